@@ -1,0 +1,221 @@
+"""Compiled (numba) kernel of the kinetic-energy partition.
+
+One pass per configuration, no Python in the loop:
+
+1. Cholesky factor ``M = L L^T`` (checks symmetry and definiteness; reused while
+   consecutive items share the same ``M``),
+2. ``u = L^T v`` so that ``T = 1/2 |u|^2``,
+3. ``W = L^{-1} A^T`` (forward substitution), columns normalised to unit length
+   (the subspace, hence ``T_c``, does not depend on the scale of the rows of ``A``),
+4. Householder QR of ``W`` with column pivoting (rank revealing, as LAPACK ``xGEQP3``);
+   the rank ``r`` is the number of pivots above ``rtol``,
+5. ``y = Q^T u``: ``T_c = 1/2 sum_{k<r} y_k^2``, ``T_a = 1/2 sum_{k>=r} y_k^2``,
+6. optionally ``v_c = L^{-T} Q [y_0..y_{r-1}, 0, ...]``.
+
+The orthogonal projector onto ``range(W) = range(L^{-1} A^T)`` is the whitened form of
+``P_c = M^{-1} A^T (A M^{-1} A^T)^+ A``; no inverse of a singular matrix is ever formed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._checks import (
+    STATUS_ASYMMETRIC_M,
+    STATUS_NONFINITE_A,
+    STATUS_NONFINITE_M,
+    STATUS_NONFINITE_V,
+    STATUS_NOT_PD,
+    STATUS_OK,
+    SYM_RTOL,
+)
+
+_EPS = np.finfo(np.float64).eps
+
+
+@njit(cache=True, nogil=True)
+def _factor(Mi, L):  # pragma: no cover - compiled
+    n = Mi.shape[0]
+    maxdiag = 0.0
+    for i in range(n):
+        d = Mi[i, i]
+        if not np.isfinite(d):
+            return STATUS_NONFINITE_M
+        if abs(d) > maxdiag:
+            maxdiag = abs(d)
+    for i in range(n):
+        for j in range(i):
+            a = Mi[i, j]
+            b = Mi[j, i]
+            if not (np.isfinite(a) and np.isfinite(b)):
+                return STATUS_NONFINITE_M
+            tol = SYM_RTOL * max(abs(Mi[i, i]), abs(Mi[j, j]))
+            if abs(a - b) > tol:
+                return STATUS_ASYMMETRIC_M
+    thresh = n * _EPS * maxdiag
+    for j in range(n):
+        s = Mi[j, j]
+        for k in range(j):
+            s -= L[j, k] * L[j, k]
+        if not s > thresh:
+            return STATUS_NOT_PD
+        d = np.sqrt(s)
+        L[j, j] = d
+        for i in range(j + 1, n):
+            t = Mi[i, j]
+            for k in range(j):
+                t -= L[i, k] * L[j, k]
+            L[i, j] = t / d
+        for i in range(j):
+            L[i, j] = 0.0
+    return STATUS_OK
+
+
+@njit(cache=True, nogil=True)
+def partition_kernel(
+    M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status
+):  # pragma: no cover - compiled
+    """Partition every item ``b``: ``M[iM[b]]``, ``A[iA[b]]``, ``v[iv[b]]``."""
+    nb = iM.shape[0]
+    n = M.shape[1]
+    m = A.shape[1]
+    L = np.zeros((n, n))
+    W = np.empty((n, m))
+    H = np.empty((n, m))  # Householder vectors, column k holds v_k in rows k..n-1
+    hn = np.empty(m)  # their squared norms
+    u = np.empty(n)
+    y = np.empty(n)
+    z = np.empty(n)
+    cn = np.empty(m)
+    kmax = min(n, m)
+    last = -1
+    last_code = STATUS_OK
+    for b in range(nb):
+        im = iM[b]
+        if im != last:
+            last_code = _factor(M[im], L)
+            last = im
+        if last_code != STATUS_OK:
+            status[b] = last_code
+            continue
+        Ab = A[iA[b]]
+        vb = v[iv[b]]
+        bad = False
+        for i in range(n):
+            if not np.isfinite(vb[i]):
+                bad = True
+        if bad:
+            status[b] = STATUS_NONFINITE_V
+            continue
+        for j in range(m):
+            for i in range(n):
+                if not np.isfinite(Ab[j, i]):
+                    bad = True
+        if bad:
+            status[b] = STATUS_NONFINITE_A
+            continue
+        # u = L^T v, T = 1/2 |u|^2
+        tt = 0.0
+        for i in range(n):
+            s = 0.0
+            for j in range(i, n):
+                s += L[j, i] * vb[j]
+            u[i] = s
+            y[i] = s
+            tt += s * s
+        T[b] = 0.5 * tt
+        # W = L^{-1} A^T, one forward substitution per row of A
+        cmax = 0.0
+        for j in range(m):
+            nrm = 0.0
+            for i in range(n):
+                s = Ab[j, i]
+                for k in range(i):
+                    s -= L[i, k] * W[k, j]
+                s /= L[i, i]
+                W[i, j] = s
+                nrm += s * s
+            cn[j] = np.sqrt(nrm)
+            if cn[j] > cmax:
+                cmax = cn[j]
+        for j in range(m):
+            if cmax == 0.0 or cn[j] <= rtol * cmax:
+                for i in range(n):
+                    W[i, j] = 0.0
+            else:
+                inv = 1.0 / cn[j]
+                for i in range(n):
+                    W[i, j] *= inv
+        # Householder QR with column pivoting
+        r = 0
+        for k in range(kmax):
+            best = -1.0
+            p = k
+            for j in range(k, m):
+                s = 0.0
+                for i in range(k, n):
+                    s += W[i, j] * W[i, j]
+                if s > best:
+                    best = s
+                    p = j
+            norm = np.sqrt(best)
+            if norm <= rtol:
+                break
+            if p != k:
+                for i in range(n):
+                    t = W[i, k]
+                    W[i, k] = W[i, p]
+                    W[i, p] = t
+            x0 = W[k, k]
+            alpha = -norm if x0 >= 0.0 else norm
+            h2 = 0.0
+            for i in range(k, n):
+                H[i, k] = W[i, k]
+            H[k, k] = x0 - alpha
+            for i in range(k, n):
+                h2 += H[i, k] * H[i, k]
+            hn[k] = h2
+            if h2 > 0.0:
+                for j in range(k + 1, m):
+                    s = 0.0
+                    for i in range(k, n):
+                        s += H[i, k] * W[i, j]
+                    f = 2.0 * s / h2
+                    for i in range(k, n):
+                        W[i, j] -= f * H[i, k]
+                s = 0.0
+                for i in range(k, n):
+                    s += H[i, k] * y[i]
+                f = 2.0 * s / h2
+                for i in range(k, n):
+                    y[i] -= f * H[i, k]
+            r += 1
+        rank[b] = r
+        tc = 0.0
+        for k in range(r):
+            tc += y[k] * y[k]
+        ta = 0.0
+        for k in range(r, n):
+            ta += y[k] * y[k]
+        Tc[b] = 0.5 * tc
+        Ta[b] = 0.5 * ta
+        if want_vc:
+            for i in range(n):
+                z[i] = y[i] if i < r else 0.0
+            for k in range(r - 1, -1, -1):
+                h2 = hn[k]
+                if h2 > 0.0:
+                    s = 0.0
+                    for i in range(k, n):
+                        s += H[i, k] * z[i]
+                    f = 2.0 * s / h2
+                    for i in range(k, n):
+                        z[i] -= f * H[i, k]
+            # back substitution L^T v_c = z
+            for i in range(n - 1, -1, -1):
+                s = z[i]
+                for j in range(i + 1, n):
+                    s -= L[j, i] * vc[b, j]
+                vc[b, i] = s / L[i, i]
+        status[b] = STATUS_OK

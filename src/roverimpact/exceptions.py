@@ -1,0 +1,33 @@
+"""Exception types of roverimpact.
+
+Every error the package raises on purpose derives from :class:`RoverImpactError`.
+Errors caused by what the user passed in (arrays, files, options) also derive from
+:class:`ValueError`, so ``except ValueError`` keeps working for callers who do not
+know about roverimpact. The CLI turns any :class:`RoverImpactError` into one line on
+stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+
+class RoverImpactError(Exception):
+    """Base class of every error raised on purpose by roverimpact."""
+
+
+class InputError(RoverImpactError, ValueError):
+    """An argument is malformed: wrong shape, NaN/inf, non-SPD mass matrix, out of range."""
+
+
+class ConfigError(InputError):
+    """A scenario, study or trials file is malformed or names something unknown."""
+
+
+class ModelError(InputError):
+    """A multibody model is malformed (URDF/MJCF, unknown frame or joint, bad inertia)."""
+
+
+class SolverError(RoverImpactError, RuntimeError):
+    """A numerical solver failed (LCP infeasible, integrator stalled, no contact in time)."""
+
+
+__all__ = ["ConfigError", "InputError", "ModelError", "RoverImpactError", "SolverError"]

@@ -1,0 +1,193 @@
+r"""Impulsive (rigid-body) impact maps.
+
+During an impact of negligible duration, positions do not change and finite forces do
+no work; the velocity jumps by :math:`\Delta v = M^{-1} J^T p` where :math:`p` are the
+impulses along the constraint rows :math:`J` (Newton-Euler, e.g. Pfeiffer & Glocker,
+*Multibody Dynamics with Unilateral Contacts*, 1996, ch. 7).
+
+The contact rows :math:`A` follow Newton's law of restitution,
+:math:`A v^+ = -e\, A v^-` (componentwise, ``A v^- < 0`` when approaching). Persistent
+rows :math:`B` (wheels that stay on the ground, loop closures, locked joints) keep zero
+velocity after the impact, :math:`B v^+ = 0`.
+
+With :math:`J = [A; B]`, :math:`G = J M^{-1} J^T` and
+:math:`d = -(I + E) J v^-` (``E = diag(e, 0)``), the impulses solve :math:`G p = d`.
+Dependent rows make :math:`G` singular; the minimum-norm solution
+:math:`p = G^{+} d` is used, obtained from the SVD of the whitened rows
+:math:`W = L^{-1} J^T` (``M = L L^T``), never from an inverse of :math:`G`.
+
+For contact rows that share one restitution coefficient and persistent rows already at
+rest, :math:`v^+ = v^- - (1 + e) P_c v^-` and the kinetic energy lost is
+:math:`(1 - e^2)\, T_c^-`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _checks
+from ._checks import InputError, as_array, broadcast_batch, fmt_index
+from .energy import RTOL, _prepare, _scalarize, _whitened, partition
+
+__all__ = ["ImpactResult", "impulsive_impact"]
+
+
+@dataclass(frozen=True)
+class ImpactResult:
+    """Result of an impulsive impact.
+
+    Attributes
+    ----------
+    v_plus : (..., n) ndarray
+        Generalized velocity just after the impact.
+    impulse : (..., m) ndarray
+        Impulse along each contact row of ``A`` [N s for unit normals].
+    impulse_persistent : (..., p) ndarray
+        Impulse along each persistent row.
+    generalized_impulse : (..., n) ndarray
+        ``J^T p = M (v_plus - v)``, the generalized impulse.
+    T_minus, T_plus : float or (...,) ndarray
+        Kinetic energy before and after [J].
+    energy_lost : float or (...,) ndarray
+        ``T_minus - T_plus`` [J]; never negative for ``e`` in [0, 1].
+    T_c_minus : float or (...,) ndarray
+        Effective kinetic energy: ``T_c`` of ``v`` with all rows ``[A; B]`` [J].
+    rank : int or (...,) ndarray
+        Rank of ``[A; B]``.
+    """
+
+    v_plus: np.ndarray
+    impulse: np.ndarray
+    impulse_persistent: np.ndarray
+    generalized_impulse: np.ndarray
+    T_minus: np.ndarray
+    T_plus: np.ndarray
+    energy_lost: np.ndarray
+    T_c_minus: np.ndarray
+    rank: np.ndarray
+
+
+def _restitution(e, name="restitution"):
+    e = as_array(e, name)
+    _checks.check_finite(e, name, 0)
+    if np.any((e < 0) | (e > 1)):
+        raise InputError(f"{name} must lie in [0, 1], got values in [{e.min():g}, {e.max():g}]")
+    return e
+
+
+def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float = RTOL):
+    r"""Rigid-body impact map with Newton restitution and persistent constraints.
+
+    Parameters
+    ----------
+    M : (..., n, n) array_like
+        Symmetric positive-definite mass matrix.
+    A : (..., m, n) array_like, or (n,) for a single contact
+        Contact rows; row i times ``v`` is the normal velocity of contact i, negative
+        when approaching.
+    v : (..., n) array_like
+        Generalized velocity just before the impact.
+    restitution : float or (..., m) array_like
+        Newton's coefficient of restitution ``e`` in [0, 1], one for all rows or one per
+        row: ``A v^+ = -e A v^-``.
+    persistent : (..., p, n) array_like, optional
+        Rows that keep zero velocity through the impact: ``B v^+ = 0``.
+    rtol : float, optional
+        Rank tolerance for dependent rows, as in :func:`~roverimpact.partition`.
+
+    Returns
+    -------
+    ImpactResult
+
+    Raises
+    ------
+    InputError
+        For bad arrays, ``e`` outside [0, 1], or dependent rows whose restitution
+        targets contradict each other (no impulse can meet them all).
+
+    Examples
+    --------
+    Two 1 kg masses on a line, the first at 2 m/s, the second at rest, e = 1: they
+    exchange velocities.
+
+    >>> import numpy as np, roverimpact as ri
+    >>> r = ri.impulsive_impact(np.eye(2), [[-1.0, 1.0]], [2.0, 0.0], restitution=1.0)
+    >>> np.round(r.v_plus, 12).tolist(), round(float(r.energy_lost), 12)
+    ([0.0, 2.0], 0.0)
+    """
+    M, A, v, batch, n, m = _prepare(M, A, v)
+    if persistent is not None:
+        B = as_array(persistent, "persistent", min_ndim=1)
+        if B.ndim == 1:
+            B = B[None, :]
+        if B.shape[-1] != n:
+            raise InputError(
+                f"persistent must have shape (..., p, n) with n = {n}, got {B.shape}"
+            )
+        batch = broadcast_batch(M=M.shape[:-2], A=A.shape[:-2], v=v.shape[:-1],
+                                persistent=B.shape[:-2])
+    else:
+        B = np.zeros((0, n))
+    p = B.shape[-2]
+    e = _restitution(restitution)
+    if e.ndim > 0 and e.shape[-1] not in (1, m):
+        raise InputError(f"restitution must be a scalar or have m = {m} values, got {e.shape}")
+    e_rows = np.broadcast_to(e if e.ndim else e[None], (*e.shape[:-1], m) if e.ndim else (m,))
+    batch = broadcast_batch(batch=batch, restitution=e_rows.shape[:-1])
+    _checks.check_finite(v, "v", 1)
+    _checks.check_finite(B, "persistent", 2)
+
+    Mb = np.broadcast_to(M, (*batch, n, n))
+    J = np.concatenate(
+        [np.broadcast_to(A, (*batch, m, n)), np.broadcast_to(B, (*batch, p, n))], axis=-2
+    )
+    vb = np.broadcast_to(v, (*batch, n))
+    E = np.concatenate([np.broadcast_to(e_rows, (*batch, m)), np.zeros((*batch, p))], axis=-1)
+
+    L, W, _, _ = _whitened(Mb, J, rtol)
+    Jv = np.einsum("...ij,...j->...i", J, vb)
+    d = -(1.0 + E) * Jv
+    d[..., m:] = -Jv[..., m:]  # persistent rows: B v+ = 0
+    U, s, Vt = np.linalg.svd(W, full_matrices=False)
+    smax = s[..., :1]
+    keep = (s > rtol * np.maximum(smax, 1e-300)) & (s > 0)
+    Vtd = np.einsum("...ij,...j->...i", Vt, d)
+    # consistency: the achievable part of d is V_r V_r^T d
+    resid = d - np.einsum("...ji,...j->...i", Vt, np.where(keep, Vtd, 0.0))
+    scale = np.maximum(np.linalg.norm(d, axis=-1), 1e-300)
+    bad = np.linalg.norm(resid, axis=-1) > 1e-8 * scale
+    if np.any(bad):
+        idx = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0]) if batch else ()
+        raise InputError(
+            f"the constraint rows are dependent and their restitution targets contradict "
+            f"each other ({fmt_index(idx)}): give dependent rows the same restitution, "
+            "or remove the redundant rows"
+        )
+    inv_s = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
+    # p = V S^-2 V^T d ; delta u = W p = U S^-1 V^T d ; delta v = L^-T delta u
+    coef = Vtd * inv_s
+    imp = np.einsum("...ji,...j->...i", Vt, coef * inv_s)
+    du = np.einsum("...ij,...j->...i", U, coef)
+    LT = np.swapaxes(L, -1, -2)
+    dv = np.linalg.solve(LT, du[..., None])[..., 0]
+    v_plus = vb + dv
+    u_minus = np.einsum("...ji,...j->...i", L, vb)  # L^T v
+    u_plus = u_minus + du
+    T_minus = 0.5 * np.sum(u_minus**2, axis=-1)
+    T_plus = 0.5 * np.sum(u_plus**2, axis=-1)
+    lost = 0.5 * np.sum(-du * (2 * u_minus + du), axis=-1)
+    part = partition(Mb, J, vb, rtol=rtol, want_velocities=False)
+    gen = np.einsum("...ji,...j->...i", J, imp)
+    return ImpactResult(
+        v_plus=v_plus,
+        impulse=imp[..., :m],
+        impulse_persistent=imp[..., m:],
+        generalized_impulse=gen,
+        T_minus=_scalarize(np.asarray(T_minus), batch),
+        T_plus=_scalarize(np.asarray(T_plus), batch),
+        energy_lost=_scalarize(np.asarray(lost), batch),
+        T_c_minus=part.T_c,
+        rank=part.rank,
+    )
