@@ -44,8 +44,11 @@ def load_system(path: str | Path) -> dict[str, np.ndarray]:
         try:
             with np.load(path, allow_pickle=False) as data:
                 raw = {k: data[k] for k in data.files}
-        except (ValueError, OSError, EOFError) as exc:
-            raise ConfigError(f"{path}: not a readable .npz file ({exc})") from None
+        except (ValueError, OSError, EOFError):
+            raise ConfigError(
+                f"{path}: not a readable .npz file (expected a NumPy archive written by "
+                "numpy.savez with arrays M, A and v)"
+            ) from None
     elif suffix == ".toml":
         raw = read_toml(path)
     else:

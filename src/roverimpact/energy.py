@@ -90,10 +90,13 @@ def _prepare(M, A, v=None):
     return M, A, v, batch, n, A.shape[-2]
 
 
+def _size(shape: tuple[int, ...]) -> int:
+    return int(np.prod(shape, dtype=np.int64))
+
+
 def _flat_index(shape: tuple[int, ...], batch: tuple[int, ...]) -> np.ndarray:
     """Flat index into an input of batch ``shape`` for every item of the broadcast ``batch``."""
-    size = int(np.prod(shape, dtype=np.int64))
-    idx = np.arange(size, dtype=np.int64).reshape(shape)
+    idx = np.arange(_size(shape), dtype=np.int64).reshape(shape)
     return np.ascontiguousarray(np.broadcast_to(idx, batch).reshape(-1))
 
 
@@ -173,9 +176,9 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     if not (np.isfinite(rtol) and 0.0 < rtol < 1.0):
         raise InputError(f"rtol must be in (0, 1), got {rtol}")
     M, A, v, batch, n, m = _prepare(M, A, v)
-    Mf = np.ascontiguousarray(M.reshape(-1, n, n))
-    Af = np.ascontiguousarray(A.reshape(-1, m, n))
-    vf = np.ascontiguousarray(v.reshape(-1, n))
+    Mf = np.ascontiguousarray(M.reshape(_size(M.shape[:-2]), n, n))
+    Af = np.ascontiguousarray(A.reshape(_size(A.shape[:-2]), m, n))
+    vf = np.ascontiguousarray(v.reshape(_size(v.shape[:-1]), n))
     iM = _flat_index(M.shape[:-2], batch)
     iA = _flat_index(A.shape[:-2], batch)
     iv = _flat_index(v.shape[:-1], batch)
@@ -301,14 +304,14 @@ def effective_mass(M, A, *, rtol: float = RTOL):
     M, A, _, batch, n, m = _prepare(M, A)
     M = np.broadcast_to(M, (*batch, n, n))
     A = np.broadcast_to(A, (*batch, m, n))
-    L, W, _, _ = _whitened(M, A, rtol)
+    _, W, _, _ = _whitened(M, A, rtol)
     if single:
         g = np.sum(W * W, axis=(-1, -2))
         if np.any(g == 0.0):
             idx = tuple(int(i) for i in np.argwhere(np.atleast_1d(g == 0.0))[0]) if batch else ()
             raise InputError(f"A is a zero row ({fmt_index(idx)}): no direction to measure")
         return 1.0 / g
-    U, s, Vt = np.linalg.svd(W, full_matrices=False)
+    _, s, Vt = np.linalg.svd(W, full_matrices=False)
     smax = s[..., :1]
     keep = s > rtol * np.maximum(smax, 1e-300)
     inv_s2 = np.where(keep, 1.0 / np.where(keep, s, 1.0) ** 2, 0.0)

@@ -8,11 +8,16 @@ becomes one line on stderr and exit code 2, never a traceback.
 from __future__ import annotations
 
 import click
+import typer
+
+# typer >= 0.17 vendors click as ``typer._click``; older releases raise click's own classes.
+_ABORT = (click.exceptions.Abort, typer.Abort)
+_USAGE = (click.exceptions.ClickException, typer.TyperException)
 
 from ._app import app, err_console
 
 # Command modules register themselves on ``app`` when imported.
-from . import _partition  # noqa: E402,F401  isort: skip
+from . import _partition  # noqa: F401  isort: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -21,12 +26,15 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         rv = app(args=argv, standalone_mode=False, prog_name="roverimpact")
-    except click.exceptions.Abort:
+    except _ABORT:
         err_console.print("[red]aborted[/red]")
         return 130
-    except click.exceptions.ClickException as exc:  # usage errors: exit 2
-        exc.show()
-        return exc.exit_code
+    except _USAGE as exc:  # usage errors (unknown option, bad value): exit 2
+        if hasattr(exc, "show"):
+            exc.show()
+        else:  # pragma: no cover
+            err_console.print(f"[bold red]error:[/bold red] {exc}", highlight=False)
+        return int(getattr(exc, "exit_code", 2))
     except RoverImpactError as exc:
         err_console.print(f"[bold red]error:[/bold red] {exc}", highlight=False)
         return 2

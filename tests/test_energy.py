@@ -1,0 +1,190 @@
+"""Kinetic-energy partition: properties over random SPD systems and closed-form cases."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import roverimpact as ri
+from roverimpact.energy import _whitened
+
+from .reference.systems import random_spd, rod_on_edge, two_masses
+
+REL = 1e-9
+
+
+@st.composite
+def systems(draw, max_n=30, max_m=8):
+    """Random (M, A, v) with A full rank, rank-deficient, or with duplicated rows."""
+    n = draw(st.integers(1, max_n))
+    m = draw(st.integers(1, max_m))
+    kind = draw(st.sampled_from(["full", "deficient", "duplicate"]))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    M = random_spd(rng, n)
+    if kind == "full":
+        A = rng.standard_normal((m, n))
+        r = min(m, n)
+    elif kind == "deficient":
+        r = draw(st.integers(1, max(1, min(m, n) - 1))) if min(m, n) > 1 else 1
+        A = rng.standard_normal((m, r)) @ rng.standard_normal((r, n))
+    else:
+        base = rng.standard_normal((m, n))
+        A = np.vstack([base, 3.0 * base[: max(1, m // 2)]])
+        r = min(m, n)
+    v = rng.standard_normal(n) * 10.0 ** rng.uniform(-1, 1)
+    return M, A, v, r
+
+
+def _rel(a, b, scale):
+    return np.max(np.abs(np.asarray(a) - np.asarray(b))) / max(scale, 1e-300)
+
+
+@settings(max_examples=150, deadline=None)
+@given(systems())
+def test_partition_properties(sys):
+    """P_c^2 = P_c, v = v_c + v_a, M-orthogonality, T = T_c + T_a, A v_a = 0, rank."""
+    M, A, v, r = sys
+    p = ri.partition(M, A, v)
+    T_ref = 0.5 * v @ M @ v
+    assert p.T == pytest.approx(T_ref, rel=1e-10)
+    assert p.T_c + p.T_a == pytest.approx(T_ref, rel=1e-9, abs=1e-12 * T_ref)
+    assert p.T_c >= 0 and p.T_a >= 0
+    assert p.rank == r == np.linalg.matrix_rank(A)
+    np.testing.assert_allclose(p.v_c + p.v_a, v, rtol=0, atol=1e-12 * np.abs(v).max())
+    # M-orthogonality of the two parts: v_c^T M v_a = 0
+    assert abs(p.v_c @ M @ p.v_a) <= 1e-8 * T_ref + 1e-300
+    # T_c from the velocity itself
+    assert 0.5 * p.v_c @ M @ p.v_c == pytest.approx(p.T_c, rel=1e-7, abs=1e-10 * T_ref)
+    # the admissible part satisfies the constraints
+    Av_scale = np.abs(A).max() * np.abs(v).max() * np.sqrt(A.shape[1])
+    assert np.abs(A @ p.v_a).max() <= 1e-8 * Av_scale
+    # projector: idempotent and consistent with the kernel's v_c
+    P = ri.projector(M, A)
+    np.testing.assert_allclose(P @ P, P, atol=1e-7 * max(1.0, np.abs(P).max()))
+    np.testing.assert_allclose(P @ v, p.v_c, atol=1e-7 * np.abs(v).max() * max(1.0, np.abs(P).max()))
+    # M P_c is symmetric (P_c is M-orthogonal)
+    MP = M @ P
+    np.testing.assert_allclose(MP, MP.T, atol=1e-7 * np.abs(MP).max())
+
+
+@settings(max_examples=100, deadline=None)
+@given(systems(max_m=5), st.integers(0, 2**32 - 1))
+def test_T_c_invariant_to_row_scaling_order_duplication(sys, seed):
+    M, A, v, _ = sys
+    rng = np.random.default_rng(seed)
+    base = ri.partition(M, A, v).T_c
+    scale = 10.0 ** rng.uniform(-3, 3, A.shape[0]) * rng.choice([-1, 1], A.shape[0])
+    A2 = (A * scale[:, None])[rng.permutation(A.shape[0])]
+    A3 = np.vstack([A, A[rng.integers(0, A.shape[0], 2)]])
+    T = 0.5 * v @ M @ v
+    for Ax in (A2, A3):
+        assert ri.partition(M, Ax, v).T_c == pytest.approx(base, rel=1e-7, abs=1e-12 * T)
+
+
+@settings(max_examples=100, deadline=None)
+@given(systems())
+def test_full_rank_matches_paper_formula(sys):
+    """For full row rank, T_c = 1/2 (A v)^T (A M^-1 A^T)^-1 (A v) (papers' eq. 2-3)."""
+    M, A, v, r = sys
+    if r < A.shape[0]:
+        return
+    G = A @ np.linalg.solve(M, A.T)
+    if np.linalg.cond(G) > 1e8:
+        return
+    Av = A @ v
+    T_c = 0.5 * Av @ np.linalg.solve(G, Av)
+    T = 0.5 * v @ M @ v
+    assert ri.partition(M, A, v).T_c == pytest.approx(T_c, rel=1e-7, abs=1e-12 * T)
+    # and the effective mass is the inverse Delassus matrix
+    np.testing.assert_allclose(ri.effective_mass(M, A), np.linalg.inv(G), rtol=1e-6,
+                               atol=1e-9 * np.abs(np.linalg.inv(G)).max())
+
+
+def test_batched_equals_loop_and_broadcasts(rng):
+    n, m, B = 9, 3, 40
+    M = np.stack([random_spd(rng, n) for _ in range(B)])
+    A = rng.standard_normal((B, m, n))
+    A[5, 2] = A[5, 0] - A[5, 1]  # one rank-deficient item
+    v = rng.standard_normal((B, n))
+    p = ri.partition(M, A, v)
+    assert p.T_c.shape == (B,) and p.v_c.shape == (B, n) and p.rank.shape == (B,)
+    for b in range(B):
+        q = ri.partition(M[b], A[b], v[b])
+        assert p.T_c[b] == pytest.approx(q.T_c, rel=1e-12)
+        assert p.rank[b] == q.rank
+        np.testing.assert_allclose(p.v_c[b], q.v_c, rtol=1e-12, atol=1e-14)
+    assert p.rank[5] == 2
+    # broadcasting: one M, a (4, 5) grid of velocities, per-row-of-grid A
+    M0 = M[0]
+    A2 = rng.standard_normal((4, 1, m, n))
+    v2 = rng.standard_normal((4, 5, n))
+    q = ri.partition(M0, A2, v2)
+    assert q.T_c.shape == (4, 5)
+    assert q.T_c[2, 3] == pytest.approx(ri.partition(M0, A2[2, 0], v2[2, 3]).T_c, rel=1e-12)
+    # projector and effective mass broadcast too
+    assert ri.projector(M0, A2).shape == (4, 1, n, n)
+    assert ri.effective_mass(M, A).shape == (B, m, m)
+
+
+def test_kernel_agrees_with_svd_reference(rng):
+    """Second method: compiled pivoted-QR kernel vs LAPACK SVD projector, batched."""
+    n, m, B = 18, 4, 200
+    M = np.stack([random_spd(rng, n, spread=3) for _ in range(B)])
+    A = rng.standard_normal((B, m, n))
+    A[::3, 3] = 2 * A[::3, 0] - A[::3, 1]
+    v = rng.standard_normal((B, n))
+    p = ri.partition(M, A, v)
+    L, _, U, mask = _whitened(M, A, ri.energy.RTOL)
+    u = np.einsum("bji,bj->bi", L, v)
+    Uu = np.einsum("bji,bj->bi", U, u) * mask
+    np.testing.assert_allclose(p.T_c, 0.5 * np.sum(Uu**2, axis=-1), rtol=1e-9)
+    np.testing.assert_array_equal(p.rank, mask.sum(-1))
+
+
+def test_closed_form_cases():
+    c = two_masses()
+    p = ri.partition(c.M, c.A, c.v)
+    assert p.T_c == pytest.approx(c.T_c_minus, rel=1e-13)
+    # the admissible part is the motion of the centre of mass
+    u_G = (c.M[0, 0] * c.v[0] + c.M[1, 1] * c.v[1]) / np.trace(c.M)
+    np.testing.assert_allclose(p.v_a, [u_G, u_G], rtol=1e-13)
+    r = rod_on_edge()
+    assert ri.partition(r.M, r.A, r.v).T_c == pytest.approx(r.T_c_minus, rel=1e-13)
+    assert ri.effective_mass(r.M, r.A[0]) == pytest.approx(r.M[0, 0] / 4, rel=1e-13)
+
+
+def test_effective_mass_single_row_and_rigid_body():
+    """A free rigid body hit at r along n: 1/m_eff = 1/m + (r x n)^T I^-1 (r x n)."""
+    m = 7.0
+    I = np.diag([0.3, 0.5, 0.7])
+    r = np.array([0.2, -0.1, 0.4])
+    nrm = np.array([0.0, 0.6, 0.8])
+    M = np.block([[m * np.eye(3), np.zeros((3, 3))], [np.zeros((3, 3)), I]])
+    # point velocity = v_G + w x r = v_G - [r]x w ; row for n: [n, r x n]
+    row = np.concatenate([nrm, np.cross(r, nrm)])
+    rn = np.cross(r, nrm)
+    ref = 1.0 / (1 / m + rn @ np.linalg.solve(I, rn))
+    assert ri.effective_mass(M, row) == pytest.approx(ref, rel=1e-13)
+
+
+def test_zero_rows_and_empty():
+    M = np.diag([1.0, 2.0])
+    v = np.array([1.0, 1.0])
+    p = ri.partition(M, np.zeros((2, 2)), v)
+    assert p.rank == 0 and p.T_c == 0.0 and p.T_a == pytest.approx(1.5)
+    p = ri.partition(M, np.zeros((0, 2)), v)
+    assert p.rank == 0 and p.T_c == 0.0
+    p = ri.partition(M, [[0.0, 0.0], [1.0, 0.0]], v)
+    assert p.rank == 1 and p.T_c == pytest.approx(0.5)
+
+
+def test_want_velocities_false_matches(rng):
+    M = random_spd(rng, 6)
+    A = rng.standard_normal((2, 6))
+    v = rng.standard_normal(6)
+    a = ri.partition(M, A, v)
+    b = ri.partition(M, A, v, want_velocities=False)
+    assert b.v_c is None and b.T_c == a.T_c and b.rank == a.rank

@@ -1,0 +1,123 @@
+"""Bad input to the core functions and the partition CLI: one clear error each."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import roverimpact as ri
+from roverimpact.cli import main
+
+M2 = np.diag([1.0, 2.0])
+A2 = np.array([[1.0, 0.0]])
+v2 = np.array([1.0, -1.0])
+
+
+@pytest.mark.parametrize(
+    ("M", "A", "v", "pattern"),
+    [
+        ([[1.0, 0.5], [0.0, 2.0]], A2, v2, r"M is not symmetric \(unbatched\)"),
+        ([[1.0, 0.0], [0.0, -2.0]], A2, v2, r"M is not positive definite .*smallest eigenvalue -2"),
+        ([[1.0, 0.0], [0.0, 0.0]], A2, v2, r"not positive definite"),
+        ([[1.0, np.nan], [np.nan, 2.0]], A2, v2, r"M contains NaN"),
+        (M2, [[1.0, np.inf]], v2, r"A contains NaN or inf"),
+        (M2, A2, [np.nan, 1.0], r"v contains NaN or inf"),
+        (M2, [[1.0, 0.0, 0.0]], v2, r"A must have shape \(\.\.\., m, n\) with n = 2"),
+        (M2, A2, [1.0, 2.0, 3.0], r"v must have shape \(\.\.\., n\) with n = 2"),
+        (np.ones((2, 3)), A2, v2, r"M must have shape \(\.\.\., n, n\)"),
+        ([[1.0, "a"], [0.0, 2.0]], A2, v2, r"M must be an array of real numbers"),
+    ],
+)
+def test_partition_rejects(M, A, v, pattern):
+    with pytest.raises(ri.InputError, match=pattern):
+        ri.partition(M, A, v)
+
+
+def test_batch_index_is_named():
+    M = np.stack([np.eye(3)] * 5)
+    M[3, 1, 1] = -0.5
+    with pytest.raises(ri.InputError, match=r"batch index 3, smallest eigenvalue -0.5"):
+        ri.partition(M, np.ones((1, 3)), np.ones(3))
+    v = np.ones((2, 4, 3))
+    v[1, 2, 0] = np.nan
+    with pytest.raises(ri.InputError, match=r"v contains NaN or inf \(batch index \(1, 2\)\)"):
+        ri.partition(np.eye(3), np.ones((1, 3)), v)
+    with pytest.raises(ri.InputError, match="batch shapes do not broadcast"):
+        ri.partition(np.stack([np.eye(3)] * 4), np.ones((1, 3)), np.ones((5, 3)))
+
+
+def test_errors_are_value_errors():
+    assert issubclass(ri.InputError, ValueError)
+    assert issubclass(ri.ConfigError, ri.RoverImpactError)
+
+
+def test_impact_rejects_bad_restitution():
+    with pytest.raises(ri.InputError, match=r"restitution must lie in \[0, 1\]"):
+        ri.impulsive_impact(M2, A2, v2, 1.5)
+    with pytest.raises(ri.InputError, match="restitution must be a scalar or have m = 1"):
+        ri.impulsive_impact(M2, A2, v2, [0.1, 0.2])
+    with pytest.raises(ri.InputError, match="persistent must have shape"):
+        ri.impulsive_impact(M2, A2, v2, 0.5, persistent=np.ones((1, 3)))
+
+
+def test_effective_mass_zero_row():
+    with pytest.raises(ri.InputError, match="zero row"):
+        ri.effective_mass(M2, [0.0, 0.0])
+
+
+# --- CLI ------------------------------------------------------------------------------
+
+
+def test_cli_partition_example(capsys):
+    assert main(["partition", "examples/rod_on_ledge.toml"]) == 0
+    out = capsys.readouterr().out
+    assert "0.390625 J" in out  # T_c^- = 1/2 (m/4) v_n^2 = 1/2 * 0.5 * 1.25^2
+    assert main(["partition", "examples/rod_on_ledge.toml", "--json"]) == 0
+    import json
+
+    data = json.loads(capsys.readouterr().out)
+    assert data["T_c"] == pytest.approx(0.390625, rel=1e-12)
+    assert data["energy_lost"] == pytest.approx(0.75 * 0.390625, rel=1e-12)
+
+
+def test_cli_version(capsys):
+    assert main(["--version"]) == 0
+    assert ri.__version__ in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("content", "suffix", "pattern"),
+    [
+        ("M = [[1.0]]\nA = [[1.0]\n", ".toml", "malformed TOML"),
+        ("M = [[1.0]]\nA = [[1.0]]\n", ".toml", "missing v"),
+        ("M = [[1.0]]\nA = [[1.0]]\nv = [1.0]\nfoo = 3\n", ".toml", "unknown key"),
+        ("M = [[-1.0]]\nA = [[1.0]]\nv = [1.0]\n", ".toml", "not positive definite"),
+        ("M = [[1.0, 2.0], [1.0]]\nA = [[1.0]]\nv = [1.0]\n", ".toml", "rectangular"),
+        ("hello", ".npz", "not a readable .npz"),
+        ("x", ".csv", "unknown file type"),
+    ],
+)
+def test_cli_bad_files(tmp_path, capsys, content, suffix, pattern):
+    f = tmp_path / f"sys{suffix}"
+    f.write_text(content)
+    assert main(["partition", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert pattern in err
+    assert "Traceback" not in err
+
+
+def test_cli_missing_file_and_unknown_option(capsys):
+    assert main(["partition", "does-not-exist.toml"]) == 2
+    assert "no such file" in capsys.readouterr().err
+    assert main(["partition", "examples/rod_on_ledge.toml", "--bogus"]) == 2
+
+
+def test_cli_npz(tmp_path, capsys):
+    f = tmp_path / "sys.npz"
+    np.savez(f, M=np.diag([2.0, 3.0]), A=np.array([[-1.0, 1.0]]), v=np.array([1.5, -0.5]))
+    assert main(["partition", str(f), "--json"]) == 0
+    import json
+
+    data = json.loads(capsys.readouterr().out)
+    mu = 6.0 / 5.0
+    assert data["T_c"] == pytest.approx(0.5 * mu * 2.0**2, rel=1e-12)
