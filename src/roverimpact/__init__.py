@@ -8,8 +8,15 @@ from ._version import __version__
 from .energy import Partition, effective_mass, partition, projector
 from .exceptions import ConfigError, InputError, ModelError, RoverImpactError, SolverError
 from .impulse import ImpactResult, impulsive_impact
+from .safety import (
+    BODY_REGIONS,
+    arm_effective_masses,
+    max_transient_speed,
+    point_effective_mass,
+)
 
 __all__ = [
+    "BODY_REGIONS",
     "ConfigError",
     "ImpactResult",
     "InputError",
@@ -18,8 +25,11 @@ __all__ = [
     "RoverImpactError",
     "SolverError",
     "__version__",
+    "arm_effective_masses",
     "effective_mass",
     "impulsive_impact",
+    "max_transient_speed",
     "partition",
+    "point_effective_mass",
     "projector",
 ]
