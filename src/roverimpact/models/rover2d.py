@@ -1,0 +1,253 @@
+r"""Parametric planar rover (DETC2014-35554, Fig. 1) as a Pinocchio model.
+
+::
+
+                 z
+                 ^        chassis (box), COM at height z_c
+                 |     +-----------------------+
+                 |     |           G           |  pitch theta about +y
+                 |     +-----------+-----------+  (+theta: nose DOWN, x turns to -z)
+                 |          rocker pivot (o)           (suspension="rocker")
+                 |        /                  \
+              (  rear  )        (middle)      (  front  )   wheels: radius r,
+       ---------------------------------------------------------> x   spin about +y
+       ground z = 0      <------ wheelbase L ------>
+
+Coordinates (all revolute/prismatic, so ``nq == nv`` and ``v = dq/dt``)::
+
+    q = [x, z, theta, <suspension>, <wheel spins>]
+
+``x, z`` [m] are the world position of the chassis centre of mass (a PX then a PZ joint
+with massless links), ``theta`` [rad] the chassis pitch (an RY joint). The chassis
+moves in the vertical x-z plane; world y is the wheel axis. We use PX + PZ + RY joints
+rather than ``pin.JointModelPlanar`` (which lives in the x-y plane and has ``nq = 4``),
+so that every generalized velocity is a physical rate in world axes.
+
+Suspension (``Rover2DParams.suspension``):
+
+* ``"rigid"``: wheel spin joints directly on the chassis.
+* ``"rocker"``: one rocker link pinned to the chassis (joint ``"rocker"``, RY) at
+  ``rocker_pivot_height`` above the wheel axles, carrying all wheels; the chassis pitches
+  freely about the pivot unless the rocker is locked.
+* ``"prismatic"``: each wheel on its own strut (joint ``"susp_<wheel>"``, PZ in chassis
+  axes, + = wheel moves up relative to the chassis), i.e. spring-damper travel.
+
+Every wheel has a spin joint ``"wheel_<name>"`` (RY) whose JOINT frame is at the wheel
+centre, so ground no-slip rows can be written.
+
+``h`` is the height of the centre of mass of the whole vehicle above flat ground in the
+nominal configuration (all wheels on the ground, suspension at 0), as in the paper's
+Fig. 3; the chassis centre of mass is placed to achieve it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Literal
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import ModelError
+from ._build import add_body, box_inertia, check_positive, rod_inertia, wheel_inertia
+from .base import MultibodyModel, Wheel
+
+__all__ = ["Rover2DParams", "rover2d"]
+
+
+@dataclass(frozen=True)
+class Rover2DParams:
+    """Parameters of the planar rover (SI units).
+
+    Defaults describe a small research rover of about 24 kg with 0.15 m wheels and a
+    0.6 m wheelbase, the scale of the McGill prototype used in DETC2015-47747 (Fig. 3).
+    The individual values are **assumptions** chosen to be plausible (box chassis,
+    solid-disc wheels), not measured data of a specific vehicle.
+
+    Attributes
+    ----------
+    chassis_mass : float
+        Chassis mass [kg] (default 19.0).
+    wheel_mass : float
+        Mass of each wheel [kg] (default 2.5).
+    wheel_radius : float
+        Wheel radius r [m] (default 0.15).
+    wheel_width : float
+        Wheel width [m] (default 0.10); only enters the wheel inertia.
+    wheelbase : float
+        Distance between front and rear wheel axles L [m] (default 0.6).
+    h : float
+        Height of the vehicle centre of mass above the ground in the nominal
+        configuration [m] (default 0.35). Must put the chassis COM above the ground.
+    com_x : float
+        Forward offset of the chassis COM from mid-wheelbase [m] (default 0).
+    chassis_length, chassis_height, chassis_width : float
+        Box dimensions for the chassis inertia and drawings [m] (0.7, 0.15, 0.4).
+    suspension : {"rigid", "rocker", "prismatic"}
+        Suspension type (default ``"rigid"``); see the module docstring.
+    middle_wheel : bool
+        Add a middle wheel at mid-wheelbase (default False).
+    rocker_mass : float
+        Rocker mass [kg] (default 1.5), ``suspension="rocker"`` only.
+    rocker_pivot_height : float
+        Height of the rocker pivot above the wheel axles [m] (default 0.12).
+    strut_mass : float
+        Mass of each prismatic strut (hub carrier) [kg] (default 0.5).
+    """
+
+    chassis_mass: float = 19.0
+    wheel_mass: float = 2.5
+    wheel_radius: float = 0.15
+    wheel_width: float = 0.10
+    wheelbase: float = 0.6
+    h: float = 0.35
+    com_x: float = 0.0
+    chassis_length: float = 0.7
+    chassis_height: float = 0.15
+    chassis_width: float = 0.4
+    suspension: Literal["rigid", "rocker", "prismatic"] = "rigid"
+    middle_wheel: bool = False
+    rocker_mass: float = 1.5
+    rocker_pivot_height: float = 0.12
+    strut_mass: float = 0.5
+
+    def __post_init__(self):
+        check_positive(self, (
+            "chassis_mass", "wheel_mass", "wheel_radius", "wheel_width", "wheelbase", "h",
+            "chassis_length", "chassis_height", "chassis_width", "rocker_mass",
+            "rocker_pivot_height", "strut_mass",
+        ))
+        if not np.isfinite(self.com_x):
+            raise ModelError(f"Rover2DParams.com_x must be finite, got {self.com_x!r}")
+        if self.suspension not in ("rigid", "rocker", "prismatic"):
+            raise ModelError(
+                f"Rover2DParams.suspension must be 'rigid', 'rocker' or 'prismatic', "
+                f"got {self.suspension!r}"
+            )
+
+    @property
+    def wheel_names(self) -> tuple[str, ...]:
+        return ("rear", "middle", "front") if self.middle_wheel else ("rear", "front")
+
+    def wheel_x(self, name: str) -> float:
+        """x of a wheel axle relative to mid-wheelbase [m]."""
+        return {"rear": -0.5, "middle": 0.0, "front": 0.5}[name] * self.wheelbase
+
+    @property
+    def total_mass(self) -> float:
+        m = self.chassis_mass + self.wheel_mass * len(self.wheel_names)
+        if self.suspension == "rocker":
+            m += self.rocker_mass
+        elif self.suspension == "prismatic":
+            m += self.strut_mass * len(self.wheel_names)
+        return m
+
+    @property
+    def chassis_com_height(self) -> float:
+        """Height z_c of the chassis COM that puts the vehicle COM at ``h`` [m].
+
+        ``m_tot h = m_c z_c + sum_w m_w r + m_rocker (r + p/2) + sum_s m_s r``.
+        """
+        r = self.wheel_radius
+        rest = self.wheel_mass * r * len(self.wheel_names)
+        if self.suspension == "rocker":
+            rest += self.rocker_mass * (r + 0.5 * self.rocker_pivot_height)
+        elif self.suspension == "prismatic":
+            rest += self.strut_mass * r * len(self.wheel_names)
+        return (self.total_mass * self.h - rest) / self.chassis_mass
+
+
+def rover2d(params: Rover2DParams | None = None, **overrides) -> MultibodyModel:
+    """Build the planar rover as a :class:`MultibodyModel`.
+
+    Parameters
+    ----------
+    params : Rover2DParams, optional
+        Parameters; defaults if omitted.
+    **overrides
+        Field values replacing those of ``params`` (e.g. ``h=0.5, suspension="rocker"``).
+
+    Returns
+    -------
+    MultibodyModel
+        ``model`` (nq = nv = 3 + n_suspension + n_wheels), ``wheels`` (frames
+        ``"wheel_<name>"`` at the wheel centres), ``lockable_joints`` (suspension joints),
+        no loop closure, and ``params`` with the parameters plus ``planar=True``,
+        ``total_mass``, ``chassis_com_height`` and ``q_nominal`` (all wheels on flat
+        ground at z = 0).
+
+    Raises
+    ------
+    ModelError
+        For a non-positive mass or length, an unknown suspension, or an ``h`` so small
+        that the chassis COM would be below the ground.
+
+    Examples
+    --------
+    >>> from roverimpact.models import rover2d
+    >>> rv = rover2d(suspension="rocker")
+    >>> rv.model.nv, [w.name for w in rv.wheels], rv.lockable_joints
+    (6, ['rear', 'front'], ['rocker'])
+    """
+    if params is None:
+        params = Rover2DParams()
+    if overrides:
+        known = set(Rover2DParams.__dataclass_fields__)
+        bad = sorted(set(overrides) - known)
+        if bad:
+            raise ModelError(f"unknown rover2d parameter(s) {bad}; known: {sorted(known)}")
+        params = Rover2DParams(**{**asdict(params), **overrides})
+    p = params
+    r = p.wheel_radius
+    z_c = p.chassis_com_height
+    if not z_c > 0.0:
+        raise ModelError(
+            f"Rover2DParams.h = {p.h} m is too small: the chassis COM would be at "
+            f"z = {z_c:.3g} m (below the ground); increase h or lower the wheel masses"
+        )
+    model = pin.Model()
+    model.name = "rover2d"
+    jx = add_body(model, 0, pin.JointModelPX(), (0, 0, 0), "base_x", "base_x_link", 0.0)
+    jz = add_body(model, jx, pin.JointModelPZ(), (0, 0, 0), "base_z", "base_z_link", 0.0)
+    jc = add_body(model, jz, pin.JointModelRY(), (0, 0, 0), "base_pitch", "chassis",
+                  p.chassis_mass, inertia=box_inertia(p.chassis_mass, p.chassis_length,
+                                                      p.chassis_width, p.chassis_height))
+    Iw = wheel_inertia(p.wheel_mass, r, p.wheel_width)
+    lockable: list[str] = []
+    wheels: list[Wheel] = []
+
+    def add_wheel(parent: int, name: str, xyz) -> None:
+        add_body(model, parent, pin.JointModelRY(), xyz, f"wheel_{name}", f"wheel_{name}_link",
+                 p.wheel_mass, inertia=Iw)
+        wheels.append(Wheel(name=name, frame=f"wheel_{name}", radius=r, width=p.wheel_width))
+
+    if p.suspension == "rocker":
+        ph = p.rocker_pivot_height
+        jr = add_body(model, jc, pin.JointModelRY(), (-p.com_x, 0.0, r + ph - z_c), "rocker",
+                      "rocker_link", p.rocker_mass, com=(0.0, 0.0, -0.5 * ph),
+                      inertia=rod_inertia(p.rocker_mass, p.wheelbase))
+        lockable.append("rocker")
+        for name in p.wheel_names:
+            add_wheel(jr, name, (p.wheel_x(name), 0.0, -ph))
+    elif p.suspension == "prismatic":
+        Is = box_inertia(p.strut_mass, 0.05, 0.05, 0.05)
+        for name in p.wheel_names:
+            js = add_body(model, jc, pin.JointModelPZ(), (p.wheel_x(name) - p.com_x, 0.0, r - z_c),
+                          f"susp_{name}", f"strut_{name}", p.strut_mass, inertia=Is)
+            lockable.append(f"susp_{name}")
+            add_wheel(js, name, (0.0, 0.0, 0.0))
+    else:
+        for name in p.wheel_names:
+            add_wheel(jc, name, (p.wheel_x(name) - p.com_x, 0.0, r - z_c))
+
+    q_nominal = np.zeros(model.nq)
+    q_nominal[1] = z_c
+    info = asdict(p) | {
+        "planar": True,
+        "total_mass": p.total_mass,
+        "chassis_com_height": z_c,
+        "q_nominal": q_nominal.tolist(),
+        "builder": "rover2d",
+    }
+    return MultibodyModel(model=model, name="rover2d", wheels=wheels, loop_closure=None,
+                          loop_names=[], lockable_joints=lockable, params=info)
