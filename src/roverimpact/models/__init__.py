@@ -1,10 +1,20 @@
 """Multibody models: built-in rovers and any URDF/MJCF robot, all through Pinocchio.
 
 * :func:`rover2d` -- parametric planar rover (DETC2014-35554, Fig. 1).
+* :func:`rocker_bogie` -- parametric six-wheel rocker-bogie rover (DETC2015-47747, Fig. 1).
 * :class:`MultibodyModel`, :class:`Wheel` -- the shared description every builder returns.
 """
 
 from .base import MultibodyModel, Wheel
+from .rocker_bogie import PRESETS, RockerBogieParams, rocker_bogie
 from .rover2d import Rover2DParams, rover2d
 
-__all__ = ["MultibodyModel", "Rover2DParams", "Wheel", "rover2d"]
+__all__ = [
+    "PRESETS",
+    "MultibodyModel",
+    "RockerBogieParams",
+    "Rover2DParams",
+    "Wheel",
+    "rocker_bogie",
+    "rover2d",
+]
