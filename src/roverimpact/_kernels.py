@@ -32,9 +32,12 @@ from ._checks import (
 )
 
 _EPS = np.finfo(np.float64).eps
+# Reassociation lets LLVM vectorise the dot products; no 'nnan'/'ninf': the kernel
+# relies on NaN comparisons to detect bad input.
+_FAST = {"reassoc", "contract", "arcp"}
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=_FAST)
 def _factor(Mi, L):  # pragma: no cover - compiled
     n = Mi.shape[0]
     maxdiag = 0.0
@@ -62,17 +65,19 @@ def _factor(Mi, L):  # pragma: no cover - compiled
             return STATUS_NOT_PD
         d = np.sqrt(s)
         L[j, j] = d
+        Lj = L[j]
         for i in range(j + 1, n):
+            Li = L[i]
             t = Mi[i, j]
             for k in range(j):
-                t -= L[i, k] * L[j, k]
+                t -= Li[k] * Lj[k]
             L[i, j] = t / d
         for i in range(j):
             L[i, j] = 0.0
     return STATUS_OK
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=_FAST)
 def partition_kernel(
     M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status
 ):  # pragma: no cover - compiled
@@ -81,8 +86,8 @@ def partition_kernel(
     n = M.shape[1]
     m = A.shape[1]
     L = np.zeros((n, n))
-    W = np.empty((n, m))
-    H = np.empty((n, m))  # Householder vectors, column k holds v_k in rows k..n-1
+    W = np.empty((m, n))  # W[j] is column j of L^{-1} A^T (row-major for speed)
+    H = np.empty((m, n))  # Householder vectors: H[k, k:] holds v_k
     hn = np.empty(m)  # their squared norms
     u = np.empty(n)
     y = np.empty(n)
@@ -116,25 +121,30 @@ def partition_kernel(
             status[b] = STATUS_NONFINITE_A
             continue
         # u = L^T v, T = 1/2 |u|^2
+        for i in range(n):
+            u[i] = 0.0
+        for j in range(n):
+            Lj = L[j]
+            vj = vb[j]
+            for i in range(j + 1):
+                u[i] += Lj[i] * vj
         tt = 0.0
         for i in range(n):
-            s = 0.0
-            for j in range(i, n):
-                s += L[j, i] * vb[j]
-            u[i] = s
-            y[i] = s
-            tt += s * s
+            y[i] = u[i]
+            tt += u[i] * u[i]
         T[b] = 0.5 * tt
         # W = L^{-1} A^T, one forward substitution per row of A
         cmax = 0.0
         for j in range(m):
             nrm = 0.0
+            Wj = W[j]
             for i in range(n):
                 s = Ab[j, i]
+                Li = L[i]
                 for k in range(i):
-                    s -= L[i, k] * W[k, j]
-                s /= L[i, i]
-                W[i, j] = s
+                    s -= Li[k] * Wj[k]
+                s /= Li[i]
+                Wj[i] = s
                 nrm += s * s
             cn[j] = np.sqrt(nrm)
             if cn[j] > cmax:
@@ -142,11 +152,11 @@ def partition_kernel(
         for j in range(m):
             if cmax == 0.0 or cn[j] <= rtol * cmax:
                 for i in range(n):
-                    W[i, j] = 0.0
+                    W[j, i] = 0.0
             else:
                 inv = 1.0 / cn[j]
                 for i in range(n):
-                    W[i, j] *= inv
+                    W[j, i] *= inv
         # Householder QR with column pivoting
         r = 0
         for k in range(kmax):
@@ -155,7 +165,7 @@ def partition_kernel(
             for j in range(k, m):
                 s = 0.0
                 for i in range(k, n):
-                    s += W[i, j] * W[i, j]
+                    s += W[j, i] * W[j, i]
                 if s > best:
                     best = s
                     p = j
@@ -164,32 +174,32 @@ def partition_kernel(
                 break
             if p != k:
                 for i in range(n):
-                    t = W[i, k]
-                    W[i, k] = W[i, p]
-                    W[i, p] = t
+                    t = W[k, i]
+                    W[k, i] = W[p, i]
+                    W[p, i] = t
             x0 = W[k, k]
             alpha = -norm if x0 >= 0.0 else norm
             h2 = 0.0
             for i in range(k, n):
-                H[i, k] = W[i, k]
+                H[k, i] = W[k, i]
             H[k, k] = x0 - alpha
             for i in range(k, n):
-                h2 += H[i, k] * H[i, k]
+                h2 += H[k, i] * H[k, i]
             hn[k] = h2
             if h2 > 0.0:
                 for j in range(k + 1, m):
                     s = 0.0
                     for i in range(k, n):
-                        s += H[i, k] * W[i, j]
+                        s += H[k, i] * W[j, i]
                     f = 2.0 * s / h2
                     for i in range(k, n):
-                        W[i, j] -= f * H[i, k]
+                        W[j, i] -= f * H[k, i]
                 s = 0.0
                 for i in range(k, n):
-                    s += H[i, k] * y[i]
+                    s += H[k, i] * y[i]
                 f = 2.0 * s / h2
                 for i in range(k, n):
-                    y[i] -= f * H[i, k]
+                    y[i] -= f * H[k, i]
             r += 1
         rank[b] = r
         tc = 0.0
@@ -208,10 +218,10 @@ def partition_kernel(
                 if h2 > 0.0:
                     s = 0.0
                     for i in range(k, n):
-                        s += H[i, k] * z[i]
+                        s += H[k, i] * z[i]
                     f = 2.0 * s / h2
                     for i in range(k, n):
-                        z[i] -= f * H[i, k]
+                        z[i] -= f * H[k, i]
             # back substitution L^T v_c = z
             for i in range(n - 1, -1, -1):
                 s = z[i]
