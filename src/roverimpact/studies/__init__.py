@@ -1,0 +1,29 @@
+"""Studies: sweeps over scenario parameters, agreement statistics, paper reproduction.
+
+See ``docs/studies.md``. The wiring to the model, contact and simulation layers is in
+:mod:`roverimpact.studies.evaluate`.
+"""
+
+from .config import Case, Study, expand, load_study
+from .evaluate import FunctionEvaluator, RigidBodyEvaluator, ScenarioEvaluator, evaluate_case
+from .stats import Agreement, Estimate, agreement, concordant_pair_fraction
+from .sweep import StudyResult, load_results, prepare_study, run_study
+
+__all__ = [
+    "Agreement",
+    "Case",
+    "Estimate",
+    "FunctionEvaluator",
+    "RigidBodyEvaluator",
+    "ScenarioEvaluator",
+    "Study",
+    "StudyResult",
+    "agreement",
+    "concordant_pair_fraction",
+    "evaluate_case",
+    "expand",
+    "load_results",
+    "load_study",
+    "prepare_study",
+    "run_study",
+]

@@ -1,0 +1,426 @@
+"""Study files: a base scenario plus a grid, a list or a seeded random sample of cases.
+
+A study file is TOML, validated by :class:`Study` (pydantic v2, unknown keys rejected)::
+
+    name = "beta sweep"
+    simulate = false              # also run the compliant-contact simulator (F_max)
+    x = "obstacle.beta_deg"       # parameter on the x axis of the figures (optional)
+
+    [base]                        # a scenario, same keys as a scenario file
+    ...                           # (or:  base = "scenario.toml", relative to the study file)
+
+    [grid]                        # full factorial over dotted paths into the scenario
+    "obstacle.beta_deg" = { start = 0, stop = 80, num = 17 }
+    "model.params.com_height" = [0.3, 0.4, 0.5]
+
+Instead of ``[grid]``: ``[[cases]]`` tables (one per case, dotted keys) or
+``[random]`` with ``n``, ``seed`` and ``[random.params]`` of ``{ low, high }`` (uniform)
+or ``{ choices = [...] }``. Values are plain numbers in the unit the parameter's name
+states (``*_deg`` in degrees, everything else SI).
+
+:func:`expand` turns a study into its cases; each has a stable id that depends only on
+its position and its parameter values, which is what ``--resume`` keys on.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import itertools
+import json
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from .._io import read_toml
+from ..exceptions import ConfigError
+
+__all__ = ["Case", "Study", "apply_overrides", "expand", "get_path", "load_study"]
+
+Scalar = bool | int | float | str
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Linspace(_Strict):
+    """``{ start, stop, num }``: ``num`` evenly spaced values, both ends included."""
+
+    start: float
+    stop: float
+    num: int = Field(ge=1, le=10_000_000)
+
+    def values(self) -> list[float]:
+        return [float(x) for x in np.linspace(self.start, self.stop, self.num)]
+
+
+class Uniform(_Strict):
+    """``{ low, high }``: uniform random values in [low, high]."""
+
+    low: float
+    high: float
+
+    @model_validator(mode="after")
+    def _order(self):
+        if not self.high >= self.low:
+            raise ValueError(f"high ({self.high}) must be >= low ({self.low})")
+        return self
+
+
+class Choice(_Strict):
+    """``{ choices = [...] }``: values drawn uniformly from a list."""
+
+    choices: list[Scalar] = Field(min_length=1)
+
+
+class RandomSample(_Strict):
+    """``[random]``: ``n`` cases drawn with ``seed`` (numpy default_rng)."""
+
+    n: int = Field(ge=1, le=100_000_000)
+    seed: int
+    params: dict[str, Uniform | Choice] = Field(min_length=1)
+
+
+class Study(_Strict):
+    """A study: base scenario and the cases to run (exactly one of grid, cases, random).
+
+    Attributes
+    ----------
+    name : str
+        Label used in file names, figures and the report.
+    base : dict
+        The base scenario (nested tables as in a scenario file).
+    grid : dict of str -> list or Linspace, optional
+        Full factorial over dotted parameter paths; the first key varies slowest.
+    cases : list of dict, optional
+        Explicit cases, each a table of dotted paths -> values.
+    random : RandomSample, optional
+        Seeded random sample.
+    simulate : bool
+        Also run the compliant-contact simulator (F_max, contact duration).
+    x : str, optional
+        Parameter drawn on the x axis of the figures (default: first swept parameter).
+    chunk_size : int, optional
+        Cases per result chunk (the unit of resume and of distribution); default:
+        about 1/100 of the cases, at least 16.
+    """
+
+    name: str = Field(min_length=1)
+    description: str = ""
+    base: dict[str, Any]
+    grid: dict[str, Linspace | list[Scalar]] | None = None
+    cases: list[dict[str, Scalar]] | None = None
+    random: RandomSample | None = None
+    simulate: bool = False
+    x: str | None = None
+    chunk_size: int | None = Field(default=None, ge=1)
+
+    @field_validator("grid")
+    @classmethod
+    def _grid_nonempty(cls, grid):
+        if grid is None:
+            return grid
+        if not grid:
+            raise ValueError("[grid] is empty: give at least one parameter to sweep")
+        for key, val in grid.items():
+            if isinstance(val, list) and not val:
+                raise ValueError(f"grid parameter {key!r} has an empty list of values")
+        return grid
+
+    @field_validator("cases")
+    @classmethod
+    def _cases_nonempty(cls, cases):
+        if cases is not None and not cases:
+            raise ValueError("[[cases]] is empty: give at least one case")
+        return cases
+
+    @model_validator(mode="after")
+    def _one_design(self):
+        given = [k for k in ("grid", "cases", "random") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "a study needs exactly one of [grid], [[cases]] or [random]"
+                + (f" (got {', '.join(given)})" if given else "")
+            )
+        return self
+
+    # ---------------------------------------------------------------------------------
+    def parameters(self) -> list[str]:
+        """The swept parameters (dotted paths), in file order."""
+        if self.grid is not None:
+            return list(self.grid)
+        if self.random is not None:
+            return list(self.random.params)
+        seen: dict[str, None] = {}
+        for case in self.cases or []:
+            seen.update(dict.fromkeys(case))
+        return list(seen)
+
+    def x_parameter(self) -> str:
+        return self.x or self.parameters()[0]
+
+    def n_cases(self) -> int:
+        if self.grid is not None:
+            return int(np.prod([len(_grid_values(v)) for v in self.grid.values()]))
+        if self.random is not None:
+            return self.random.n
+        return len(self.cases or [])
+
+    def fingerprint(self) -> str:
+        """Hash of everything that determines the rows (not the chunking)."""
+        data = self.model_dump(mode="json", exclude={"chunk_size", "description", "x"})
+        text = json.dumps(data, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _grid_values(spec) -> list:
+    return spec.values() if isinstance(spec, Linspace) else list(spec)
+
+
+_UNIT_RE = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[A-Za-z°%/\^\d]+\s*$")
+
+
+def _format_errors(exc: ValidationError, where: str) -> str:
+    parts = []
+    for err in exc.errors():
+        loc = ".".join(str(x) for x in err["loc"])
+        msg = err["msg"]
+        val = err.get("input")
+        if isinstance(val, str) and _UNIT_RE.match(val):
+            msg += (f" (got {val!r}: write a plain number in the unit of the parameter "
+                    "name: *_deg in degrees, everything else SI)")
+        parts.append(f"{loc}: {msg}" if loc else msg)
+    return f"{where}: " + "; ".join(parts)
+
+
+def load_study(path: str | Path) -> tuple[Study, str]:
+    """Read and validate a study file; return the study and its original text.
+
+    A ``base = "file.toml"`` string is read relative to the study file (the text is then
+    ``None``: the study is self-contained only once the base is inlined).
+
+    Raises
+    ------
+    ConfigError
+        For malformed TOML, unknown keys, wrong types, an empty grid or a missing base.
+    """
+    path = Path(path)
+    raw = read_toml(path)
+    text = path.read_text(encoding="utf-8")
+    if isinstance(raw.get("base"), str):
+        # the base lives in another file: the copy written next to results inlines it
+        base_path = (path.parent / raw["base"]).resolve()
+        raw["base"] = read_toml(base_path)
+        text = None
+    try:
+        study = Study.model_validate(raw)
+    except ValidationError as exc:
+        raise ConfigError(_format_errors(exc, str(path))) from None
+    return study, text
+
+
+def study_from_dict(data: Mapping[str, Any], where: str = "study") -> Study:
+    """Validate a study given as a dict (as read from TOML)."""
+    if isinstance(data, Study):
+        return data
+    try:
+        return Study.model_validate(dict(data))
+    except ValidationError as exc:
+        raise ConfigError(_format_errors(exc, where)) from None
+
+
+# -------------------------------------------------------------------------------------
+# Dotted paths into nested scenario dicts
+# -------------------------------------------------------------------------------------
+
+_MISSING = object()
+
+
+def get_path(tree: Mapping[str, Any], path: str, default=_MISSING):
+    """Value at a dotted ``path`` ("model.params.com_height") of a nested dict."""
+    node: Any = tree
+    for part in path.split("."):
+        if isinstance(node, Mapping) and part in node:
+            node = node[part]
+        else:
+            if default is _MISSING:
+                raise KeyError(path)
+            return default
+    return node
+
+
+def apply_overrides(base: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict:
+    """A copy of ``base`` with dotted-path ``overrides`` set (base is not modified).
+
+    Only the dicts on the overridden paths are copied, so this is cheap.
+    """
+    out = dict(base)
+    for path, value in overrides.items():
+        parts = path.split(".")
+        node = out
+        for part in parts[:-1]:
+            child = node.get(part)
+            child = dict(child) if isinstance(child, Mapping) else {}
+            node[part] = child
+            node = child
+        node[parts[-1]] = copy.deepcopy(value) if isinstance(value, (list, dict)) else value
+    return out
+
+
+def flatten(tree: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Leaves of a nested dict as ``{dotted.path: value}`` (lists kept as values)."""
+    out: dict[str, Any] = {}
+    for key, val in tree.items():
+        name = f"{prefix}{key}"
+        if isinstance(val, Mapping) and val:
+            out.update(flatten(val, name + "."))
+        else:
+            out[name] = val
+    return out
+
+
+# -------------------------------------------------------------------------------------
+# Cases
+# -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Case:
+    """One case of a study.
+
+    Attributes
+    ----------
+    index : int
+        Position in the study (0-based); results are sorted by it.
+    case_id : str
+        Stable id: the index and a hash of the parameter values.
+    overrides : dict
+        Dotted parameter path -> value for this case.
+    """
+
+    index: int
+    case_id: str
+    overrides: dict[str, Any]
+
+
+def case_id(index: int, overrides: Mapping[str, Any]) -> str:
+    text = json.dumps({k: overrides[k] for k in sorted(overrides)}, sort_keys=True,
+                      separators=(",", ":"), default=float)
+    return f"{index:07d}-{hashlib.sha1(text.encode()).hexdigest()[:8]}"
+
+
+def _to_python(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    return x
+
+
+def design(study: Study) -> tuple[list[str], list[tuple]]:
+    """The swept parameter names and one tuple of values per case."""
+    names = study.parameters()
+    if study.grid is not None:
+        axes = [_grid_values(study.grid[k]) for k in names]
+        return names, list(itertools.product(*axes))
+    if study.random is not None:
+        rng = np.random.default_rng(study.random.seed)
+        cols = []
+        for key in names:
+            spec = study.random.params[key]
+            if isinstance(spec, Uniform):
+                cols.append([float(x) for x in rng.uniform(spec.low, spec.high, study.random.n)])
+            else:
+                idx = rng.integers(0, len(spec.choices), study.random.n)
+                cols.append([spec.choices[i] for i in idx])
+        return names, list(zip(*cols, strict=False))
+    rows = []
+    for case in study.cases or []:
+        rows.append(tuple(case.get(k, _MISSING) for k in names))
+    return names, rows
+
+
+def expand(study: Study) -> list[Case]:
+    """All cases of a study, in order, with their stable ids."""
+    names, rows = design(study)
+    out = []
+    for i, vals in enumerate(rows):
+        ov = {k: _to_python(v) for k, v in zip(names, vals, strict=False) if v is not _MISSING}
+        out.append(Case(index=i, case_id=case_id(i, ov), overrides=ov))
+    return out
+
+
+def distinct_values(study: Study) -> dict[str, list]:
+    """Per parameter, the values to check before running (grid values, sample bounds)."""
+    out: dict[str, list] = {}
+    if study.grid is not None:
+        for k, spec in study.grid.items():
+            out[k] = _grid_values(spec)
+    elif study.random is not None:
+        for k, spec in study.random.params.items():
+            out[k] = [spec.low, spec.high] if isinstance(spec, Uniform) else list(spec.choices)
+    else:
+        for case in study.cases or []:
+            for k, v in case.items():
+                out.setdefault(k, []).append(v)
+    # keep order, drop duplicates
+    return {k: list(dict.fromkeys(map(_hashable, v))) for k, v in out.items()}
+
+
+def _hashable(v):
+    return tuple(v) if isinstance(v, list) else v
+
+
+def check_parameters(study: Study, validated_base: Mapping[str, Any]) -> None:
+    """Every swept parameter must name an existing leaf of the (validated) base scenario.
+
+    Raises
+    ------
+    ConfigError
+        Naming the unknown parameter and the closest valid names.
+    """
+    leaves = flatten(validated_base)
+    for name in study.parameters():
+        if name in leaves:
+            continue
+        import difflib
+
+        close = difflib.get_close_matches(name, list(leaves), n=3, cutoff=0.5)
+        hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+        raise ConfigError(
+            f"study {study.name!r}: unknown parameter {name!r}: it is not a field of the "
+            f"base scenario{hint} (known: {', '.join(sorted(leaves)[:30])})"
+        )
+    if study.x is not None and study.x not in study.parameters():
+        raise ConfigError(
+            f"study {study.name!r}: x = {study.x!r} is not one of the swept parameters "
+            f"{study.parameters()}"
+        )
+
+
+def validate_scenarios(study: Study, validate) -> dict:
+    """Validate the base and every distinct swept value with the evaluator's validator.
+
+    ``validate(scenario_dict) -> normalized dict`` raises :class:`ConfigError` (or a
+    pydantic ``ValidationError``) for a bad scenario. Returns the normalized base.
+    """
+    def _run(scn, where):
+        try:
+            return validate(scn)
+        except ValidationError as exc:
+            raise ConfigError(_format_errors(exc, where)) from None
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+
+    base = _run(study.base, f"study {study.name!r}: base scenario")
+    check_parameters(study, base)
+    for key, values in distinct_values(study).items():
+        for val in values:
+            val = list(val) if isinstance(val, tuple) else val
+            _run(apply_overrides(study.base, {key: val}),
+                 f"study {study.name!r}: {key} = {val!r}")
+    return base

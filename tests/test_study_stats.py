@@ -1,0 +1,94 @@
+"""Agreement statistics: checked against brute-force pair counts and textbook identities."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from roverimpact.studies.stats import agreement, concordant_pair_fraction
+
+
+def _brute_pairs(x, y):
+    """Count concordant / discordant / tied pairs with a double loop (the definition)."""
+    C = D = T = 0
+    for i, j in itertools.combinations(range(len(x)), 2):
+        s = (x[i] - x[j]) * (y[i] - y[j])
+        if s > 0:
+            C += 1
+        elif s < 0:
+            D += 1
+        else:
+            T += 1
+    return C, D, T
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 6), st.integers(0, 6)), min_size=2, max_size=40))
+def test_concordant_fraction_matches_brute_force_with_ties(pairs):
+    x = np.array([p[0] for p in pairs], float)
+    y = np.array([p[1] for p in pairs], float)
+    C, D, T = _brute_pairs(x, y)
+    frac, c, d, t = concordant_pair_fraction(x, y)
+    assert (c, d, t) == (C, D, T)
+    if C + D:
+        assert frac == pytest.approx(C / (C + D))
+    else:
+        assert np.isnan(frac)
+
+
+def test_fraction_equals_kendall_tau_a_identity_without_ties(rng):
+    """Without ties, tau = (C - D) / (C + D) so the fraction is (1 + tau) / 2."""
+    x = rng.standard_normal(50)
+    y = x + 0.8 * rng.standard_normal(50)
+    C, D, _ = _brute_pairs(x, y)
+    tau_a = (C - D) / (C + D)
+    a = agreement(x, y, n_boot=0)
+    assert a.concordant_fraction.value == pytest.approx((1 + tau_a) / 2)
+    assert a.kendall.value == pytest.approx(tau_a)
+
+
+def test_monotone_map_has_perfect_rank_agreement_but_not_linear(rng):
+    """y = exp(3x) is increasing: Spearman = Kendall = fraction = 1, Pearson < 1."""
+    x = np.sort(rng.uniform(0, 2, 30))
+    a = agreement(x, np.exp(3 * x), n_boot=100, seed=1)
+    assert a.spearman.value == pytest.approx(1.0)
+    assert a.kendall.value == pytest.approx(1.0)
+    assert a.concordant_fraction.value == 1.0
+    assert a.pearson.value < 0.95
+    assert a.spearman.low == pytest.approx(1.0)  # every resample is monotone too
+
+
+def test_reversed_order_and_spearman_closed_form():
+    """rho = 1 - 6 sum d^2 / (n (n^2 - 1)) for distinct ranks; a reversal gives -1."""
+    x = np.array([1.0, 2, 3, 4, 5])
+    y = np.array([2.0, 1, 4, 3, 5])  # d = (1, -1, 1, -1, 0): sum d^2 = 4
+    a = agreement(x, y, n_boot=0)
+    assert a.spearman.value == pytest.approx(1 - 6 * 4 / (5 * 24))
+    b = agreement(x, -x, n_boot=0)
+    assert b.spearman.value == pytest.approx(-1.0)
+    assert b.concordant_fraction.value == 0.0
+
+
+def test_bootstrap_is_seeded_and_brackets_the_estimate(rng):
+    x = rng.standard_normal(40)
+    y = x + rng.standard_normal(40)
+    a1 = agreement(x, y, n_boot=200, seed=7)
+    a2 = agreement(x, y, n_boot=200, seed=7)
+    a3 = agreement(x, y, n_boot=200, seed=8)
+    assert a1 == a2
+    assert a1.spearman != a3.spearman
+    for e in (a1.spearman, a1.kendall, a1.pearson, a1.concordant_fraction):
+        assert e.low <= e.value <= e.high
+
+
+def test_nan_pairs_dropped_and_degenerate_inputs():
+    a = agreement([1, 2, np.nan, 4], [1, 3, 2, 5], n_boot=0)
+    assert a.n == 3
+    c = agreement([1, 1, 1, 1], [1, 2, 3, 4], n_boot=10)
+    assert np.isnan(c.spearman.value)
+    with pytest.raises(ValueError, match="same length"):
+        agreement([1, 2], [1, 2, 3])

@@ -1,0 +1,184 @@
+"""Sweeps: case expansion, the closed-form evaluator, resume, Dask (incl. a killed worker)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from roverimpact.exceptions import ConfigError
+from roverimpact.studies import RigidBodyEvaluator, expand, load_results, run_study
+from roverimpact.studies.config import apply_overrides, study_from_dict
+
+BASE = {
+    "model": {"name": "rigid_body",
+              "params": {"mass": 20.0, "inertia": 1.2, "com_height": 0.3, "lever": 0.4}},
+    "motion": {"speed": 0.5},
+}
+
+
+def _study(**kw):
+    data = {"name": "rb", "base": BASE,
+            "grid": {"obstacle.beta_deg": {"start": 0, "stop": 80, "num": 9},
+                     "model.params.com_height": [0.2, 0.45]}}
+    data.update(kw)
+    return data
+
+
+class CountingRigidBody(RigidBodyEvaluator):
+    """The closed-form evaluator, counting the cases it is asked to compute."""
+
+    name = "counting_rigid_body"
+
+    def __init__(self):
+        self.n = 0
+
+    def evaluate(self, base, overrides, *, simulate=False):
+        self.n += len(overrides)
+        return super().evaluate(base, overrides, simulate=simulate)
+
+
+class SlowRigidBody(RigidBodyEvaluator):
+    """The closed-form evaluator, slowed down so a worker can be killed mid-study."""
+
+    name = "slow_rigid_body"
+
+    def evaluate(self, base, overrides, *, simulate=False):
+        time.sleep(0.25)
+        return super().evaluate(base, overrides, simulate=simulate)
+
+
+def test_grid_expansion_order_ids_and_overrides():
+    study = study_from_dict(_study())
+    cases = expand(study)
+    assert len(cases) == 18 == study.n_cases()
+    # first grid key varies slowest
+    assert cases[0].overrides == {"obstacle.beta_deg": 0.0, "model.params.com_height": 0.2}
+    assert cases[1].overrides == {"obstacle.beta_deg": 0.0, "model.params.com_height": 0.45}
+    assert cases[2].overrides["obstacle.beta_deg"] == 10.0
+    assert len({c.case_id for c in cases}) == 18
+    assert [c.case_id for c in expand(study_from_dict(_study()))] == [c.case_id for c in cases]
+    scn = apply_overrides(BASE, cases[3].overrides)
+    assert scn["model"]["params"]["com_height"] == 0.45 and scn["obstacle"]["beta_deg"] == 10.0
+    assert BASE["model"]["params"]["com_height"] == 0.3  # base untouched
+
+
+def test_random_and_case_list_designs():
+    rnd = {"name": "r", "base": BASE, "random": {
+        "n": 25, "seed": 3, "params": {"obstacle.beta_deg": {"low": 0, "high": 60},
+                                       "motion.speed": {"choices": [0.2, 0.4]}}}}
+    a, b = expand(study_from_dict(rnd)), expand(study_from_dict(rnd))
+    assert [c.overrides for c in a] == [c.overrides for c in b]
+    betas = [c.overrides["obstacle.beta_deg"] for c in a]
+    assert all(0 <= x <= 60 for x in betas) and len(set(betas)) == 25
+    assert {c.overrides["motion.speed"] for c in a} == {0.2, 0.4}
+    lst = {"name": "l", "base": BASE, "cases": [{"obstacle.beta_deg": 5}, {"motion.speed": 1.0}]}
+    cs = expand(study_from_dict(lst))
+    assert [c.overrides for c in cs] == [{"obstacle.beta_deg": 5}, {"motion.speed": 1.0}]
+
+
+def test_rigid_body_indicator_matches_closed_form(tmp_path):
+    r"""T_c^- of the planar rigid body, derived by hand.
+
+    The contact point C is at r = (l, -h) from the COM; the normal direction into the
+    obstacle is d = (cos b, -sin b). The speed of C along d is
+    d.v_G + theta_dot (r_x d_z - r_z d_x) = d.v_G + theta_dot (h cos b - l sin b).
+    For a single row a, 1/m_eff = a M^-1 a^T = 1/m + (h cos b - l sin b)^2 / I and
+    T_c^- = m_eff v_n^2 / 2 with v_n = u cos b (pure translation at speed u).
+    """
+    res = run_study(_study(), tmp_path / "out", evaluator=RigidBodyEvaluator())
+    t = res.table
+    b = np.deg2rad(t["obstacle.beta_deg"].to_numpy())
+    h = t["model.params.com_height"].to_numpy()
+    m, inertia, lever, u = 20.0, 1.2, 0.4, 0.5
+    m_eff = 1.0 / (1.0 / m + (h * np.cos(b) - lever * np.sin(b)) ** 2 / inertia)
+    np.testing.assert_allclose(t["m_eff"], m_eff, rtol=1e-12)
+    np.testing.assert_allclose(t["T_c_minus"], 0.5 * m_eff * (u * np.cos(b)) ** 2, rtol=1e-10)
+    np.testing.assert_allclose(t["v_n"], u * np.cos(b), rtol=1e-12)
+
+
+def test_outputs_inputs_and_files(tmp_path):
+    res = run_study(_study(), tmp_path / "out", evaluator=RigidBodyEvaluator(), csv=True)
+    out = tmp_path / "out"
+    for name in ("results.parquet", "results.csv", "study.toml", "manifest.json"):
+        assert (out / name).is_file()
+    t = pd.read_parquet(out / "results.parquet")
+    pd.testing.assert_frame_equal(t, res.table)
+    # every scenario input next to every output
+    for col in ("case", "case_id", "obstacle.beta_deg", "model.params.com_height",
+                "model.params.mass", "motion.speed", "T_c_minus", "m_eff"):
+        assert col in t.columns
+    assert t["case"].tolist() == list(range(18))
+    csv = pd.read_csv(out / "results.csv")
+    np.testing.assert_allclose(csv["T_c_minus"], t["T_c_minus"], rtol=1e-12)
+    _table, manifest, study = load_results(out)
+    assert manifest["status"] == "complete" and study.name == "rb"
+
+
+def test_interrupted_then_resumed_equals_serial(tmp_path):
+    serial = run_study(_study(chunk_size=4), tmp_path / "serial",
+                       evaluator=RigidBodyEvaluator()).table
+
+    def stop_after_two_chunks(done, total):
+        if done >= 8:
+            raise KeyboardInterrupt
+
+    ev = CountingRigidBody()
+    with pytest.raises(KeyboardInterrupt):
+        run_study(_study(chunk_size=4), tmp_path / "r", evaluator=ev,
+                  progress=stop_after_two_chunks)
+    assert ev.n == 8
+    assert not (tmp_path / "r" / "results.parquet").exists()
+    with pytest.raises(ConfigError, match="--resume"):
+        run_study(_study(chunk_size=4), tmp_path / "r", evaluator=ev)
+    ev2 = CountingRigidBody()
+    res = run_study(_study(chunk_size=4), tmp_path / "r", evaluator=ev2, resume=True)
+    assert ev2.n == 10 and res.n_reused == 8 and res.n_computed == 10  # nothing recomputed
+    pd.testing.assert_frame_equal(res.table, serial)
+    # resuming a finished study computes nothing; a different study is refused
+    ev3 = CountingRigidBody()
+    again = run_study(_study(chunk_size=4), tmp_path / "r", evaluator=ev3, resume=True)
+    assert ev3.n == 0
+    pd.testing.assert_frame_equal(again.table, serial)
+    other = _study(chunk_size=4)
+    other["grid"]["model.params.com_height"] = [0.1]
+    with pytest.raises(ConfigError, match="another study"):
+        run_study(other, tmp_path / "r", evaluator=ev3, resume=True)
+
+
+def test_dask_local_cluster_equals_serial(tmp_path):
+    pytest.importorskip("dask.distributed")
+    serial = run_study(_study(chunk_size=3), tmp_path / "s", evaluator=RigidBodyEvaluator()).table
+    res = run_study(_study(chunk_size=3), tmp_path / "d", evaluator=RigidBodyEvaluator(),
+                    workers=2)
+    pd.testing.assert_frame_equal(res.table, serial)
+
+
+def test_killed_worker_loses_and_duplicates_no_row(tmp_path):
+    pytest.importorskip("dask.distributed")
+    import cloudpickle
+    from dask.distributed import Client, LocalCluster
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    study = _study(chunk_size=2)  # 9 chunks of 0.25 s each on 2 workers
+    serial = run_study(study, tmp_path / "s", evaluator=RigidBodyEvaluator()).table
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        pids = sorted(client.run(os.getpid).values())
+        killed = []
+
+        def kill_one_worker(done, total):
+            if done > 0 and not killed:
+                os.kill(pids[0], signal.SIGKILL)
+                killed.append(pids[0])
+
+        res = run_study(study, tmp_path / "k", evaluator=SlowRigidBody(),
+                        scheduler=cluster.scheduler_address, progress=kill_one_worker)
+    assert killed
+    assert res.table["case_id"].is_unique and len(res.table) == 18
+    pd.testing.assert_frame_equal(res.table, serial)
