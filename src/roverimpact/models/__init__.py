@@ -2,10 +2,12 @@
 
 * :func:`rover2d` -- parametric planar rover (DETC2014-35554, Fig. 1).
 * :func:`rocker_bogie` -- parametric six-wheel rocker-bogie rover (DETC2015-47747, Fig. 1).
+* :func:`load_robot`, :func:`export_urdf` -- any URDF/MJCF robot; built-in rovers to URDF.
 * :class:`MultibodyModel`, :class:`Wheel` -- the shared description every builder returns.
 """
 
 from .base import MultibodyModel, Wheel
+from .robot import export_urdf, joint_slices, load_robot
 from .rocker_bogie import PRESETS, RockerBogieParams, rocker_bogie
 from .rover2d import Rover2DParams, rover2d
 
@@ -15,6 +17,9 @@ __all__ = [
     "RockerBogieParams",
     "Rover2DParams",
     "Wheel",
+    "export_urdf",
+    "joint_slices",
+    "load_robot",
     "rocker_bogie",
     "rover2d",
 ]

@@ -8,8 +8,8 @@ both produce one; ``simulate`` and the studies consume it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 

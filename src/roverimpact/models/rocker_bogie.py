@@ -12,9 +12,10 @@ Side view of one side (the other side is its mirror in y)::
            (rear)   (middle)   (front)                   above the axles by bogie_pivot_height
        ----------------------------------------> x (forward)
 
-Coordinates: ``q = [x, y, z, qx, qy, qz, qw, rocker_left, bogie_left, wheel spins...,
-rocker_right, bogie_right, ...]`` (order of the kinematic tree; look names up with
-:func:`roverimpact.models.robot.joint_slices`). The base is ``pin.JointModelFreeFlyer``
+Coordinates: ``q = [x, y, z, qx, qy, qz, qw, rocker_left, bogie_left, wheel_left_middle,
+wheel_left_rear, wheel_left_front, rocker_right, ...]`` (order of the kinematic tree; look
+names up with :func:`roverimpact.models.robot.joint_slices`). The base is
+``pin.JointModelFreeFlyer``
 (joint ``"root_joint"``, at the chassis COM), so ``v[:6]`` is the chassis twist in
 **chassis axes** (Pinocchio's LOCAL convention).
 
@@ -208,12 +209,14 @@ def rocker_bogie(
                       (-p.com_x, sy * 0.5 * p.track, -p.chassis_com_above_pivot),
                       f"rocker_{side}", f"rocker_{side}_link", p.rocker_mass, com=rocker_com,
                       inertia=rod_inertia(p.rocker_mass, p.front_x - bx))
-        add_wheel(jr, side, "front", (p.front_x, 0.0, -rh))
+        # children in alphabetical order of joint names (bogie_ < wheel_), the order of
+        # Pinocchio's URDF parser, so that an export loads back with the same q layout
         jb = add_body(model, jr, pin.JointModelRY(), (bx, 0.0, -(rh - bh)), f"bogie_{side}",
                       f"bogie_{side}_link", p.bogie_mass, com=(0.0, 0.0, -0.5 * bh),
                       inertia=rod_inertia(p.bogie_mass, p.middle_x - p.rear_x))
         add_wheel(jb, side, "middle", (p.middle_x - bx, 0.0, -bh))
         add_wheel(jb, side, "rear", (p.rear_x - bx, 0.0, -bh))
+        add_wheel(jr, side, "front", (p.front_x, 0.0, -rh))
 
     q_nominal = pin.neutral(model)
     q_nominal[2] = r + rh + p.chassis_com_above_pivot

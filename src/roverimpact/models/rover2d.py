@@ -127,7 +127,8 @@ class Rover2DParams:
 
     @property
     def wheel_names(self) -> tuple[str, ...]:
-        return ("rear", "middle", "front") if self.middle_wheel else ("rear", "front")
+        # alphabetical = the order of Pinocchio's URDF parser, so exports load back identically
+        return ("front", "middle", "rear") if self.middle_wheel else ("front", "rear")
 
     def wheel_x(self, name: str) -> float:
         """x of a wheel axle relative to mid-wheelbase [m]."""
@@ -187,7 +188,7 @@ def rover2d(params: Rover2DParams | None = None, **overrides) -> MultibodyModel:
     >>> from roverimpact.models import rover2d
     >>> rv = rover2d(suspension="rocker")
     >>> rv.model.nv, [w.name for w in rv.wheels], rv.lockable_joints
-    (6, ['rear', 'front'], ['rocker'])
+    (6, ['front', 'rear'], ['rocker'])
     """
     if params is None:
         params = Rover2DParams()
