@@ -1,0 +1,466 @@
+r"""The impact run: settle, drive into the obstacle, integrate through the impact.
+
+Phases (each a scipy ``solve_ivp`` call with events):
+
+1. *approach* from the start state until the obstacle gap of some wheel reaches 0
+   (terminal event, direction -1). The state at the event is the pre-impact state
+   ``(q^-, v^-)`` from which ``T_c^-`` is computed.
+2. *contact* until every wheel has left the obstacle again (gap event, direction +1),
+   or ``t_after`` has elapsed.
+
+Configurations on the manifold: the state holds a chart ``dq`` around an anchor
+``q_ref`` (``q = pin.integrate(q_ref, dq)``); a terminal event at ``|dq|_inf = 0.5``
+re-anchors (free-flyer rotations stay far from the chart's singularity at pi).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pinocchio as pin
+from scipy.integrate import solve_ivp
+from scipy.optimize import least_squares, minimize_scalar
+
+from ..energy import effective_mass, partition
+from ..exceptions import ConfigError, InputError, ModelError, SolverError
+from ._config import SimulationConfig, gravity_vector
+from ._result import SimulationResult
+from ._system import ContactSystem, Plane
+
+__all__ = ["build_system", "effective_energy", "simulate_impact"]
+
+_CHART_LIMIT = 0.5
+_MAX_EVALS = 400_000
+_FAR = 1.0e9
+
+
+def _law(spec, override):
+    if override is not None:
+        return override
+    try:
+        from ..contact import get_law
+    except ImportError:  # pragma: no cover - until roverimpact.contact lands
+        raise ConfigError("roverimpact.contact is not available: pass law objects "
+                          "explicitly (law=..., ground_law=...)") from None
+    key = spec.law.strip().lower().replace("_", "-")
+    e = None if key == "hertz" and spec.e == 1.0 else spec.e
+    n = None if key == "kelvin-voigt" and spec.n == 1.0 else spec.n
+    return get_law(spec.law, k=spec.k, e=e, n=n, c=spec.c)
+
+
+def _reference_q(mbm):
+    q0 = getattr(mbm, "q0", None)
+    if q0 is None:
+        q0 = (mbm.params or {}).get("q_nominal")
+    return pin.neutral(mbm.model) if q0 is None else np.asarray(q0, dtype=float)
+
+
+def _obstacle_normal(beta: float) -> np.ndarray:
+    return np.array([-math.sin(beta), 0.0, math.cos(beta)])
+
+
+def build_system(mbm, cfg: SimulationConfig, *, law=None, ground_law=None) -> ContactSystem:
+    """Turn a :class:`~roverimpact.models.base.MultibodyModel` and a config into a system.
+
+    The obstacle plane is created far ahead (x = 1e9 m); :func:`simulate_impact` moves it
+    in front of the rover after settling.
+    """
+    model = mbm.model
+    if not mbm.wheels:
+        raise ModelError(f"model {mbm.name!r} has no wheels: nothing can touch the obstacle")
+    springs = []
+    q_neutral = _reference_q(mbm)
+    for name, sp in cfg.springs.items():
+        if not model.existJointName(name):
+            known = [model.names[i] for i in range(1, model.njoints)]
+            raise ConfigError(f"spring on unknown joint {name!r}; joints of {mbm.name!r}: "
+                              f"{known}")
+        j = model.joints[model.getJointId(name)]
+        if j.nq != 1 or j.nv != 1:
+            raise ConfigError(f"spring on joint {name!r}: only 1-dof joints take springs")
+        q0 = q_neutral[j.idx_q] if sp.q0 is None else sp.q0
+        springs.append((j.idx_q, j.idx_v, sp.k, sp.c, q0))
+    planes = []
+    if cfg.ground:
+        planes.append(Plane("ground", np.array([0.0, 0.0, 1.0]), np.zeros(3),
+                            _law(cfg.ground_contact, ground_law), cfg.ground_contact.v_ref))
+    planes.append(Plane("obstacle", _obstacle_normal(cfg.beta), np.array([_FAR, 0.0, 0.0]),
+                        _law(cfg.obstacle, law), cfg.obstacle.v_ref,
+                        z_max=cfg.obstacle_height))
+    return ContactSystem(
+        model=model,
+        wheel_frames=[w.frame for w in mbm.wheels],
+        radii=np.array([w.radius for w in mbm.wheels]),
+        planes=planes,
+        gravity=gravity_vector(cfg.g),
+        springs=springs,
+        loop_closure=mbm.loop_closure,
+        mu=cfg.mu,
+        v_slip=cfg.v_slip,
+        baumgarte=cfg.integrator.baumgarte,
+    )
+
+
+# ---------------------------------------------------------------------- initial state
+def _rigid_velocity(sys: ContactSystem, q, axis: np.ndarray) -> np.ndarray:
+    """Generalized velocity moving every wheel centre at unit speed along ``axis``
+    with no rotation of the wheel frames (min-norm least squares)."""
+    _, J = sys.wheel_kinematics(q)
+    nw = J.shape[0]
+    A = J.reshape(nw * 6, sys.nv)
+    b = np.tile(np.concatenate([axis, np.zeros(3)]), nw)
+    w = np.linalg.lstsq(A, b, rcond=None)[0]
+    if np.linalg.norm(A @ w - b) > 1e-6 * math.sqrt(nw):
+        raise ModelError(
+            f"the model cannot translate rigidly along {axis.tolist()}: settling and driving "
+            "need a floating or planar base; pass q0 and v0 and set settle = false")
+    return w
+
+
+def _settle(sys: ContactSystem, q, cfg: SimulationConfig, mass: float):
+    """Place the wheels on the ground and solve the static equilibrium (v = 0)."""
+    ground = sys.planes[0]
+    w_z = _rigid_velocity(sys, q, np.array([0.0, 0.0, 1.0]))
+    nw = len(sys.fids)
+    law = ground.law
+    delta0 = (mass * cfg.g / max(nw, 1) / law.k) ** (1.0 / law.n) if cfg.g > 0 else 0.0
+    for _ in range(3):  # pure translation: exact up to the wheel frames' rotation
+        gmin = float(np.min(sys.gaps(q)[0]))
+        q = pin.integrate(sys.model, q, -(gmin + delta0) * w_z)
+    if cfg.g == 0.0:
+        return q
+    kloop = 0 if sys.loop_closure is None else sys.loop(q)[0].size
+    scale_f = mass * cfg.g
+    scale_x = max(delta0, 1e-6)
+
+    def residual(x):
+        qq = pin.integrate(sys.model, q, x[: sys.nv] * scale_x)
+        zero = np.zeros(sys.nv)
+        cs = sys.contacts(qq, zero)
+        r = cs.tau + sys.spring_torque(qq, zero) - pin.computeGeneralizedGravity(
+            sys.model, sys.data, qq)
+        if kloop:
+            phi, Jl = sys.loop(qq)
+            r = np.concatenate([r + Jl.T @ x[sys.nv:] * scale_f, phi / scale_x])
+            return np.concatenate([r[: sys.nv] / scale_f, r[sys.nv:]])
+        return r / scale_f
+
+    sol = least_squares(residual, np.zeros(sys.nv + kloop), method="lm", xtol=1e-14,
+                        ftol=1e-14, gtol=1e-14, max_nfev=200 * (sys.nv + kloop))
+    if not np.all(np.abs(sol.fun) < 1e-7):
+        raise SolverError(
+            f"could not find the static equilibrium on the ground (residual "
+            f"{np.max(np.abs(sol.fun)):.2g} of the weight): check the suspension springs "
+            "and that every wheel can reach the ground, or set settle = false")
+    return pin.integrate(sys.model, q, sol.x[: sys.nv] * scale_x)
+
+
+def _driving_velocity(sys: ContactSystem, q, u: float) -> np.ndarray:
+    """Rigid translation at speed u along +x with each wheel rolling if it has a spin joint."""
+    v = u * _rigid_velocity(sys, q, np.array([1.0, 0.0, 0.0]))
+    if not sys.planes or sys.planes[0].name != "ground":
+        return v
+    cs = sys.contacts(q, v)
+    model = sys.model
+    for w, fid in enumerate(sys.fids):
+        jid = model.frames[fid].parentJoint
+        j = model.joints[jid]
+        if j.nv != 1:
+            continue
+        col = cs.Jp[0, w, :, j.idx_v]          # contact-point velocity per unit spin rate
+        _, Jc = sys.wheel_kinematics(q)
+        if np.linalg.norm(Jc[w, :3, j.idx_v]) > 1e-9 or abs(col[0]) < 1e-12:
+            continue                           # not a pure wheel-spin joint
+        slip = cs.Jp[0, w] @ v
+        v[j.idx_v] -= slip[0] / col[0]
+    return v
+
+
+# ---------------------------------------------------------------------- indicator
+def effective_energy(sys: ContactSystem, q, v, wheel: int):
+    """``T_c^-`` and ``m_eff`` of the state (q, v) for an obstacle contact of ``wheel``.
+
+    Constraint rows ``A`` (in this order): the obstacle normal of ``wheel``, the ground
+    normal of every wheel in ground contact (indentation > 0) and the loop-closure rows.
+    ``m_eff`` is the effective mass along the obstacle row alone.
+
+    Returns
+    -------
+    T_c : float, m_eff : float, labels : list of str
+    """
+    cs = sys.contacts(q, v)
+    names = [p.name for p in sys.planes]
+    io = names.index("obstacle")
+    rows = [sys.planes[io].n @ cs.Jp[io, wheel]]
+    labels = [f"obstacle_{wheel}"]
+    if "ground" in names:
+        ig = names.index("ground")
+        for w in np.flatnonzero(cs.delta[ig] > 0):
+            rows.append(sys.planes[ig].n @ cs.Jp[ig, w])
+            labels.append(f"ground_{w}")
+    if sys.loop_closure is not None:
+        Jl = sys.loop(q)[1]
+        rows.extend(Jl)
+        labels.extend(f"loop_{i}" for i in range(Jl.shape[0]))
+    M = sys.mass_matrix(q)
+    A = np.array(rows)
+    T_c = float(partition(M, A, v, want_velocities=False).T_c)
+    m_eff = float(effective_mass(M, rows[0]))
+    return T_c, m_eff, labels
+
+
+# ---------------------------------------------------------------------- integration
+class _Segments:
+    """Accepted steps of all solve_ivp calls, with their anchors for dense output."""
+
+    def __init__(self):
+        self.t, self.y, self.seg, self.sols, self.anchors = [], [], [], [], []
+
+    def add(self, sol, q_ref):
+        k = len(self.sols)
+        self.sols.append(sol.sol)
+        self.anchors.append(q_ref)
+        start = 1 if self.t else 0
+        self.t.extend(sol.t[start:])
+        self.y.extend(sol.y.T[start:])
+        self.seg.extend([k] * (len(sol.t) - start))
+
+
+def _run_phase(sys, q_ref, v, imp, t0, t1, cfg, v_i, obstacle_event, direction, segs,
+               counter):
+    """Integrate from t0 to t1 with re-anchoring; stop at the obstacle gap event."""
+    nv, io = sys.nv, len(sys.planes) - 1
+    spec = cfg.integrator
+
+    def rhs(t, y):
+        counter[0] += 1
+        if counter[0] > _MAX_EVALS:
+            raise SolverError(
+                f"the integrator needed more than {_MAX_EVALS} force evaluations: the contact "
+                "is too stiff for the time limit or the run diverges; lower the stiffness, "
+                "loosen integrator.rtol or shorten t_max / t_after")
+        dq, vv = y[:nv], y[nv:2 * nv]
+        q = sys.config(q_ref_box[0], dq)
+        cs, tau = sys.generalized_forces(q, vv, v_i)
+        a = sys.acceleration(q, vv, tau)
+        return np.concatenate([sys.chart_rate(q_ref_box[0], dq, vv), a, cs.f_n[io]])
+
+    def ev_gap(t, y):
+        q = sys.config(q_ref_box[0], y[:nv])
+        g = sys.gaps(q)[io]
+        return float(np.min(g)) if np.isfinite(g).any() else 1.0
+
+    ev_gap.terminal, ev_gap.direction = obstacle_event, direction
+
+    def ev_chart(t, y):
+        return float(np.max(np.abs(y[:nv]))) - _CHART_LIMIT
+
+    ev_chart.terminal, ev_chart.direction = True, 1
+    events = [ev_gap] if sys.euclidean else [ev_gap, ev_chart]
+    q_ref_box = [q_ref]
+    y = np.concatenate([np.zeros(nv), v, imp])
+    t = t0
+    while True:
+        sol = solve_ivp(rhs, (t, t1), y, method=spec.method, rtol=spec.rtol, atol=spec.atol,
+                        max_step=spec.max_step, first_step=spec.first_step,
+                        events=events, dense_output=True)
+        if sol.status < 0:
+            raise SolverError(f"the integrator failed at t = {sol.t[-1]:.6g} s: {sol.message}"
+                              " (try a smaller integrator.rtol or max_step)")
+        segs.add(sol, q_ref_box[0])
+        t, y = sol.t[-1], sol.y[:, -1].copy()
+        if sol.status == 0:
+            return t, sys.config(q_ref_box[0], y[:nv]), y[nv:], False
+        if len(sol.t_events[0]):
+            return t, sys.config(q_ref_box[0], y[:nv]), y[nv:], True
+        q_ref_box[0] = sys.config(q_ref_box[0], y[:nv])   # re-anchor the chart
+        y[:nv] = 0.0
+
+
+def _state_at(sys, segs, k, t):
+    y = segs.sols[k](t)
+    return sys.config(segs.anchors[k], y[: sys.nv]), y[sys.nv: 2 * sys.nv]
+
+
+def simulate_impact(mbm, config: SimulationConfig | dict | None = None, *, q0=None, v0=None,
+                    law=None, ground_law=None) -> SimulationResult:
+    r"""Simulate the rover driving into the obstacle with compliant contact.
+
+    Parameters
+    ----------
+    mbm : MultibodyModel
+        Model with wheels (and loop closure if any).
+    config : SimulationConfig or dict, optional
+        Run parameters (defaults: Earth gravity, 0.1 m/s, vertical wall 1 mm ahead).
+    q0 : (nq,) array_like, optional
+        Start configuration (default: the model's ``params['q_nominal']`` or pin.neutral); with
+        ``config.settle`` it is settled on the ground first.
+    v0 : (nv,) array_like, optional
+        Start velocity. If given, it is used as is (no settling, no driving velocity);
+        otherwise the rover translates at ``config.speed`` along +x with rolling wheels.
+    law, ground_law : contact-law objects, optional
+        Override the laws named in the config (any object with ``force(delta,
+        delta_dot, v_i)``, ``k``, ``n``, ``e``).
+
+    Returns
+    -------
+    SimulationResult
+
+    Raises
+    ------
+    ConfigError, InputError
+        Bad configuration values, obstacle behind or inside the rover.
+    SolverError
+        No obstacle contact within ``t_max``, integrator failure or runaway cost.
+    """
+    if config is None:
+        config = SimulationConfig()
+    elif isinstance(config, dict):
+        config = SimulationConfig.from_dict(config)
+    sys = build_system(mbm, config, law=law, ground_law=ground_law)
+    model = sys.model
+    if q0 is None:
+        q0 = _reference_q(mbm)
+    q = np.asarray(q0, dtype=float).copy()
+    if q.shape != (sys.nq,):
+        raise InputError(f"q0 must have shape ({sys.nq},), got {q.shape}")
+    mass = float(sum(i.mass for i in model.inertias))
+    if v0 is None:
+        if config.settle and config.ground:
+            q = _settle(sys, q, config, mass)
+        v = _driving_velocity(sys, q, config.speed)
+    else:
+        v = np.asarray(v0, dtype=float).copy()
+        if v.shape != (sys.nv,):
+            raise InputError(f"v0 must have shape ({sys.nv},), got {v.shape}")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        raise InputError("q0 and v0 must be finite")
+
+    # place the obstacle
+    obst = sys.planes[-1]
+    n = obst.n
+    c = sys.wheel_centres(q)
+    sb = math.sin(config.beta)
+    if config.obstacle_x is None:
+        x0 = (config.distance - float(np.min(c @ n - sys.radii))) / sb
+    else:
+        x0 = float(config.obstacle_x)
+    obst.p0 = np.array([x0, 0.0, 0.0])
+    sys._set_planes()
+    gaps = sys.gaps(q)[-1]
+    if not np.isfinite(gaps).any():
+        raise InputError(f"the obstacle (height {config.obstacle_height} m) is lower than the "
+                         "contact points of every wheel: the rover would pass over it")
+    if float(np.nanmin(np.where(np.isfinite(gaps), gaps, np.nan))) < 0.0:
+        w = int(np.argmin(gaps))
+        raise InputError(f"the obstacle is behind or inside the rover: wheel "
+                         f"{mbm.wheels[w].name!r} is {-gaps[w]:.4g} m past its face; "
+                         "move obstacle_x ahead of the rover (+x)")
+
+    counter = [0]
+    segs = _Segments()
+    nw = len(sys.fids)
+    t_end, q1, y1, hit = _run_phase(sys, q, v, np.zeros(nw), 0.0, config.t_max, config,
+                                    None, True, -1, segs, counter)
+    if not hit:
+        raise SolverError(
+            f"no obstacle contact within t_max = {config.t_max} s (nearest wheel started "
+            f"{float(np.min(gaps)):.4g} m away at {config.speed} m/s): increase t_max or "
+            "reduce distance")
+    t_c = t_end
+    q_minus, v_minus = q1, y1[:sys.nv].copy()
+    g_now = sys.gaps(q_minus)[-1]
+    wheel = int(np.argmin(g_now))
+    cs = sys.contacts(q_minus, v_minus)
+    v_n = float(cs.delta_dot[-1, wheel])
+    if v_n <= 0.0:  # pragma: no cover - the event has direction -1
+        raise SolverError("the first obstacle contact has no approach velocity")
+    v_i = [p.v_i for p in sys.planes]
+    v_i[-1] = v_n
+    obst.v_i = v_n
+    T_c, m_eff, labels = effective_energy(sys, q_minus, v_minus, wheel)
+    T_minus = sys.kinetic_energy(q_minus, v_minus)
+    E_minus = float(T_minus + sys.potential_energy(q_minus))
+    i_contact = len(segs.t) - 1
+
+    t_stop, q_plus, y2, separated = _run_phase(
+        sys, q_minus, v_minus, np.zeros(nw), t_c, t_c + config.t_after, config, v_i, True, 1,
+        segs, counter)
+    v_plus = y2[:sys.nv].copy()
+    impulses = y2[sys.nv:]
+    T_plus = sys.kinetic_energy(q_plus, v_plus)
+    E_plus = float(T_plus + sys.potential_energy(q_plus))
+
+    # ---- time history
+    T = np.asarray(segs.t)
+    Y = np.asarray(segs.y)
+    names_w = [w.name for w in mbm.wheels]
+    rows_q, rows_v, force = [], [], {}
+    pl_names = [p.name for p in sys.planes]
+    fn = np.empty((len(T), len(pl_names), nw))
+    ft = np.empty_like(fn)
+    de = np.empty_like(fn)
+    for i, (yk, k) in enumerate(zip(Y, segs.seg, strict=True)):
+        qk = sys.config(segs.anchors[k], yk[:sys.nv])
+        vk = yk[sys.nv: 2 * sys.nv]
+        csk = sys.contacts(qk, vk, v_i if i >= i_contact else None)
+        fn[i], ft[i], de[i] = csk.f_n, csk.f_t, csk.delta
+        rows_q.append(qk)
+        rows_v.append(vk)
+    data = {"t": T - t_c}
+    rows_q, rows_v = np.array(rows_q), np.array(rows_v)
+    for j in range(sys.nq):
+        data[f"q_{j}"] = rows_q[:, j]
+    for j in range(sys.nv):
+        data[f"v_{j}"] = rows_v[:, j]
+    for p, pn in enumerate(pl_names):
+        for w, wn in enumerate(names_w):
+            data[f"{pn}_{wn}_fn"] = fn[:, p, w]
+            data[f"{pn}_{wn}_ft"] = ft[:, p, w]
+            data[f"{pn}_{wn}_delta"] = de[:, p, w]
+            force[(pn, w)] = fn[:, p, w]
+    history = pd.DataFrame(data)
+
+    # ---- peaks refined on the dense output
+    io = len(pl_names) - 1
+    F_max, t_peak = {}, {}
+
+    def f_obst(t, k, w=None):
+        qk, vk = _state_at(sys, segs, k, t)
+        f = sys.contacts(qk, vk, v_i).f_n[io]
+        return f.sum() if w is None else f[w]
+
+    def refine(series, w):
+        i = int(np.argmax(series))
+        if series[i] <= 0.0 or i < i_contact:
+            return 0.0, float(T[i] - t_c)
+        best_f, best_t = float(series[i]), float(T[i])
+        for a, b in ((i - 1, i), (i, i + 1)):
+            if a < i_contact or b >= len(T) or segs.seg[b] != segs.seg[max(a, 0)]:
+                continue
+            k = segs.seg[b]
+            r = minimize_scalar(lambda t, k=k: -f_obst(t, k, w), bounds=(T[a], T[b]),
+                                method="bounded", options={"xatol": 1e-12 + 1e-9 * T[b]})
+            if -r.fun > best_f:
+                best_f, best_t = float(-r.fun), float(r.x)
+        return best_f, best_t - t_c
+
+    for w, wn in enumerate(names_w):
+        f, tp = refine(fn[:, io, w], w)
+        F_max[f"obstacle_{wn}"], t_peak[f"obstacle_{wn}"] = f, tp
+    F_total, _ = refine(fn[:, io, :].sum(axis=1), None)
+    duration = float(t_stop - t_c)
+    return SimulationResult(
+        history=history, F_max=F_max, t_peak=t_peak, F_max_total=F_total,
+        impulse={f"obstacle_{wn}": float(impulses[w]) for w, wn in enumerate(names_w)},
+        contact_duration=duration, separated=bool(separated),
+        T_minus=T_minus, T_plus=T_plus, E_minus=E_minus, E_plus=E_plus,
+        q_minus=q_minus, v_minus=v_minus, q_plus=q_plus, v_plus=v_plus,
+        T_c_minus=T_c, m_eff=m_eff, v_n=v_n, contact_wheel=names_w[wheel],
+        A_rows=[lab.replace(f"_{wheel}", f"_{names_w[wheel]}", 1) if lab.startswith("obst")
+                else lab for lab in labels],
+        stats={"nfev": counter[0], "steps": len(T), "segments": len(segs.sols),
+               "t_contact": float(t_c)},
+    )
