@@ -173,7 +173,12 @@ def test_peak_force_monotonic_in_T(name):
     law = _law(name, 1e6, 0.6, 1.5, 10.0)
     T = np.geomspace(1e-3, 1e3, 200)
     F = peak_force(T, 0.5, law)
-    assert F.shape == T.shape and np.all(np.diff(F) > 0)
+    assert F.shape == T.shape
+    if name == "kelvin-voigt":
+        # fixed c: for zeta >= 1/2 (small masses) the peak is c v_n at first touch
+        assert np.all(np.diff(F) >= 0) and F[0] == pytest.approx(law.c * 0.5)
+    else:
+        assert np.all(np.diff(F) > 0)
 
 
 def test_peak_force_batched_matches_scalar_predict():
