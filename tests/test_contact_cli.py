@@ -1,0 +1,58 @@
+"""`roverimpact contact` command and the contact plots."""
+
+import matplotlib
+import pytest
+
+import roverimpact
+from roverimpact.cli import main
+from roverimpact.contact import get_law, predict
+
+
+def test_top_level_exports():
+    assert roverimpact.contact.get_law is get_law
+    assert callable(roverimpact.peak_force) and callable(roverimpact.impact_1dof)
+
+
+def test_contact_prints_predictions(capsys):
+    assert main(["contact", "--law", "hunt-crossley", "--k", "1e6", "--e", "0.8",
+                 "--mass", "12", "--speed", "0.5", "--check"]) == 0
+    out = capsys.readouterr().out
+    p = predict(get_law("hunt-crossley", k=1e6, e=0.8), 12.0, 0.5)
+    assert f"{p.peak_force:.6g}" in out and "integrated" in out
+    assert "max indentation [mm]" in out
+
+
+def test_contact_from_tc_and_plot(tmp_path, capsys):
+    png = tmp_path / "loop.png"
+    assert main(["contact", "--law", "kelvin-voigt", "--k", "1e5", "--e", "0.5",
+                 "--tc", "1.5", "--speed", "0.5", "--plot", str(png)]) == 0
+    assert png.stat().st_size > 1000
+
+
+def test_contact_list(capsys):
+    assert main(["contact", "--list"]) == 0
+    out = capsys.readouterr().out
+    assert "carvalho-martins" in out and "Hunt" in out
+
+
+@pytest.mark.parametrize(
+    ("args", "msg"),
+    [
+        (["--law", "flores", "--k", "1e6", "--e", "0", "--mass", "1", "--speed", "1"],
+         "undefined at e = 0"),
+        (["--law", "hertz", "--k", "-1", "--mass", "1", "--speed", "1"], "k"),
+        (["--law", "hertz", "--k", "1e6", "--mass", "1", "--speed", "0"], "v_n"),
+        (["--law", "zzz", "--k", "1e6", "--mass", "1", "--speed", "1"], "unknown contact law"),
+    ],
+)
+def test_contact_bad_input_exit_2(args, msg, capsys):
+    assert main(["contact", *args]) == 2
+    assert msg in capsys.readouterr().err
+
+
+def test_peak_force_plot(tmp_path):
+    from roverimpact.contact.plots import default_laws, plot_peak_force_vs_T
+
+    fig = plot_peak_force_vs_T(default_laws(1e6, 0.7, m_eff=10.0), 0.5,
+                               path=tmp_path / "pf.png")
+    assert isinstance(fig, matplotlib.figure.Figure) and (tmp_path / "pf.png").exists()
