@@ -11,7 +11,7 @@ import numpy as np
 
 from .exceptions import InputError
 
-#: relative tolerance of the symmetry check on M: |M_ij - M_ji| <= SYM_RTOL * max(|M_ii|, |M_jj|)
+#: relative tolerance of the symmetry check on M: |M_ij - M_ji| <= SYM_RTOL * max_k |M_kk|
 SYM_RTOL = 1e-8
 
 
@@ -70,6 +70,8 @@ def mass_matrix_error(M: np.ndarray, flat_index: int, code: int, name: str = "M"
     idx = tuple(int(i) for i in np.unravel_index(flat_index, batch_shape)) if batch_shape else ()
     item = M.reshape(-1, *M.shape[-2:])[flat_index]
     where = fmt_index(idx)
+    if not np.isfinite(item).all():
+        code = STATUS_NONFINITE_M
     if code == STATUS_NONFINITE_M:
         return InputError(f"{name} contains NaN or inf ({where})")
     if code == STATUS_ASYMMETRIC_M:
@@ -103,8 +105,7 @@ def check_mass_matrix(M: np.ndarray, name: str = "M") -> None:
     finite = np.isfinite(flat).all(axis=(-1, -2))
     if not finite.all():
         raise mass_matrix_error(M, int(np.argmin(finite)), STATUS_NONFINITE_M, name)
-    scale = np.abs(np.diagonal(flat, axis1=-2, axis2=-1))
-    tol = SYM_RTOL * np.maximum(scale[:, :, None], scale[:, None, :])
+    tol = SYM_RTOL * np.abs(np.diagonal(flat, axis1=-2, axis2=-1)).max(axis=-1)[:, None, None]
     asym = (np.abs(flat - np.swapaxes(flat, -1, -2)) > tol).any(axis=(-1, -2))
     if asym.any():
         raise mass_matrix_error(M, int(np.argmax(asym)), STATUS_ASYMMETRIC_M, name)

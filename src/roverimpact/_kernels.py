@@ -38,7 +38,12 @@ _FAST = {"reassoc", "contract", "arcp"}
 
 
 @njit(cache=True, nogil=True, fastmath=_FAST)
-def _factor(Mi, L):  # pragma: no cover - compiled
+def _factor(Mi, L, invd):  # pragma: no cover - compiled
+    """Check ``Mi`` (finite, symmetric, positive definite) and factor it, ``Mi = L L^T``.
+
+    ``invd`` receives ``1 / diag(L)``. Symmetry: ``|M_ij - M_ji| <= SYM_RTOL * max|M_kk|``
+    (a NaN or inf off the diagonal fails this test too; the caller classifies it).
+    """
     n = Mi.shape[0]
     maxdiag = 0.0
     for i in range(n):
@@ -47,33 +52,32 @@ def _factor(Mi, L):  # pragma: no cover - compiled
             return STATUS_NONFINITE_M
         if abs(d) > maxdiag:
             maxdiag = abs(d)
-    for i in range(n):
-        for j in range(i):
-            a = Mi[i, j]
-            b = Mi[j, i]
-            if not (np.isfinite(a) and np.isfinite(b)):
-                return STATUS_NONFINITE_M
-            tol = SYM_RTOL * max(abs(Mi[i, i]), abs(Mi[j, j]))
-            if abs(a - b) > tol:
-                return STATUS_ASYMMETRIC_M
+    tol = SYM_RTOL * maxdiag
+    ok = True
+    for j in range(n):
+        Mj = Mi[j]
+        for i in range(j + 1, n):
+            ok &= abs(Mj[i] - Mi[i, j]) <= tol
+    if not ok:
+        return STATUS_ASYMMETRIC_M
     thresh = n * _EPS * maxdiag
     for j in range(n):
+        Lj = L[j]
         s = Mi[j, j]
         for k in range(j):
-            s -= L[j, k] * L[j, k]
+            s -= Lj[k] * Lj[k]
         if not s > thresh:
             return STATUS_NOT_PD
         d = np.sqrt(s)
-        L[j, j] = d
-        Lj = L[j]
+        Lj[j] = d
+        inv = 1.0 / d
+        invd[j] = inv
         for i in range(j + 1, n):
             Li = L[i]
             t = Mi[i, j]
             for k in range(j):
                 t -= Li[k] * Lj[k]
-            L[i, j] = t / d
-        for i in range(j):
-            L[i, j] = 0.0
+            Li[j] = t * inv
     return STATUS_OK
 
 
@@ -86,6 +90,7 @@ def partition_kernel(
     n = M.shape[1]
     m = A.shape[1]
     L = np.zeros((n, n))
+    invd = np.empty(n)
     W = np.empty((m, n))  # W[j] is column j of L^{-1} A^T (row-major for speed)
     H = np.empty((m, n))  # Householder vectors: H[k, k:] holds v_k
     hn = np.empty(m)  # their squared norms
@@ -99,7 +104,7 @@ def partition_kernel(
     for b in range(nb):
         im = iM[b]
         if im != last:
-            last_code = _factor(M[im], L)
+            last_code = _factor(M[im], L, invd)
             last = im
         if last_code != STATUS_OK:
             status[b] = last_code
@@ -143,7 +148,7 @@ def partition_kernel(
                 Li = L[i]
                 for k in range(i):
                     s -= Li[k] * Wj[k]
-                s /= Li[i]
+                s *= invd[i]
                 Wj[i] = s
                 nrm += s * s
             cn[j] = np.sqrt(nrm)
@@ -227,5 +232,5 @@ def partition_kernel(
                 s = z[i]
                 for j in range(i + 1, n):
                     s -= L[j, i] * vc[b, j]
-                vc[b, i] = s / L[i, i]
+                vc[b, i] = s * invd[i]
         status[b] = STATUS_OK
