@@ -5,13 +5,11 @@ planar_box     a rigid box moving in the x-z plane (pin.JointModelPlanar turned 
                plane is x-z: nq = 4, nv = 3) with a wheel (contact disc) at an offset
                from the centre of mass, so an off-centre hit makes it rotate.
 pendulum       a rod on a revolute joint (RY) with a disc at its tip.
-four_bar       a closed planar loop: two links on RY joints whose tip is pinned to a fixed
-               point (loop closure phi = tip - pivot), with a disc on the first link.
 
-     z                         four_bar:     o pivot (fixed)
-     ^   o  ball                             |
-     |  [==o==] box (disc at offset)         link 2
-     +-----> x                 base o--link 1--o
+     z
+     ^   o  ball
+     |  [==o==] box (disc at offset)
+     +-----> x
 """
 
 from __future__ import annotations
@@ -79,35 +77,3 @@ def pendulum(mass=1.0, length=0.5, radius=0.05):
     model.addFrame(pin.Frame("tip", j, 0, pin.SE3(np.eye(3), np.array([0, 0, -length])),
                              pin.FrameType.OP_FRAME))
     return MultibodyModel(model=model, name="pendulum", wheels=[Wheel("tip", "tip", radius)])
-
-
-def four_bar(l1=0.4, l2=0.4, pivot=(0.4, 0.0, 0.4), mass=1.0, radius=0.05):
-    """Links of length l1, l2 along their local +x at q = 0; tip of link 2 pinned at pivot.
-
-    At q = (0, -pi/2) the tip is at (l1, 0, l2) = pivot: a consistent start.
-    """
-    model = pin.Model()
-    model.name = "four_bar"
-    j1 = model.addJoint(0, pin.JointModelRY(), pin.SE3.Identity(), "j1")
-    model.appendBodyToJoint(j1, _inertia(mass, l1, 0.02, 0.02, (l1 / 2, 0, 0)),
-                            pin.SE3.Identity())
-    j2 = model.addJoint(j1, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([l1, 0, 0])), "j2")
-    model.appendBodyToJoint(j2, _inertia(mass, l2, 0.02, 0.02, (l2 / 2, 0, 0)),
-                            pin.SE3.Identity())
-    tip = model.addFrame(pin.Frame("tip", j2, 0, pin.SE3(np.eye(3), np.array([l2, 0, 0])),
-                                   pin.FrameType.OP_FRAME))
-    model.addFrame(pin.Frame("disc", j1, 0, pin.SE3(np.eye(3), np.array([l1 / 2, 0, 0])),
-                             pin.FrameType.OP_FRAME))
-    data = model.createData()
-    pv = np.array(pivot, float)
-
-    def loop(q):
-        pin.framesForwardKinematics(model, data, q)
-        phi = data.oMf[tip].translation - pv
-        J = pin.computeFrameJacobian(model, data, q, tip, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        return phi[[0, 2]], J[[0, 2]]
-
-    q0 = np.array([0.0, -np.pi / 2])
-    return MultibodyModel(model=model, name="four_bar", wheels=[Wheel("disc", "disc", radius)],
-                          loop_closure=loop, loop_names=["tip_x", "tip_z"],
-                          params={"q_nominal": q0.tolist()})

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 import pinocchio as pin
 from scipy.integrate import solve_ivp
-from scipy.optimize import least_squares, minimize_scalar
+from scipy.optimize import minimize_scalar
 
 from ..energy import effective_mass, partition
 from ..exceptions import ConfigError, InputError, ModelError, SolverError
@@ -111,6 +111,10 @@ def _rigid_velocity(sys: ContactSystem, q, axis: np.ndarray) -> np.ndarray:
     nw = J.shape[0]
     A = J.reshape(nw * 6, sys.nv)
     b = np.tile(np.concatenate([axis, np.zeros(3)]), nw)
+    if sys.loop_closure is not None:        # keep the loops closed (J_l w = 0)
+        Jl = sys.loop(q)[1]
+        A = np.vstack([A, Jl])
+        b = np.concatenate([b, np.zeros(Jl.shape[0])])
     w = np.linalg.lstsq(A, b, rcond=None)[0]
     if np.linalg.norm(A @ w - b) > 1e-6 * math.sqrt(nw):
         raise ModelError(
@@ -147,14 +151,33 @@ def _settle(sys: ContactSystem, q, cfg: SimulationConfig, mass: float):
             return np.concatenate([r[: sys.nv] / scale_f, r[sys.nv:]])
         return r / scale_f
 
-    sol = least_squares(residual, np.zeros(sys.nv + kloop), method="lm", xtol=1e-14,
-                        ftol=1e-14, gtol=1e-14, max_nfev=200 * (sys.nv + kloop))
-    if not np.all(np.abs(sol.fun) < 1e-7):
+    # Newton with a forward-difference Jacobian and min-norm steps: the neutral directions
+    # (translation along the ground, yaw) make the Jacobian singular, lstsq ignores them.
+    x = np.zeros(sys.nv + kloop)
+    r = residual(x)
+    h = 1e-6
+    for _ in range(30):
+        if np.max(np.abs(r)) < 1e-10:
+            break
+        Jr = np.empty((r.size, x.size))
+        for i in range(x.size):
+            xp = x.copy()
+            xp[i] += h
+            Jr[:, i] = (residual(xp) - r) / h
+        step = np.linalg.lstsq(Jr, -r, rcond=1e-10)[0]
+        lam = 1.0
+        while lam > 1e-4:                      # backtracking on |r|
+            r_new = residual(x + lam * step)
+            if np.linalg.norm(r_new) < np.linalg.norm(r):
+                break
+            lam *= 0.5
+        x, r = x + lam * step, r_new
+    if not np.max(np.abs(r)) < 1e-8:
         raise SolverError(
             f"could not find the static equilibrium on the ground (residual "
-            f"{np.max(np.abs(sol.fun)):.2g} of the weight): check the suspension springs "
+            f"{np.max(np.abs(r)):.2g} of the weight): check the suspension springs "
             "and that every wheel can reach the ground, or set settle = false")
-    return pin.integrate(sys.model, q, sol.x[: sys.nv] * scale_x)
+    return pin.integrate(sys.model, q, x[: sys.nv] * scale_x)
 
 
 def _driving_velocity(sys: ContactSystem, q, u: float) -> np.ndarray:
@@ -175,14 +198,18 @@ def _driving_velocity(sys: ContactSystem, q, u: float) -> np.ndarray:
             continue                           # not a pure wheel-spin joint
         slip = cs.Jp[0, w] @ v
         v[j.idx_v] -= slip[0] / col[0]
+    if sys.loop_closure is not None:        # exact velocity consistency: J_l v = 0
+        v = partition(sys.mass_matrix(q), sys.loop(q)[1], v).v_a
     return v
 
 
 # ---------------------------------------------------------------------- indicator
-def effective_energy(sys: ContactSystem, q, v, wheel: int):
+def effective_energy(sys: ContactSystem, q, v, wheel: int, simultaneous: float = 1e-6):
     """``T_c^-`` and ``m_eff`` of the state (q, v) for an obstacle contact of ``wheel``.
 
-    Constraint rows ``A`` (in this order): the obstacle normal of ``wheel``, the ground
+    Constraint rows ``A`` (in this order): the obstacle normal of ``wheel`` and of every
+    other wheel within ``simultaneous`` [m] of touching (a symmetric rover hits with both
+    front wheels at once), the ground
     normal of every wheel in ground contact (indentation > 0) and the loop-closure rows.
     ``m_eff`` is the effective mass along the obstacle row alone.
 
@@ -195,6 +222,10 @@ def effective_energy(sys: ContactSystem, q, v, wheel: int):
     io = names.index("obstacle")
     rows = [sys.planes[io].n @ cs.Jp[io, wheel]]
     labels = [f"obstacle_{wheel}"]
+    for w in np.flatnonzero(cs.gap[io] <= cs.gap[io, wheel] + simultaneous):
+        if w != wheel:                         # wheels touching at the same instant
+            rows.append(sys.planes[io].n @ cs.Jp[io, w])
+            labels.append(f"obstacle_{w}")
     if "ground" in names:
         ig = names.index("ground")
         for w in np.flatnonzero(cs.delta[ig] > 0):
@@ -277,6 +308,11 @@ def _run_phase(sys, q_ref, v, imp, t0, t1, cfg, v_i, obstacle_event, direction, 
             return t, sys.config(q_ref_box[0], y[:nv]), y[nv:], True
         q_ref_box[0] = sys.config(q_ref_box[0], y[:nv])   # re-anchor the chart
         y[:nv] = 0.0
+
+
+def _label(lab: str, wheel_names) -> str:
+    kind, idx = lab.rsplit("_", 1)
+    return f"{kind}_{wheel_names[int(idx)]}" if kind in ("obstacle", "ground") else lab
 
 
 def _state_at(sys, segs, k, t):
@@ -459,8 +495,7 @@ def simulate_impact(mbm, config: SimulationConfig | dict | None = None, *, q0=No
         T_minus=T_minus, T_plus=T_plus, E_minus=E_minus, E_plus=E_plus,
         q_minus=q_minus, v_minus=v_minus, q_plus=q_plus, v_plus=v_plus,
         T_c_minus=T_c, m_eff=m_eff, v_n=v_n, contact_wheel=names_w[wheel],
-        A_rows=[lab.replace(f"_{wheel}", f"_{names_w[wheel]}", 1) if lab.startswith("obst")
-                else lab for lab in labels],
+        A_rows=[_label(lab, names_w) for lab in labels],
         stats={"nfev": counter[0], "steps": len(T), "segments": len(segs.sols),
                "t_contact": float(t_c)},
     )
