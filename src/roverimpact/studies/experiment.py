@@ -56,6 +56,7 @@ __all__ = [
     "fit_gain",
     "load_trials",
     "lowpass",
+    "make_synthetic_trials",
     "normal_force",
     "plot_overlay",
     "process_recording",
@@ -111,7 +112,7 @@ class SensorsConfig(_Strict):
     @property
     def columns(self) -> list[str]:
         """CSV column names expected for the channels."""
-        return [f"{c}_{u}" for c, u in zip(self.channels, self.unit_list)]
+        return [f"{c}_{u}" for c, u in zip(self.channels, self.unit_list, strict=True)]
 
 
 class FilterConfig(_Strict):
@@ -126,8 +127,9 @@ class DetectionConfig(_Strict):
     """``[detection]``: impact detection and offset removal (all optional).
 
     An impact is where the filtered force exceeds
-    ``max(threshold_n, noise_sigmas * noise)``, ``noise`` being the robust standard
-    deviation (1.4826 MAD) of the first ``baseline_s`` seconds. Impacts closer than
+    ``max(threshold_n, noise_sigmas * noise, 0.001 * max|F|)``, ``noise`` being the robust
+    standard deviation (1.4826 MAD) of the first ``baseline_s`` seconds (then of all the
+    samples away from impacts); the last term only matters for noise-free data. Impacts closer than
     ``min_separation_s`` are merged. NaN runs of up to ``max_nan_run`` samples are
     interpolated; longer ones make the file fail.
     """
@@ -227,7 +229,7 @@ def _nan_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
     starts = np.flatnonzero(d == 1)
     ends = np.flatnonzero(d == -1)
-    return list(zip(starts.tolist(), (ends - starts).tolist()))
+    return list(zip(starts.tolist(), (ends - starts).tolist(), strict=True))
 
 
 def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int = 3):
@@ -266,7 +268,8 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
             "column must be the time in seconds"
         )
     cols = []
-    for ch, unit, col in zip(sensors.channels, sensors.unit_list, sensors.columns):
+    for ch, unit, col in zip(sensors.channels, sensors.unit_list, sensors.columns,
+                             strict=True):
         if col in df.columns:
             cols.append(col)
             continue
@@ -283,7 +286,8 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
     if len(df) == 0:
         raise TrialDataError(f"{path.name}: header but no data rows")
     try:
-        data = df[["time_s", *cols]].apply(pd.to_numeric, errors="raise").to_numpy(float)
+        numeric = df[["time_s", *cols]].apply(pd.to_numeric, errors="raise")
+        data = np.array(numeric, dtype=float)
     except (ValueError, TypeError) as exc:
         raise TrialDataError(f"{path.name}: non-numeric value ({exc})") from None
     t, raw = data[:, 0], data[:, 1:]
@@ -394,7 +398,7 @@ def normal_force(t, raw, gains, fs: float, filt: FilterConfig = FilterConfig(),
     """
     t = np.asarray(t, float)
     forces = np.asarray(raw, float) * np.asarray(gains, float)[None, :]
-    nb = max(int(round(det.baseline_s * fs)), 8)
+    nb = max(round(det.baseline_s * fs), 8)
     if nb >= len(t) // 2:
         raise InputError(f"recording of {t[-1] - t[0]:.3g} s is too short for a baseline of "
                          f"{det.baseline_s:g} s")
@@ -402,7 +406,7 @@ def normal_force(t, raw, gains, fs: float, filt: FilterConfig = FilterConfig(),
     f0 = lowpass(forces - np.median(forces[:nb], axis=0), fs, filt.cutoff_hz, filt.order)
     s0 = f0.sum(axis=1)
     sigma = _robust_sigma(s0[:nb])
-    threshold = max(det.threshold_n, det.noise_sigmas * sigma)
+    threshold = max(det.threshold_n, det.noise_sigmas * sigma, 1e-3 * np.max(np.abs(s0)))
     active = np.abs(s0) > threshold
     quiet = np.ones(len(t), bool)
     for s, e in _regions(active, 0):
@@ -416,26 +420,31 @@ def normal_force(t, raw, gains, fs: float, filt: FilterConfig = FilterConfig(),
     base = coef[0][None, :] + (t - t[0])[:, None] * coef[1][None, :]
     F = lowpass(forces - base, fs, filt.cutoff_hz, filt.order).sum(axis=1)
     sigma = _robust_sigma(F[quiet])
-    threshold = max(det.threshold_n, det.noise_sigmas * sigma)
+    threshold = max(det.threshold_n, det.noise_sigmas * sigma, 1e-3 * np.max(np.abs(F)))
     return F, threshold, coef[0]
 
 
-def _crossing(t, F, i, j) -> float:
-    """Time where F crosses 0 between samples i and j (linear interpolation)."""
+def _crossing(t, F, i, j, level: float = 0.0) -> float:
+    """Time where F crosses ``level`` between samples i and j (linear interpolation)."""
     if F[i] == F[j]:
         return float(t[i])
-    return float(t[i] + (t[j] - t[i]) * F[i] / (F[i] - F[j]))
+    return float(t[i] + (t[j] - t[i]) * (F[i] - level) / (F[i] - F[j]))
 
 
 def detect_impacts(t, F, threshold: float, *, min_separation_s: float = 0.005) -> pd.DataFrame:
     """Impacts in a force trace: peak, impulse and duration of each excursion above threshold.
 
-    Each region where ``F > threshold`` (regions closer than ``min_separation_s`` merged) is
-    widened to the zero crossings of F on either side; within it
+    Each region where ``F > threshold`` (regions closer than ``min_separation_s`` merged,
+    e.g. filter ringing next to a large peak) gives one impact, measured on the lobe that
+    holds its peak:
 
     - ``F_peak`` = max F [N] at ``t_peak`` [s],
-    - ``impulse`` = :math:`\\int F\\,dt` between the crossings (trapezoidal) [N s],
-    - ``duration`` = time between the crossings [s].
+    - ``t_start``, ``t_end``, ``duration``: where F crosses the threshold (interpolated)
+      and the time between [s] (the low tails under the threshold are left out: with a
+      threshold of a few noise sigmas they are short, and the zero crossings themselves
+      wander with the noise),
+    - ``impulse`` = :math:`\\int F\\,dt` [N s] (trapezoidal) over the region widened to the
+      zero crossings of F on either side, so that the tails are counted.
 
     Returns
     -------
@@ -445,28 +454,34 @@ def detect_impacts(t, F, threshold: float, *, min_separation_s: float = 0.005) -
     t = np.asarray(t, float)
     F = np.asarray(F, float)
     dt = float(np.median(np.diff(t)))
-    gap = int(round(min_separation_s / dt))
+    gap = round(min_separation_s / dt)
     rows = []
     for s, e in _regions(F > threshold, gap):
-        a = s
+        k = s + int(np.argmax(F[s:e]))
+        # main lobe: walk from the peak to the threshold crossings, then to the zero crossings
+        s1 = k
+        while s1 > 0 and F[s1 - 1] > threshold:
+            s1 -= 1
+        e1 = k
+        while e1 < len(F) - 1 and F[e1 + 1] > threshold:
+            e1 += 1
+        a, b = s1, e1
         while a > 0 and F[a - 1] > 0:
             a -= 1
-        b = e - 1
         while b < len(F) - 1 and F[b + 1] > 0:
             b += 1
-        t0 = _crossing(t, F, a - 1, a) if a > 0 else float(t[0])
-        t1 = _crossing(t, F, b, b + 1) if b < len(F) - 1 else float(t[-1])
-        tt = np.concatenate([[t0], t[a:b + 1], [t1]])
+        z0 = _crossing(t, F, a - 1, a) if a > 0 else float(t[0])
+        z1 = _crossing(t, F, b, b + 1) if b < len(F) - 1 else float(t[-1])
+        tt = np.concatenate([[z0], t[a:b + 1], [z1]])
         ff = np.concatenate([[0.0], F[a:b + 1], [0.0]])
-        k = s + int(np.argmax(F[s:e]))
+        t0 = _crossing(t, F, s1 - 1, s1, threshold) if s1 > 0 else float(t[0])
+        t1 = _crossing(t, F, e1, e1 + 1, threshold) if e1 < len(F) - 1 else float(t[-1])
         rows.append({
             "t_start": t0, "t_peak": float(t[k]), "t_end": t1, "F_peak": float(F[k]),
             "impulse": float(np.trapezoid(ff, tt)), "duration": t1 - t0,
         })
     df = pd.DataFrame(rows, columns=["t_start", "t_peak", "t_end", "F_peak", "impulse",
                                      "duration"])
-    # neighbours may share their zero crossings after widening: keep distinct impacts
-    df = df.drop_duplicates(subset=["t_start", "t_end"]).reset_index(drop=True)
     df.insert(0, "impact", np.arange(len(df)))
     return df
 
@@ -705,7 +720,7 @@ class PlanarBodyImpact:
 
     def __call__(self, beta: float, speed: float) -> dict:
         """``{"T_c_minus": J, "F_max": N, "m_eff": kg, "v_n": m/s}`` for ``beta`` [rad]."""
-        t, F, info = self.force_history(beta, speed)
+        _, F, info = self.force_history(beta, speed)
         return info | {"F_max": float(F.max())}
 
 
@@ -744,7 +759,7 @@ def compare_with_model(trials_df: pd.DataFrame, model_fn: Callable[[float, float
     -------
     ModelComparison
         Kendall tau and Spearman rho (``scipy.stats``) over the conditions; NaN with fewer
-        than 3 conditions.
+        than 3 conditions or a constant column.
     """
     from scipy.stats import kendalltau, spearmanr
 
@@ -755,7 +770,7 @@ def compare_with_model(trials_df: pd.DataFrame, model_fn: Callable[[float, float
     table = pd.DataFrame({"n": g.size(), "F_peak_mean": g.mean(),
                           "F_peak_std": g.std(ddof=1)}).reset_index()
     out = []
-    for beta_deg, speed in zip(table["beta_deg"], table["speed"]):
+    for beta_deg, speed in zip(table["beta_deg"], table["speed"], strict=True):
         res = model_fn(math.radians(beta_deg), float(speed))
         try:
             out.append((float(res["T_c_minus"]), float(res["F_max"])))
@@ -767,7 +782,8 @@ def compare_with_model(trials_df: pd.DataFrame, model_fn: Callable[[float, float
     table["F_ratio"] = table["F_peak_mean"] / table["F_max"]
     stats: dict = {"n_conditions": len(table)}
     for key, col in (("Tc", "T_c_minus"), ("Fmax", "F_max")):
-        if len(table) >= 3:
+        constant = table["F_peak_mean"].nunique() < 2 or table[col].nunique() < 2
+        if len(table) >= 3 and not constant:
             kt = kendalltau(table["F_peak_mean"], table[col])
             sr = spearmanr(table["F_peak_mean"], table[col])
             stats |= {f"kendall_tau_{key}": float(kt.statistic),
@@ -869,3 +885,96 @@ def write_outputs(result: ExperimentResult, outdir, *, comparison: ModelComparis
     if plot and not result.trials.empty:
         files["plot"] = plot_overlay(result.trials, comparison, out / "overlay.png")
     return files
+
+
+# ----------------------------------------------------------------------------------------
+# Synthetic data set
+# ----------------------------------------------------------------------------------------
+
+#: The "true" system of the shipped synthetic data set (a :class:`PlanarBodyImpact`).
+SYNTHETIC_TRUTH = {"mass": 20.0, "inertia": 1.0, "contact_point": (0.35, -0.15),
+                   "descent_deg": 30.0, "stiffness": 1.0e7, "restitution": 0.8}
+
+
+def make_synthetic_trials(outdir, *, betas_deg=tuple(range(0, 91, 10)), speeds=(0.5,),
+                          repeats: int = 1, seed: int = 20150802, fs: float = 5000.0,
+                          record_s: float = 0.5, gains=(250.0, 240.0), noise_v: float = 0.002,
+                          model_stiffness: float = 8.0e6, truth: dict | None = None
+                          ) -> pd.DataFrame:
+    """Write a realistic synthetic experiment: CSV recordings, ``trials.toml``, ``truth.csv``.
+
+    The true force of each trial is the Hunt-Crossley impact of :class:`PlanarBodyImpact`
+    with :data:`SYNTHETIC_TRUTH` (a STAND-IN for the rover simulator). It is split between
+    two load cells (random share 35-65 %), converted to volts with the known ``gains``
+    [N/V], and corrupted like a real recording: per-channel offset (0.1 V order) and
+    linear drift (up to 0.02 V/s), white noise ``noise_v`` [V] and 16-bit quantisation
+    of a +-10 V range. The trials file's ``[model]`` uses ``model_stiffness``, not the true
+    stiffness: the comparison model is, as in reality, not exact.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The truth table (also written to ``truth.csv``): per trial ``file, beta_deg,
+        speed, repeat, F_peak, impulse, duration, t_impact, share_ch1``.
+    """
+    import tomli_w
+
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    tr = dict(SYNTHETIC_TRUTH if truth is None else truth)
+    true_model = PlanarBodyModelConfig(**tr).build()
+    rng = np.random.default_rng(seed)
+    gains = np.asarray(gains, float)
+    lsb = 20.0 / 2**16
+    n = round(record_s * fs)
+    t = np.arange(n) / fs
+    base_offset = np.array([0.12, -0.08])
+    rows, trials = [], []
+    k = 0
+    for speed in speeds:
+        for beta in betas_deg:
+            for rep in range(1, repeats + 1):
+                th, Fh, _ = true_model.force_history(math.radians(beta), speed)
+                t0 = 0.15 + rng.uniform(0.0, 0.05)
+                F = np.interp(t - t0, th, Fh, left=0.0, right=0.0)
+                share = rng.uniform(0.35, 0.65)
+                parts = np.stack([share * F, (1 - share) * F], axis=1)
+                offset = base_offset + rng.normal(0, 0.02, 2)
+                drift = rng.uniform(-0.02, 0.02, 2)
+                volts = (parts / gains + offset + t[:, None] * drift
+                         + rng.normal(0, noise_v, (n, 2)))
+                volts = np.round(volts / lsb) * lsb
+                name = f"trial_{k:02d}_beta{beta:02.0f}_v{speed:g}_r{rep}.csv"
+                header = (f"synthetic recording (roverimpact.studies.experiment), seed {seed}\n"
+                          f"beta_deg = {beta:g}, speed = {speed:g} m/s, repeat {rep}\n"
+                          "time_s,ch1_V,ch2_V")
+                np.savetxt(out / name, np.column_stack([t, volts]), delimiter=",",
+                           fmt=["%.6f", "%.6f", "%.6f"], header=header, comments="# ")
+                # the last header line must be the column names, not a comment
+                text = (out / name).read_text()
+                text = text.replace("# time_s,ch1_V,ch2_V", "time_s,ch1_V,ch2_V")
+                (out / name).write_text(text)
+                rows.append({"file": name, "beta_deg": float(beta), "speed": float(speed),
+                             "repeat": rep, "F_peak": float(Fh.max()),
+                             "impulse": float(np.trapezoid(Fh, th)),
+                             "duration": float(th[-1]), "t_impact": t0, "share_ch1": share})
+                trials.append({"file": name, "beta_deg": float(beta), "speed": float(speed),
+                               "repeat": rep, "notes": "synthetic"})
+                k += 1
+    model = {"kind": "planar-body"} | {key: (list(v) if isinstance(v, tuple) else v)
+                                       for key, v in tr.items()}
+    model["stiffness"] = float(model_stiffness)
+    doc = {
+        "description": "Synthetic impact experiment (stand-in model, known calibration); "
+                       "generated by roverimpact.studies.experiment.make_synthetic_trials",
+        "sensors": {"channels": ["ch1", "ch2"], "units": "V", "gains": gains.tolist(),
+                    "sample_rate_hz": fs},
+        "filter": {"cutoff_hz": 300.0, "order": 4},
+        "detection": {"noise_sigmas": 10.0, "baseline_s": 0.1},
+        "trial": trials,
+        "model": model,
+    }
+    (out / "trials.toml").write_text(tomli_w.dumps(doc))
+    truth_df = pd.DataFrame(rows)
+    truth_df.to_csv(out / "truth.csv", index=False)
+    return truth_df

@@ -1,0 +1,19 @@
+"""Regenerate the synthetic experiment of this folder (fixed seed, known calibration).
+
+    python examples/experiment/make_synthetic.py
+
+Writes trial_*.csv (2 load cells, 5 kHz, gains 250 and 240 N/V, offset drift, white
+noise, 16-bit quantisation), trials.toml and truth.csv (the true peak force, impulse and
+duration of every trial) next to this script. The true force comes from the STAND-IN
+impact model roverimpact.studies.experiment.PlanarBodyImpact (a rigid planar body whose
+corner hits an inclined face, Hunt-Crossley contact), not from the rover simulator.
+"""
+
+from pathlib import Path
+
+from roverimpact.studies.experiment import make_synthetic_trials
+
+if __name__ == "__main__":
+    here = Path(__file__).resolve().parent
+    truth = make_synthetic_trials(here, seed=20150802)
+    print(truth[["file", "beta_deg", "speed", "F_peak", "impulse", "duration"]].to_string())

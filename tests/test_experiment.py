@@ -1,0 +1,291 @@
+"""Force-sensor experiment pipeline: ingestion, filtering, impact detection, model comparison."""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from roverimpact.exceptions import ConfigError, InputError
+from roverimpact.studies import experiment as ex
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "experiment"
+
+
+def _half_sine(t, t0, T, A):
+    """A half-sine pulse of height A [N] and length T [s] from t0; its impulse is 2 A T / pi."""
+    x = (t - t0) / T
+    return np.where((x > 0) & (x < 1), A * np.sin(np.pi * np.clip(x, 0, 1)), 0.0)
+
+
+def _write_csv(path, t, cols: dict, header_extra: str = ""):
+    df = pd.DataFrame({"time_s": t} | cols)
+    text = header_extra + df.to_csv(index=False, float_format="%.7g")
+    Path(path).write_text(text)
+
+
+def _trials_toml(path, files, *, gains=(250.0, 240.0), extra=""):
+    lines = [
+        "[sensors]", 'channels = ["ch1", "ch2"]', 'units = "V"',
+        f"gains = [{gains[0]}, {gains[1]}]", "sample_rate_hz = 5000.0", "",
+        "[filter]", "cutoff_hz = 300.0", "order = 4", "",
+    ]
+    for i, f in enumerate(files):
+        lines += ["[[trial]]", f'file = "{f}"', f"beta_deg = {10.0 * i}", "speed = 0.5", ""]
+    Path(path).write_text("\n".join(lines) + extra)
+    return Path(path)
+
+
+# ---------------------------------------------------------------------------------------
+# The shipped synthetic data set
+# ---------------------------------------------------------------------------------------
+
+
+def test_synthetic_set_recovers_true_peaks():
+    """The pipeline recovers the known peaks (and impulse, duration) of the shipped set.
+
+    truth.csv holds the noiseless force of the generator; the recordings add offsets, drift,
+    noise and quantisation and go through the known gains (250, 240 N/V)."""
+    res = ex.run_experiment(EXAMPLE / "trials.toml")
+    assert res.failures == []
+    truth = pd.read_csv(EXAMPLE / "truth.csv")
+    m = res.trials.merge(truth, on="file", suffixes=("", "_true"))
+    assert len(m) == len(truth) == 10
+    np.testing.assert_allclose(m["F_peak"], m["F_peak_true"], rtol=0.02)
+    np.testing.assert_allclose(m["impulse"], m["impulse_true"], rtol=0.02)
+    np.testing.assert_allclose(m["duration"], m["duration_true"], rtol=0.05)
+    assert (m["n_impacts"] == 1).all()
+
+
+def test_generator_reproducible(tmp_path):
+    """Same seed -> same files as shipped (the example folder is regenerable)."""
+    ex.make_synthetic_trials(tmp_path, betas_deg=(0, 10), seed=20150802)
+    shipped = (EXAMPLE / "trial_00_beta00_v0.5_r1.csv").read_text()
+    assert (tmp_path / "trial_00_beta00_v0.5_r1.csv").read_text() == shipped
+
+
+# ---------------------------------------------------------------------------------------
+# Calibration
+# ---------------------------------------------------------------------------------------
+
+
+def test_gains_recover_true_force(tmp_path):
+    """A half-sine of 800 N, 12 ms, split 30/70 over two cells with gains 250 and 240 N/V,
+    offsets and drift: the processed force has peak 800 N and impulse 2 A T / pi."""
+    fs = 5000.0
+    t = np.arange(0, 0.4, 1 / fs)
+    A, T = 800.0, 0.012
+    F = _half_sine(t, 0.2, T, A)
+    v1 = 0.3 * F / 250.0 + 0.05 + 0.01 * t
+    v2 = 0.7 * F / 240.0 - 0.1 - 0.02 * t
+    _write_csv(tmp_path / "a.csv", t, {"ch1_V": v1, "ch2_V": v2})
+    cfg = _trials_toml(tmp_path / "trials.toml", ["a.csv"])
+    res = ex.run_experiment(cfg)
+    row = res.trials.iloc[0]
+    assert row["F_peak"] == pytest.approx(A, rel=5e-3)
+    assert row["impulse"] == pytest.approx(2 * A * T / np.pi, rel=5e-3)
+    # wrong calibration -> wrong force, by the ratio of the gains
+    _trials_toml(tmp_path / "bad.toml", ["a.csv"], gains=(275.0, 264.0))
+    assert ex.run_experiment(tmp_path / "bad.toml").trials.iloc[0]["F_peak"] == pytest.approx(
+        1.1 * A, rel=5e-3)
+
+
+def test_fit_gain_from_reference_loads():
+    """Static reference weights 0..200 N through a cell of 250 N/V with 0.1 V offset."""
+    rng = np.random.default_rng(3)
+    loads = np.repeat([0.0, 49.05, 98.1, 147.15, 196.2], 200)
+    volts = loads / 250.0 + 0.1 + rng.normal(0, 1e-3, loads.size)
+    gain, v0, rms = ex.fit_gain(volts, loads)
+    assert gain == pytest.approx(250.0, rel=2e-3)
+    assert v0 == pytest.approx(0.1, abs=1e-3)
+    assert rms == pytest.approx(0.25, rel=0.1)  # 1 mV noise * 250 N/V
+    with pytest.raises(InputError):
+        ex.fit_gain([1, 2], [5, 5])
+
+
+# ---------------------------------------------------------------------------------------
+# Filter and detection
+# ---------------------------------------------------------------------------------------
+
+
+def test_butterworth_zero_phase_passes_sine():
+    """A 40 Hz sine under a 300 Hz cut-off: amplitude error < 1 %, no phase lag.
+
+    Amplitude and phase from a least-squares fit of a sin + b cos on the interior."""
+    fs, f = 5000.0, 40.0
+    t = np.arange(0, 1.0, 1 / fs)
+    x = np.sin(2 * np.pi * f * t)
+    y = ex.lowpass(x, fs, 300.0, 4)
+    sl = slice(500, -500)
+    X = np.stack([np.sin(2 * np.pi * f * t[sl]), np.cos(2 * np.pi * f * t[sl])], axis=1)
+    (a, b), *_ = np.linalg.lstsq(X, y[sl], rcond=None)
+    assert abs(math.hypot(a, b) - 1) < 0.01
+    assert abs(math.atan2(b, a)) < 1e-4  # rad
+    # a causal filter of the same order lags: the zero-phase one does not
+    from scipy.signal import butter, sosfilt
+    yc = sosfilt(butter(4, 300.0, fs=fs, output="sos"), x)
+    (ac, bc), *_ = np.linalg.lstsq(X, yc[sl], rcond=None)
+    assert abs(math.atan2(bc, ac)) > 0.05
+    with pytest.raises(InputError, match="Nyquist"):
+        ex.lowpass(x, fs, 3000.0)
+
+
+def test_detects_two_impacts():
+    fs = 5000.0
+    t = np.arange(0, 0.3, 1 / fs)
+    F = _half_sine(t, 0.1, 0.01, 500.0) + _half_sine(t, 0.18, 0.008, 120.0)
+    imp = ex.detect_impacts(t, F, 5.0)
+    assert len(imp) == 2
+    np.testing.assert_allclose(imp["F_peak"], [500.0, 120.0], rtol=1e-3)
+    np.testing.assert_allclose(imp["t_peak"], [0.105, 0.184], atol=1 / fs)
+    np.testing.assert_allclose(imp["impulse"], [2 * 500 * 0.01 / np.pi, 2 * 120 * 0.008 / np.pi],
+                               rtol=2e-3)
+
+
+# ---------------------------------------------------------------------------------------
+# Corrupted files: reported per file, the others still run
+# ---------------------------------------------------------------------------------------
+
+
+def _corrupt_set(tmp_path):
+    good = ["trial_00_beta00_v0.5_r1.csv", "trial_05_beta50_v0.5_r1.csv"]
+    for g in good:
+        shutil.copy(EXAMPLE / g, tmp_path / g)
+    df = pd.read_csv(EXAMPLE / good[0], comment="#")
+    df.drop(columns=["ch2_V"]).to_csv(tmp_path / "missing_col.csv", index=False)
+    d = df.copy()
+    d.loc[100, "time_s"] = d.loc[98, "time_s"]
+    d.to_csv(tmp_path / "time_back.csv", index=False)
+    d = df.copy()
+    d.loc[1000:1019, "ch1_V"] = np.nan
+    d.to_csv(tmp_path / "nan_run.csv", index=False)
+    df.rename(columns={"ch1_V": "ch1_mV"}).to_csv(tmp_path / "units.csv", index=False)
+    (tmp_path / "empty.csv").write_text("")
+    d = df.copy()
+    d.loc[2000, "ch2_V"] = np.nan  # a single missing sample is interpolated
+    d.to_csv(tmp_path / "one_nan.csv", index=False)
+    files = [*good, "missing_col.csv", "time_back.csv", "nan_run.csv", "units.csv",
+             "empty.csv", "absent.csv", "one_nan.csv"]
+    return _trials_toml(tmp_path / "trials.toml", files)
+
+
+def test_corrupted_files_reported_per_file(tmp_path):
+    res = ex.run_experiment(_corrupt_set(tmp_path))
+    assert sorted(res.trials["file"]) == sorted(
+        ["trial_00_beta00_v0.5_r1.csv", "trial_05_beta50_v0.5_r1.csv", "one_nan.csv"])
+    msgs = {f.file: f.message for f in res.failures}
+    assert set(msgs) == {"missing_col.csv", "time_back.csv", "nan_run.csv", "units.csv",
+                         "empty.csv", "absent.csv"}
+    assert "missing column 'ch2_V'" in msgs["missing_col.csv"]
+    assert "not strictly increasing at row 101" in msgs["time_back.csv"]
+    assert "run of 20 NaN" in msgs["nan_run.csv"] and "'ch1_V'" in msgs["nan_run.csv"]
+    assert "unit 'mV'" in msgs["units.csv"] and "unit 'V'" in msgs["units.csv"]
+    assert "empty file" in msgs["empty.csv"]
+    assert "no such file" in msgs["absent.csv"]
+    one = res.trials.set_index("file").loc["one_nan.csv"]
+    assert one["n_filled"] == 1
+    # the good files give the same result as in the clean run
+    clean = ex.run_experiment(EXAMPLE / "trials.toml").trials.set_index("file")
+    f = "trial_05_beta50_v0.5_r1.csv"
+    assert res.trials.set_index("file").loc[f, "F_peak"] == pytest.approx(clean.loc[f, "F_peak"])
+
+
+def test_trials_file_errors(tmp_path):
+    p = tmp_path / "t.toml"
+    p.write_text('[sensors]\nchannels = ["a"]\ngains = [1.0]\nbogus = 1\n[[trial]]\n'
+                 'file = "x.csv"\nbeta_deg = 0\nspeed = 1\n')
+    with pytest.raises(ConfigError, match=r"sensors\.bogus"):
+        ex.load_trials(p)
+    p.write_text('[sensors]\nchannels = ["a", "b"]\ngains = [1.0]\n[[trial]]\n'
+                 'file = "x.csv"\nbeta_deg = 0\nspeed = 1\n')
+    with pytest.raises(ConfigError, match="gains has 1 values for 2 channels"):
+        ex.load_trials(p)
+
+
+# ---------------------------------------------------------------------------------------
+# Model comparison and the stand-in model
+# ---------------------------------------------------------------------------------------
+
+
+def test_stand_in_model_against_closed_forms():
+    """beta = 0 (vertical wall), descent 30 deg: n = (-1, 0), a = [-1, 0, r_z], so
+    m_eff = 1 / (1/m + r_z^2 / I) and v_n = V cos 30deg, T_c^- = m_eff v_n^2 / 2.
+    Elastic Hertz-type impact (e = 1): delta_max = (5 m v^2 / (4 k))^(2/5),
+    F_max = k delta_max^(3/2), impulse = 2 m v (full rebound)."""
+    m, inertia, rz, V, k = 20.0, 1.0, -0.15, 0.5, 1e7
+    model = ex.PlanarBodyImpact(mass=m, inertia=inertia, contact_point=(0.35, rz),
+                                descent=math.radians(30), stiffness=k, restitution=1.0)
+    t, F, info = model.force_history(0.0, V)
+    m_eff = 1 / (1 / m + rz**2 / inertia)
+    v_n = V * math.cos(math.radians(30))
+    assert info["m_eff"] == pytest.approx(m_eff, rel=1e-12)
+    assert info["T_c_minus"] == pytest.approx(0.5 * m_eff * v_n**2, rel=1e-10)
+    dmax = (5 * m_eff * v_n**2 / (4 * k)) ** 0.4
+    assert F.max() == pytest.approx(k * dmax**1.5, rel=1e-5)
+    assert np.trapezoid(F, t) == pytest.approx(2 * m_eff * v_n, rel=1e-5)
+
+
+def test_compare_with_model_rank_statistics():
+    df = pd.DataFrame({"beta_deg": [0, 0, 30, 30, 60, 60, 90, 90],
+                       "speed": [0.5] * 8,
+                       "F_peak": [100, 110, 300, 290, 200, 210, 50, 55]})
+    up = ex.compare_with_model(df, lambda b, s: {"T_c_minus": math.cos(b - 0.6),
+                                                 "F_max": 2 * math.cos(b - 0.6)})
+    assert list(up.table["n"]) == [2, 2, 2, 2]
+    assert up.table["F_peak_mean"].tolist() == [105, 295, 205, 52.5]
+    assert up.stats["kendall_tau_Tc"] == pytest.approx(1.0)
+    assert up.stats["spearman_rho_Fmax"] == pytest.approx(1.0)
+    down = ex.compare_with_model(df, lambda b, s: {"T_c_minus": -math.cos(b - 0.6), "F_max": 1})
+    assert down.stats["kendall_tau_Tc"] == pytest.approx(-1.0)
+    assert math.isnan(down.stats["kendall_tau_Fmax"])  # constant model column
+    with pytest.raises(InputError, match="T_c_minus"):
+        ex.compare_with_model(df, lambda b, s: {"Tc": 1})
+
+
+def test_synthetic_ranks_agree_with_stand_in():
+    res = ex.run_experiment(EXAMPLE / "trials.toml")
+    cmp = ex.compare_with_model(res.trials, res.config.model.build())
+    assert cmp.stats["kendall_tau_Tc"] > 0.95
+    assert cmp.stats["spearman_rho_Fmax"] > 0.95
+
+
+# ---------------------------------------------------------------------------------------
+# CLI
+# ---------------------------------------------------------------------------------------
+
+
+def test_cli_exit_codes(tmp_path, capsys):
+    from roverimpact.cli import main
+
+    out = tmp_path / "out"
+    assert main(["experiment", str(EXAMPLE / "trials.toml"), "-o", str(out)]) == 0
+    for name in ("impacts.csv", "trials.csv", "comparison.csv", "summary.json", "overlay.png",
+                 "inputs_trials.toml"):
+        assert (out / name).is_file()
+    assert "Kendall tau = 1.000" in capsys.readouterr().out
+
+    # some failures: exit 0 but the failures are printed
+    d = tmp_path / "mixed"
+    d.mkdir()
+    cfg = _corrupt_set(d)
+    assert main(["experiment", str(cfg), "-o", str(tmp_path / "o2"), "--no-plot"]) == 0
+    err = capsys.readouterr().err
+    assert "6 trial(s) failed" in err and "units.csv" in err
+
+    # nothing ran: exit 2
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "empty.csv").write_text("")
+    cfg = _trials_toml(bad / "trials.toml", ["empty.csv", "absent.csv"])
+    assert main(["experiment", str(cfg), "-o", str(tmp_path / "o3")]) == 2
+    assert "no trial could be processed" in capsys.readouterr().err
+
+    # malformed trials file: exit 2, one line, no traceback
+    (bad / "broken.toml").write_text("[sensors\n")
+    assert main(["experiment", str(bad / "broken.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "malformed TOML" in err and "Traceback" not in err
