@@ -10,31 +10,57 @@ from .contact import impact_1dof, peak_force
 from .energy import Partition, effective_mass, partition, projector
 from .exceptions import ConfigError, InputError, ModelError, RoverImpactError, SolverError
 from .impulse import ImpactResult, impulsive_impact
+from .models import (
+    MultibodyModel,
+    export_urdf,
+    load_robot,
+    rocker_bogie,
+    rover2d,
+)
 from .safety import (
     BODY_REGIONS,
     arm_effective_masses,
     max_transient_speed,
     point_effective_mass,
 )
+from .scenario import (
+    ImpactEnergy,
+    ImpactSetup,
+    Scenario,
+    energy_of,
+    load_scenario,
+    sweep_energy,
+)
 
 __all__ = [
     "BODY_REGIONS",
     "ConfigError",
+    "ImpactEnergy",
     "ImpactResult",
+    "ImpactSetup",
     "InputError",
     "ModelError",
+    "MultibodyModel",
     "Partition",
     "RoverImpactError",
+    "Scenario",
     "SolverError",
     "__version__",
     "arm_effective_masses",
     "contact",
     "effective_mass",
+    "energy_of",
+    "export_urdf",
     "impact_1dof",
     "impulsive_impact",
+    "load_robot",
+    "load_scenario",
     "max_transient_speed",
     "partition",
     "peak_force",
     "point_effective_mass",
     "projector",
+    "rocker_bogie",
+    "rover2d",
+    "sweep_energy",
 ]

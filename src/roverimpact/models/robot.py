@@ -21,7 +21,45 @@ from ..exceptions import ModelError
 from ._build import LinearLoopClosure
 from .base import MultibodyModel, Wheel
 
-__all__ = ["export_urdf", "joint_slices", "load_robot"]
+__all__ = ["ERD_SCHEME", "example_robot_file", "export_urdf", "joint_slices", "load_robot"]
+
+#: Prefix of robot paths inside the example-robot-data package, e.g.
+#: ``"example-robot-data:panda_description/urdf/panda.urdf"``.
+ERD_SCHEME = "example-robot-data:"
+
+
+def example_robot_file(relpath: str) -> Path:
+    """Path of a file shipped by the ``example-robot-data`` package (e.g. the Panda URDF).
+
+    Works with the Python module (``example_robot_data.getModelPath``) and with the
+    data-only wheel (files under ``cmeel.prefix/share/example-robot-data/robots``).
+
+    Raises
+    ------
+    ModelError
+        If the package is not installed or has no such file.
+    """
+    relpath = relpath.removeprefix(ERD_SCHEME).lstrip("/")
+    candidates = []
+    try:
+        import example_robot_data as erd
+
+        candidates.append(Path(erd.getModelPath(relpath)) / relpath)
+    except Exception:
+        pass
+    try:
+        from importlib.metadata import PackageNotFoundError, distribution
+
+        dist = distribution("example-robot-data")
+        candidates.append(Path(str(dist.locate_file(
+            f"cmeel.prefix/share/example-robot-data/robots/{relpath}"))))
+    except PackageNotFoundError:
+        pass
+    for c in candidates:
+        if c.is_file():
+            return c
+    raise ModelError(f"{ERD_SCHEME}{relpath}: not found; install example-robot-data "
+                     "(pip install example-robot-data) or give a file path")
 
 _URDF_AXES = {"X": "1 0 0", "Y": "0 1 0", "Z": "0 0 1"}
 
@@ -167,7 +205,7 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None) -> Multib
     Parameters
     ----------
     path : str or Path
-        Robot description file.
+        Robot description file, or ``"example-robot-data:<path inside the package>"``.
     floating_base : bool, optional
         Add a ``pin.JointModelFreeFlyer`` root (joint ``"root_joint"``). Default: as
         recorded by :func:`export_urdf` in the file, else fixed base.
@@ -183,6 +221,8 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None) -> Multib
     ModelError
         Missing, unreadable or malformed file, or a file Pinocchio cannot build.
     """
+    if str(path).startswith(ERD_SCHEME):
+        path = example_robot_file(str(path))
     path = Path(path)
     if not path.is_file():
         raise ModelError(f"{path}: no such robot file")

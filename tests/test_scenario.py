@@ -1,0 +1,241 @@
+"""Scenarios -> (M, A, v) -> T_c^-: limit cases against closed forms and independent methods."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from roverimpact.exceptions import ConfigError, ModelError
+from roverimpact.models import export_urdf, rocker_bogie, rover2d
+from roverimpact.scenario import Scenario, energy_of, load_scenario, sweep_energy
+
+ROVER2D = {"model": {"name": "rover2d"}, "velocity": {"u": 0.5},
+           "obstacle": {"wheel": "front", "beta_deg": 45.0}}
+RB = {"model": {"name": "rocker_bogie"}, "velocity": {"u": 0.2},
+      "obstacle": {"wheel": "left_front", "beta_deg": 30.0}}
+
+
+def sc(base, **upd):
+    d = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
+    for k, v in upd.items():
+        d[k] = {**d.get(k, {}), **v} if isinstance(v, dict) else v
+    return Scenario.model_validate(d)
+
+
+@pytest.mark.parametrize("base", [ROVER2D, RB])
+def test_beta_zero_gives_no_effective_energy(base):
+    """beta = 0: n = z is orthogonal to the rim-point velocity of a rolling wheel -> T_c^- = 0.
+
+    For a wheel rolling at u, the point c - r n has velocity u(1 - cos b, 0, -sin b), so
+    -n.v_p = u sin(beta) (derived by hand); every ground row is satisfied by rolling.
+    """
+    e = energy_of(sc(base, obstacle={"beta_deg": 0.0}))
+    assert e.T > 0 and abs(e.T_c_minus) < 1e-12 * e.T and abs(e.v_n) < 1e-12
+    for beta in (20.0, 60.0, 90.0):
+        e = energy_of(sc(base, obstacle={"beta_deg": beta}))
+        u = base["velocity"]["u"]
+        assert e.v_n == pytest.approx(u * np.sin(np.deg2rad(beta)), rel=1e-12)
+
+
+@pytest.mark.parametrize("base", [ROVER2D, RB])
+def test_tc_equals_half_meff_vn2_when_other_rows_are_admissible(base):
+    """If A_other v = 0, T_c^- = 1/2 m_eff v_n^2 (Schur-complement identity), m_eff >= m_free."""
+    e = energy_of(sc(base))
+    assert e.T_c_minus == pytest.approx(0.5 * e.m_eff * e.v_n**2, rel=1e-9)
+    assert e.m_eff >= e.m_eff_free * (1 - 1e-12)
+
+
+def _free_body_urdf(tmp_path, m=3.0, com=(0.1, -0.05, 0.2), I=(0.2, 0.3, 0.15)):
+    txt = f"""<robot name="brick"><link name="brick"><inertial>
+      <origin xyz="{com[0]} {com[1]} {com[2]}" rpy="0 0 0"/><mass value="{m}"/>
+      <inertia ixx="{I[0]}" ixy="0" ixz="0" iyy="{I[1]}" iyz="0" izz="{I[2]}"/>
+      </inertial></link></robot>"""
+    p = tmp_path / "brick.urdf"
+    p.write_text(txt)
+    return p
+
+
+def test_single_free_body_matches_rigid_body_formula(tmp_path):
+    """1/m_eff = 1/m + (r x n)^T I_G^-1 (r x n), r = contact point - COM (world).
+
+    A free brick (free-flyer base) with a rotated base pose; the contact is a point given
+    in the body frame, the normal in world.
+    """
+    m, com, Id = 3.0, np.array([0.1, -0.05, 0.2]), np.array([0.2, 0.3, 0.15])
+    f = _free_body_urdf(tmp_path, m, com, Id)
+    pt = [0.3, 0.1, -0.2]
+    n = np.array([0.3, -0.5, 0.8])
+    s = Scenario.model_validate({
+        "model": {"file": str(f), "floating_base": True},
+        "configuration": {"base": {"x": 0.2, "roll_deg": 20, "pitch_deg": -35, "yaw_deg": 70}},
+        "velocity": {"base_linear": [0.1, 0.2, -1.0], "base_angular": [0.5, -0.3, 0.2]},
+        "obstacle": {"frame": "brick", "point": pt, "normal": n.tolist()},
+    })
+    setup = s.build()
+    e = setup.partition()
+    R = pin.rpy.rpyToMatrix(*np.deg2rad([20, -35, 70]))
+    nn = n / np.linalg.norm(n)
+    r = R @ (np.array(pt) - com)
+    I_w = R @ np.diag(Id) @ R.T
+    rxn = np.cross(r, nn)
+    assert 1.0 / e.m_eff_free == pytest.approx(1 / m + rxn @ np.linalg.solve(I_w, rxn), rel=1e-10)
+    # single row: T_c = 1/2 m_eff v_n^2 with v_n from rigid-body kinematics
+    vp = np.array([0.1, 0.2, -1.0]) + np.cross([0.5, -0.3, 0.2], R @ np.array(pt))
+    assert e.v_n == pytest.approx(-nn @ vp, rel=1e-10)
+    assert e.T_c_minus == pytest.approx(0.5 * e.m_eff_free * e.v_n**2, rel=1e-10)
+
+
+def test_locking_all_joints_equals_one_rigid_body():
+    """Rocker-bogie with rockers, bogies and wheels locked = one body of the total inertia.
+
+    The composite COM and central inertia are summed here from the body placements and
+    inertias (parallel-axis theorem), independently of the CRBA.
+    """
+    rv = rocker_bogie()
+    joints = [n for n in rv.model.names[2:]]
+    s = sc(RB, contacts={"ground_wheels": [], "locked": joints},
+           configuration={"joints": {"rocker_left": 0.1, "rocker_right": -0.1,
+                                     "bogie_left": -0.2},
+                          "base": {"pitch_deg": 10, "yaw_deg": 25}})
+    setup = s.build()
+    e = setup.partition()
+    model = setup.model.model
+    d = model.createData()
+    pin.forwardKinematics(model, d, setup.q)
+    mt, c = 0.0, np.zeros(3)
+    for j in range(1, model.njoints):
+        Ij = model.inertias[j]
+        mt += Ij.mass
+        c += Ij.mass * d.oMi[j].act(Ij.lever)
+    c /= mt
+    I = np.zeros((3, 3))
+    for j in range(1, model.njoints):
+        Ij = model.inertias[j]
+        R = d.oMi[j].rotation
+        g = d.oMi[j].act(Ij.lever) - c
+        I += R @ Ij.inertia @ R.T + Ij.mass * (g @ g * np.eye(3) - np.outer(g, g))
+    r = setup.contact_point - c
+    rxn = np.cross(r, setup.normal)
+    assert 1.0 / e.m_eff == pytest.approx(1 / mt + rxn @ np.linalg.solve(I, rxn), rel=1e-9)
+
+
+def test_sweep_matches_individual_builds():
+    """The batched beta sweep (M reused, only the obstacle row changes) = one build per beta."""
+    for base in (ROVER2D, RB):
+        betas = np.array([0.0, 15.0, 45.0, 75.0, 90.0])
+        sw = sweep_energy(sc(base), np.deg2rad(betas))
+        for k, b in enumerate(betas):
+            e = energy_of(sc(base, obstacle={"beta_deg": b}))
+            assert sw.T_c_minus[k] == pytest.approx(e.T_c_minus, rel=1e-9, abs=1e-12)
+            assert sw.m_eff[k] == pytest.approx(e.m_eff, rel=1e-9)
+
+
+@pytest.mark.parametrize("builder", ["rover2d", "rocker_bogie"])
+def test_urdf_export_loads_back_to_same_M_and_A(tmp_path, builder):
+    """Export to URDF, load the file in a scenario: identical M, A, labels and v."""
+    base = ROVER2D if builder == "rover2d" else RB
+    params = {"suspension": "rocker", "middle_wheel": True} if builder == "rover2d" else {}
+    mbm = rover2d(**params) if builder == "rover2d" else rocker_bogie()
+    f = export_urdf(mbm, tmp_path / "rover.urdf")
+    joints = {"rocker": 0.2} if builder == "rover2d" else {"rocker_left": 0.1, "bogie_right": 0.3}
+    a = sc(base, model={"name": builder, "params": params}, configuration={"joints": joints},
+           contacts={"locked": [mbm.lockable_joints[0]]})
+    b = sc(base, model={"file": str(f), "name": None}, configuration={"joints": joints},
+           contacts={"locked": [mbm.lockable_joints[0]]})
+    sa, sb = a.build(), b.build()
+    assert sa.labels == sb.labels
+    np.testing.assert_allclose(sb.M, sa.M, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(sb.A, sa.A, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(sb.v, sa.v)
+
+
+def test_panda_tool_effective_mass_vs_finite_differences_and_aba():
+    """Panda tool point: m_eff = 1/(n^T J M^-1 J^T n) with J by central differences of the
+    point position and M^-1 column by column from ABA (pin.aba with unit torques, gravity
+    removed), a route independent of CRBA and frame Jacobians."""
+    pytest.importorskip("pinocchio")
+    from roverimpact.models.robot import example_robot_file
+
+    try:
+        urdf = example_robot_file("panda_description/urdf/panda.urdf")
+    except ModelError:
+        pytest.skip("example-robot-data is not installed")
+    q_arm = {"panda_joint1": 0.3, "panda_joint2": -0.4, "panda_joint4": -2.0,
+             "panda_joint6": 1.6, "panda_joint7": 0.7}
+    n = np.array([0.2, -0.4, -0.9])
+    pt = [0.0, 0.0, 0.05]
+    s = Scenario.model_validate({
+        "model": {"file": str(urdf)}, "configuration": {"joints": q_arm},
+        "velocity": {"joints": {"panda_joint1": 0.5, "panda_joint2": 0.8}},
+        "obstacle": {"frame": "panda_hand_tcp", "point": pt, "normal": n.tolist()},
+    })
+    setup = s.build()
+    e = setup.partition()
+    model = setup.model.model
+    d = model.createData()
+    q = setup.q
+    fid = model.getFrameId("panda_hand_tcp")
+    J = np.zeros((3, model.nv))
+    h = 1e-6
+    for i in range(model.nv):
+        dq = np.zeros(model.nv)
+        dq[i] = h
+        pos = []
+        for sgn in (1, -1):
+            pin.framesForwardKinematics(model, d, pin.integrate(model, q, sgn * dq))
+            pos.append(d.oMf[fid].act(np.array(pt)))
+        J[:, i] = (pos[0] - pos[1]) / (2 * h)
+    z = np.zeros(model.nv)
+    a0 = pin.aba(model, d, q, z, z).copy()
+    Minv = np.column_stack([pin.aba(model, d, q, z, np.eye(model.nv)[i]) - a0
+                            for i in range(model.nv)])
+    nn = n / np.linalg.norm(n)
+    jn = nn @ J
+    assert e.m_eff_free == pytest.approx(1.0 / (jn @ Minv @ jn), rel=1e-6)
+    assert e.v_n == pytest.approx(-(jn @ setup.v), rel=1e-6)
+
+
+# ---------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize("upd,match", [
+    ({"configuration": {"joints": {"nope": 1.0}}}, "unknown joint 'nope'"),
+    ({"obstacle": {"wheel": "middle"}}, "unknown wheel 'middle'"),
+    ({"contacts": {"locked": ["bogie"]}}, "unknown joint 'bogie'"),
+    ({"constraints": ["ground:left:normal"]}, "matches no candidate"),
+])
+def test_bad_names_raise_config_error(upd, match):
+    with pytest.raises(ConfigError, match=match):
+        sc(ROVER2D, **upd).build()
+
+
+@pytest.mark.parametrize("obstacle,match", [
+    ({"wheel": "front", "beta_deg": 95.0}, r"\[0, 90\]"),
+    ({"wheel": "front", "beta_deg": -1.0}, r"\[0, 90\]"),
+    ({"wheel": "front", "normal": [0.0, 0.0, 0.0]}, "non-zero"),
+    ({"wheel": "front", "beta_deg": 10.0, "normal": [1, 0, 0]}, "exactly one"),
+    ({"wheel": "front", "beta_deg": 10.0, "colour": "red"}, "unknown key"),
+])
+def test_bad_obstacle_rejected_at_load(tmp_path, obstacle, match):
+    import tomli_w
+
+    p = tmp_path / "s.toml"
+    p.write_text(tomli_w.dumps({**ROVER2D, "obstacle": obstacle}))
+    with pytest.raises(ConfigError, match=match):
+        load_scenario(p)
+
+
+def test_bad_files(tmp_path):
+    p = tmp_path / "s.toml"
+    p.write_text("model = {name = 'rover2d'\n")
+    with pytest.raises(ConfigError, match="malformed TOML"):
+        load_scenario(p)
+    u = tmp_path / "bad.urdf"
+    u.write_text("<robot name='x'><link name='a'></robot>")
+    with pytest.raises(ModelError, match="malformed XML"):
+        sc(ROVER2D, model={"file": str(u), "name": None}).build()
+    with pytest.raises(ModelError, match="wheel_mass"):
+        sc(ROVER2D, model={"params": {"wheel_mass": -2.0}}).build()
+    with pytest.raises(ModelError, match="wheel_radius"):
+        sc(RB, model={"params": {"wheel_radius": -0.1}}).build()
