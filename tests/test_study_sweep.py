@@ -24,7 +24,7 @@ BASE = {
 
 def _study(**kw):
     data = {"name": "rb", "base": BASE,
-            "grid": {"obstacle.beta_deg": {"start": 0, "stop": 80, "num": 9},
+            "grid": {"obstacle.beta_deg": {"start": 10, "stop": 90, "num": 9},
                      "model.params.com_height": [0.2, 0.45]}}
     data.update(kw)
     return data
@@ -58,13 +58,13 @@ def test_grid_expansion_order_ids_and_overrides():
     cases = expand(study)
     assert len(cases) == 18 == study.n_cases()
     # first grid key varies slowest
-    assert cases[0].overrides == {"obstacle.beta_deg": 0.0, "model.params.com_height": 0.2}
-    assert cases[1].overrides == {"obstacle.beta_deg": 0.0, "model.params.com_height": 0.45}
-    assert cases[2].overrides["obstacle.beta_deg"] == 10.0
+    assert cases[0].overrides == {"obstacle.beta_deg": 10.0, "model.params.com_height": 0.2}
+    assert cases[1].overrides == {"obstacle.beta_deg": 10.0, "model.params.com_height": 0.45}
+    assert cases[2].overrides["obstacle.beta_deg"] == 20.0
     assert len({c.case_id for c in cases}) == 18
     assert [c.case_id for c in expand(study_from_dict(_study()))] == [c.case_id for c in cases]
     scn = apply_overrides(BASE, cases[3].overrides)
-    assert scn["model"]["params"]["com_height"] == 0.45 and scn["obstacle"]["beta_deg"] == 10.0
+    assert scn["model"]["params"]["com_height"] == 0.45 and scn["obstacle"]["beta_deg"] == 20.0
     assert BASE["model"]["params"]["com_height"] == 0.3  # base untouched
 
 
@@ -85,21 +85,22 @@ def test_random_and_case_list_designs():
 def test_rigid_body_indicator_matches_closed_form(tmp_path):
     r"""T_c^- of the planar rigid body, derived by hand.
 
-    The contact point C is at r = (l, -h) from the COM; the normal direction into the
-    obstacle is d = (cos b, -sin b). The speed of C along d is
-    d.v_G + theta_dot (r_x d_z - r_z d_x) = d.v_G + theta_dot (h cos b - l sin b).
-    For a single row a, 1/m_eff = a M^-1 a^T = 1/m + (h cos b - l sin b)^2 / I and
-    T_c^- = m_eff v_n^2 / 2 with v_n = u cos b (pure translation at speed u).
+    The contact point C is at r = (l, -h) from the COM; the obstacle's outward normal is
+    n = (-sin b, cos b), so the direction into the obstacle is d = (sin b, -cos b). The
+    speed of C along d is d.v_G + theta_dot (r_x d_z - r_z d_x)
+    = d.v_G + theta_dot (h sin b - l cos b). For a single row a,
+    1/m_eff = a M^-1 a^T = 1/m + (h sin b - l cos b)^2 / I and T_c^- = m_eff v_n^2 / 2
+    with v_n = u sin b (pure translation at speed u).
     """
     res = run_study(_study(), tmp_path / "out", evaluator=RigidBodyEvaluator())
     t = res.table
     b = np.deg2rad(t["obstacle.beta_deg"].to_numpy())
     h = t["model.params.com_height"].to_numpy()
     m, inertia, lever, u = 20.0, 1.2, 0.4, 0.5
-    m_eff = 1.0 / (1.0 / m + (h * np.cos(b) - lever * np.sin(b)) ** 2 / inertia)
+    m_eff = 1.0 / (1.0 / m + (h * np.sin(b) - lever * np.cos(b)) ** 2 / inertia)
     np.testing.assert_allclose(t["m_eff"], m_eff, rtol=1e-12)
-    np.testing.assert_allclose(t["T_c_minus"], 0.5 * m_eff * (u * np.cos(b)) ** 2, rtol=1e-10)
-    np.testing.assert_allclose(t["v_n"], u * np.cos(b), rtol=1e-12)
+    np.testing.assert_allclose(t["T_c_minus"], 0.5 * m_eff * (u * np.sin(b)) ** 2, rtol=1e-10)
+    np.testing.assert_allclose(t["v_n"], u * np.sin(b), rtol=1e-12)
 
 
 def test_outputs_inputs_and_files(tmp_path):

@@ -20,6 +20,7 @@ from ._app import app, err_console
 from . import _partition  # noqa: F401  isort: skip
 from . import _experiment  # noqa: F401  isort: skip
 from . import _contact  # noqa: F401  isort: skip
+from . import _study  # noqa: F401  isort: skip
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -375,38 +375,31 @@ def _hashable(v):
     return tuple(v) if isinstance(v, list) else v
 
 
-def check_parameters(study: Study, validated_base: Mapping[str, Any]) -> None:
-    """Every swept parameter must name an existing leaf of the (validated) base scenario.
+def _unknown_parameter(study: Study, name: str, leaves: Mapping[str, Any]) -> ConfigError:
+    import difflib
+
+    close = difflib.get_close_matches(name, list(leaves), n=3, cutoff=0.5)
+    hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
+    return ConfigError(
+        f"study {study.name!r}: unknown parameter {name!r}: it is not a field of the "
+        f"base scenario{hint} (known: {', '.join(sorted(leaves)[:40])})"
+    )
+
+
+def validate_scenarios(study: Study, validate) -> dict:
+    """Check a study against the evaluator's scenario validator before any work.
+
+    ``validate(scenario_dict) -> normalized dict`` raises :class:`ConfigError` (or a
+    pydantic ``ValidationError``) for a bad scenario. The base is validated, then every
+    distinct swept value (grid values, sample bounds, listed cases); a swept parameter
+    must name a leaf of the normalized scenario (free-form tables such as
+    ``model.params`` count once the validator accepts the key). Returns the normalized
+    base.
 
     Raises
     ------
     ConfigError
-        Naming the unknown parameter and the closest valid names.
-    """
-    leaves = flatten(validated_base)
-    for name in study.parameters():
-        if name in leaves:
-            continue
-        import difflib
-
-        close = difflib.get_close_matches(name, list(leaves), n=3, cutoff=0.5)
-        hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
-        raise ConfigError(
-            f"study {study.name!r}: unknown parameter {name!r}: it is not a field of the "
-            f"base scenario{hint} (known: {', '.join(sorted(leaves)[:30])})"
-        )
-    if study.x is not None and study.x not in study.parameters():
-        raise ConfigError(
-            f"study {study.name!r}: x = {study.x!r} is not one of the swept parameters "
-            f"{study.parameters()}"
-        )
-
-
-def validate_scenarios(study: Study, validate) -> dict:
-    """Validate the base and every distinct swept value with the evaluator's validator.
-
-    ``validate(scenario_dict) -> normalized dict`` raises :class:`ConfigError` (or a
-    pydantic ``ValidationError``) for a bad scenario. Returns the normalized base.
+        Unknown parameter (with close matches), bad value (type, unit, range).
     """
     def _run(scn, where):
         try:
@@ -417,10 +410,23 @@ def validate_scenarios(study: Study, validate) -> dict:
             raise ConfigError(f"{where}: {exc}") from None
 
     base = _run(study.base, f"study {study.name!r}: base scenario")
-    check_parameters(study, base)
+    leaves = flatten(base)
     for key, values in distinct_values(study).items():
-        for val in values:
+        for i, val in enumerate(values):
             val = list(val) if isinstance(val, tuple) else val
+            if i == 0 and key not in leaves:
+                try:
+                    got = validate(apply_overrides(study.base, {key: val}))
+                except (ValidationError, ConfigError):
+                    raise _unknown_parameter(study, key, leaves) from None
+                if key not in flatten(got):
+                    raise _unknown_parameter(study, key, leaves)
+                continue
             _run(apply_overrides(study.base, {key: val}),
                  f"study {study.name!r}: {key} = {val!r}")
+    if study.x is not None and study.x not in study.parameters():
+        raise ConfigError(
+            f"study {study.name!r}: x = {study.x!r} is not one of the swept parameters "
+            f"{study.parameters()}"
+        )
     return base

@@ -58,25 +58,108 @@ def _optional(module: str):
 # The single entry point into the scenario / contact / simulate layers
 # -------------------------------------------------------------------------------------
 
+#: Study scenarios are scenario files plus an optional ``[simulation]`` table (the
+#: options of :class:`roverimpact.simulate.SimulationConfig`: gravity, friction ``mu``,
+#: springs, integrator...). Speed, impact angle and contact law default to the scenario's.
+SIMULATION_KEY = "simulation"
+
+_LAYER_ERRORS = (ValueError, TypeError, KeyError)
+
 
 def _scenario_module():
     mod = _optional("scenario")
-    if mod is None or not hasattr(mod, "Scenario"):
+    if mod is None or not hasattr(mod, "scenario_from_dict"):
         raise ConfigError(
-            "the scenario layer (roverimpact.scenario.Scenario) is not available in this "
+            "the scenario layer (roverimpact.scenario) is not available in this "
             "installation, so rover studies cannot run; use model.name = 'rigid_body' "
             "for the closed-form demonstration model"
         )
     return mod
 
 
-def evaluate_case(scenario: Mapping[str, Any], *, simulate: bool = False) -> dict[str, float]:
-    """Evaluate one scenario: the indicator, the predicted and (optionally) simulated force.
+def _split(scenario: Mapping[str, Any]) -> tuple[dict, dict]:
+    scn = dict(scenario)
+    sim = scn.pop(SIMULATION_KEY, None) or {}
+    return scn, dict(sim)
+
+
+def _parse(scenario: Mapping[str, Any], where: str = "scenario"):
+    """Validated ``(Scenario, simulation dict)`` of a study scenario."""
+    scn, sim = _split(scenario)
+    return _scenario_module().scenario_from_dict(scn, where=where), sim
+
+
+def _law_of(sc):
+    """Contact law of the scenario's ``[contact_law]`` (None if absent)."""
+    spec = getattr(sc, "contact_law", None)
+    if spec is None:
+        return None
+    from ..contact import get_law
+
+    return get_law(spec.name, k=spec.k, e=spec.e, n=spec.n)
+
+
+def _peak_force(T_c_minus, v_n, law) -> np.ndarray:
+    """Predicted peak force [N] (NaN without a law, 0 where there is no approach)."""
+    T = np.atleast_1d(np.asarray(T_c_minus, float))
+    v = np.broadcast_to(np.atleast_1d(np.asarray(v_n, float)), T.shape)
+    out = np.full(T.shape, np.nan)
+    if law is None:
+        return out
+    from ..contact import peak_force
+
+    hit = (T > 0) & (v > 0) & np.isfinite(T)
+    out[~hit] = 0.0
+    if hit.any():
+        out[hit] = np.asarray(peak_force(T[hit], v[hit], law), float)
+    return out
+
+
+def simulation_config(sc, sim: Mapping[str, Any]):
+    """The :class:`~roverimpact.simulate.SimulationConfig` of a study scenario.
+
+    ``speed`` defaults to ``velocity.u``, ``beta_deg`` to ``obstacle.beta_deg`` and the
+    obstacle contact law to the scenario's ``[contact_law]``.
+    """
+    from ..simulate import SimulationConfig
+
+    data = dict(sim)
+    if "speed" not in data and sc.velocity.u > 0:
+        data["speed"] = sc.velocity.u
+    if "beta_deg" not in data and sc.obstacle.beta_deg is not None:
+        data["beta_deg"] = sc.obstacle.beta_deg
+    if "obstacle" not in data and sc.contact_law is not None:
+        law = sc.contact_law
+        data["obstacle"] = {k: v for k, v in (("law", law.name), ("k", law.k), ("e", law.e),
+                                              ("n", law.n)) if v is not None}
+    return SimulationConfig.from_dict(data, source="study scenario [simulation]")
+
+
+def _simulate_one(sc, sim: Mapping[str, Any], model) -> dict[str, Any]:
+    """F_max (summed obstacle normal force, the papers' f_n) and duration; NaN on failure."""
+    from ..exceptions import RoverImpactError
+    from ..simulate import simulate_impact
+
+    try:
+        res = simulate_impact(model, simulation_config(sc, sim))
+    except (RoverImpactError, *_LAYER_ERRORS) as exc:
+        return {"F_max": np.nan, "contact_duration": np.nan, "T_c_minus_sim": np.nan,
+                "sim_error": f"{type(exc).__name__}: {exc}"}
+    return {"F_max": float(res.F_max_total), "contact_duration": float(res.contact_duration),
+            "T_c_minus_sim": float(res.T_c_minus), "sim_error": ""}
+
+
+def evaluate_case(scenario: Mapping[str, Any], *, simulate: bool = False) -> dict[str, Any]:
+    """Evaluate one study scenario: indicator, predicted and (optionally) simulated force.
+
+    This function (with :class:`ScenarioEvaluator`, its batched form) is the only place
+    where studies call the scenario, contact and simulate layers.
 
     Parameters
     ----------
     scenario : dict
-        A scenario as in a scenario file (nested dicts).
+        A scenario as in a scenario file (nested dicts), plus an optional
+        ``simulation`` table of simulator options.
     simulate : bool
         Also run the compliant-contact simulation.
 
@@ -84,70 +167,129 @@ def evaluate_case(scenario: Mapping[str, Any], *, simulate: bool = False) -> dic
     -------
     dict
         ``T_c_minus`` [J], ``m_eff`` [kg], ``v_n`` [m/s], ``F_pred`` [N] and, with
-        ``simulate``, ``F_max`` [N] and ``contact_duration`` [s] (NaN where a layer is
-        not available).
+        ``simulate``, ``F_max`` [N], ``contact_duration`` [s], ``T_c_minus_sim`` [J]
+        (the simulator's own T_c^- at first contact) and ``sim_error`` ("" if none).
     """
     if _is_rigid_body(scenario):
         return _rigid_body_single(scenario, simulate)
-    mod = _scenario_module()
-    scn = mod.Scenario.model_validate(dict(scenario))
-    built = scn.build()
-    out = {
-        "T_c_minus": float(built.T_c_minus),
-        "m_eff": float(built.m_eff),
-        "v_n": float(built.v_n),
-        "F_pred": _peak_force(built.T_c_minus, built.v_n, scn),
+    sc, sim = _parse(scenario)
+    setup = sc.build()
+    en = setup.partition()
+    out: dict[str, Any] = {
+        "T_c_minus": float(en.T_c_minus),
+        "m_eff": float(en.m_eff),
+        "v_n": float(en.v_n),
+        "F_pred": float(_peak_force(en.T_c_minus, en.v_n, _law_of(sc))[0]),
     }
     if simulate:
-        out.update(_simulate(scn, built))
+        out.update(_simulate_one(sc, sim, setup.model))
     return out
-
-
-def _peak_force(T_c_minus, v_n, scn) -> float:
-    contact = _optional("contact")
-    if contact is None or not hasattr(contact, "peak_force"):
-        return float("nan")
-    law = contact.get_law(scn.contact) if hasattr(scn, "contact") else None
-    return float(contact.peak_force(T_c_minus, v_n, law))
-
-
-def _simulate(scn, built) -> dict[str, float]:
-    sim = _optional("simulate")
-    if sim is None or not hasattr(sim, "simulate"):
-        return {"F_max": float("nan"), "contact_duration": float("nan")}
-    res = sim.simulate(scn)
-    return {"F_max": float(res.F_max), "contact_duration": float(res.contact_duration)}
 
 
 def simulator_available() -> bool:
     """True when the compliant-contact simulator layer is installed."""
     sim = _optional("simulate")
-    return sim is not None and hasattr(sim, "simulate")
+    return sim is not None and hasattr(sim, "simulate_impact")
+
+
+_BETA = "obstacle.beta_deg"
 
 
 class ScenarioEvaluator:
-    """Evaluator of the built-in rovers through the scenario layer (see :func:`evaluate_case`)."""
+    """Evaluator of the built-in rovers (and robot files) through the scenario layer.
+
+    Batched: cases that differ only in the impact angle ``obstacle.beta_deg`` and the
+    contact law share one ``Scenario.build()`` (Pinocchio evaluates ``M``, ``A``, ``v``
+    once) and get T_c^- for all their angles from one stacked
+    :func:`roverimpact.scenario.sweep_energy` call; the predicted peak force is one
+    vectorized ``peak_force`` call per law. Simulations run one per case.
+    """
 
     name = "scenario"
 
     def validate(self, scenario: Mapping[str, Any]) -> dict:
         if _is_rigid_body(scenario):
             return RigidBodyEvaluator().validate(scenario)
-        mod = _scenario_module()
-        return mod.Scenario.model_validate(dict(scenario)).model_dump(mode="json")
+        sc, sim = _parse(scenario)
+        try:
+            setup = sc.build()
+            simulation_config(sc, sim)
+            _law_of(sc)
+        except ConfigError:
+            raise
+        except _LAYER_ERRORS as exc:
+            raise ConfigError(str(exc)) from None
+        del setup
+        out = sc.model_dump(mode="json")
+        if sim:
+            out[SIMULATION_KEY] = sim
+        return out
 
     def evaluate(self, base, overrides, *, simulate: bool = False) -> dict[str, np.ndarray]:
         if _is_rigid_body(base):
             return RigidBodyEvaluator().evaluate(base, overrides, simulate=simulate)
-        rows = [evaluate_case(apply_overrides(base, ov), simulate=simulate) for ov in overrides]
-        return _columns(rows)
+        from ..scenario import sweep_energy
+
+        n = len(overrides)
+        T = np.full(n, np.nan)
+        m_eff = np.full(n, np.nan)
+        v_n = np.full(n, np.nan)
+        F_pred = np.full(n, np.nan)
+        sims: list[dict] = [{} for _ in range(n)]
+        groups: dict[str, list[int]] = {}
+        for i, ov in enumerate(overrides):
+            key = _group_key(ov)
+            groups.setdefault(key, []).append(i)
+        for idx in groups.values():
+            first = apply_overrides(base, overrides[idx[0]])
+            sc, _sim = _parse(first)
+            setup = sc.build()
+            if sc.obstacle.beta_deg is not None:
+                betas = np.array([float(overrides[i].get(_BETA, sc.obstacle.beta_deg))
+                                  for i in idx])
+                en = sweep_energy(setup, np.deg2rad(betas))
+            else:
+                en = setup.partition()
+            T[idx] = en.T_c_minus
+            m_eff[idx] = en.m_eff
+            v_n[idx] = en.v_n
+            laws: dict[str, list[int]] = {}
+            for i in idx:
+                laws.setdefault(_law_key(overrides[i]), []).append(i)
+            for members in laws.values():
+                sc_i = _parse(apply_overrides(base, overrides[members[0]]))[0]
+                F_pred[members] = _peak_force(T[members], v_n[members], _law_of(sc_i))
+            if simulate:
+                for i in idx:
+                    sc_i, sim_i = _parse(apply_overrides(base, overrides[i]))
+                    sims[i] = _simulate_one(sc_i, sim_i, setup.model)
+        out = {"T_c_minus": T, "m_eff": m_eff, "v_n": v_n, "F_pred": F_pred}
+        if simulate:
+            out.update(_columns(sims))
+        return out
 
 
-def _columns(rows: Sequence[Mapping[str, float]]) -> dict[str, np.ndarray]:
+def _group_key(ov: Mapping[str, Any]) -> str:
+    """Cases with the same key share M, A and v (they differ in beta / contact law only)."""
+    items = sorted((k, v) for k, v in ov.items()
+                   if k != _BETA and not k.startswith(("contact_law.", SIMULATION_KEY + ".")))
+    return repr(items)
+
+
+def _law_key(ov: Mapping[str, Any]) -> str:
+    return repr(sorted((k, v) for k, v in ov.items() if k.startswith("contact_law.")))
+
+
+def _columns(rows: Sequence[Mapping[str, Any]]) -> dict[str, np.ndarray]:
     keys: dict[str, None] = {}
     for r in rows:
         keys.update(dict.fromkeys(r))
-    return {k: np.array([r.get(k, np.nan) for r in rows]) for k in keys}
+    out = {}
+    for k in keys:
+        vals = [r.get(k, np.nan) for r in rows]
+        out[k] = (np.array(vals, dtype=object) if any(isinstance(v, str) for v in vals)
+                  else np.array(vals, dtype=float))
+    return out
 
 
 class FunctionEvaluator:
@@ -211,8 +353,8 @@ class RigidBodyModel(_Strict):
 
 class RigidBodyObstacle(_Strict):
     beta_deg: float = Field(
-        0.0, ge=-89.999, le=89.999,
-        description="inclination of the obstacle normal from horizontal [deg]",
+        90.0, ge=0.0, le=90.0,
+        description="angle of the obstacle face with the ground [deg] (90: vertical wall)",
     )
 
 
@@ -243,11 +385,13 @@ class RigidBodyEvaluator:
               h  G --> u            coordinates (x, z, theta) of the COM G,
                  |\                 M = diag(m, m, I)
                  | \ r = (l, -h)
-                 +--C  obstacle normal d = (cos beta, -sin beta)
+                 +--C  / obstacle face at angle beta with the ground
 
-    The contact row is ``a = [d_x, d_z, r_x d_z - r_z d_x]`` (velocity of C along d), so
-    ``T_c^-`` comes from :func:`roverimpact.partition` with ``A = a`` and
-    ``v = (u, 0, 0)``; the approach speed is ``v_n = u cos(beta)``. Computed batched
+    As in the scenario layer, the outward obstacle normal is
+    ``n = (-sin beta, cos beta)`` (beta = 90 deg: vertical wall). The contact row is the
+    velocity of C along ``d = -n``: ``a = [d_x, d_z, r_x d_z - r_z d_x]``, so ``T_c^-``
+    comes from :func:`roverimpact.partition` with ``A = a`` and ``v = (u, 0, 0)``; the
+    approach speed is ``v_n = u sin(beta)``. Computed batched
     over all cases (one ``partition`` call on stacked arrays).
     """
 
@@ -274,7 +418,7 @@ class RigidBodyEvaluator:
         h, lever = col["model.params.com_height"], col["model.params.lever"]
         beta = np.deg2rad(col["obstacle.beta_deg"])
         u = col["motion.speed"]
-        dx, dz = np.cos(beta), -np.sin(beta)
+        dx, dz = np.sin(beta), -np.cos(beta)
         M = np.zeros((n, 3, 3))
         M[:, 0, 0] = M[:, 1, 1] = m
         M[:, 2, 2] = inertia

@@ -1,0 +1,111 @@
+"""``roverimpact sweep | report | reproduce``: run studies, regenerate reports, reproduce papers.
+
+Thin: parses, calls :mod:`roverimpact.studies` / :mod:`roverimpact.report`, prints.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from pathlib import Path
+
+import typer
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+
+from ._app import app, console
+
+
+@contextmanager
+def _progress_bar(label: str):
+    """A rich progress bar with ETA, shown from the first report on (so that a study
+    rejected before any work prints only its error); yields ``progress(done, total)``."""
+    bar = Progress(
+        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+        TextColumn("cases"), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+        console=console, transient=False,
+    )
+    task = bar.add_task(label, total=None)
+    started = False
+
+    def update(done: int, total: int) -> None:
+        nonlocal started
+        if not started:
+            bar.start()
+            started = True
+        bar.update(task, completed=done, total=total)
+
+    try:
+        yield update
+    finally:
+        if started:
+            bar.stop()
+
+
+def _print_stats(sections) -> None:
+    tab = Table(title="Indicator T_c^- vs simulated peak force F_max")
+    for col in ("study", "n", "Spearman", "Kendall", "Pearson", "concordant pairs"):
+        tab.add_column(col, justify="right" if col != "study" else "left")
+    for s in sections:
+        a = s.agreement
+        if a is None:
+            tab.add_row(s.name, str(len(s.table)), "-", "-", "-", "F_max unavailable")
+        else:
+            tab.add_row(s.name, str(a.n), str(a.spearman), str(a.kendall), str(a.pearson),
+                        str(a.concordant_fraction))
+    console.print(tab)
+
+
+@app.command("sweep")
+def sweep_cmd(
+    study: Path = typer.Argument(..., help="Study file (TOML): base scenario + grid/cases/random."),
+    out: Path = typer.Option(Path("results"), "-o", "--out", help="Output folder."),
+    resume: bool = typer.Option(False, "--resume", help="Continue an interrupted run."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Discard results in the folder."),
+    csv: bool = typer.Option(False, "--csv", help="Also write results.csv."),
+    workers: int = typer.Option(None, "--workers", help="Local Dask cluster of N processes."),
+    scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler tcp://HOST:PORT."),
+    chunk_size: int = typer.Option(None, "--chunk-size", min=1, help="Cases per chunk."),
+    report: bool = typer.Option(True, "--report/--no-report", help="Write figure + report.html."),
+) -> None:
+    """Run a study: every case's T_c^-, effective mass, predicted (and simulated) peak force."""
+    from ..studies.sweep import run_study
+
+    with _progress_bar(study.stem) as update:
+        res = run_study(study, out, resume=resume, overwrite=overwrite, csv=csv,
+                        workers=workers, scheduler=scheduler, chunk_size=chunk_size,
+                        progress=update)
+    console.print(
+        f"{len(res.table)} cases ({res.n_computed} computed, {res.n_reused} reused) in "
+        f"{res.elapsed:.1f} s"
+    )
+    if report:
+        from ..report.html import build_report
+
+        path, sections = build_report(res.out_dir)
+        _print_stats(sections)
+        console.print(f"report: [bold]{path}[/bold]")
+    for role, path in res.files.items():
+        console.print(f"{role}: {path}")
+
+
+@app.command("report")
+def report_cmd(
+    results: Path = typer.Argument(..., help="A results folder (of sweep or reproduce)."),
+    n_boot: int = typer.Option(1000, "--n-boot", min=0, help="Bootstrap resamples."),
+    seed: int = typer.Option(0, "--seed", help="Bootstrap seed."),
+) -> None:
+    """Regenerate the figures and the HTML report from saved results (no recomputation)."""
+    from ..report.html import build_report
+
+    path, sections = build_report(results, n_boot=n_boot, seed=seed)
+    _print_stats(sections)
+    for s in sections:
+        console.print(f"figure: {s.figures.get('png')}")
+    console.print(f"report: [bold]{path}[/bold]")
