@@ -198,15 +198,45 @@ def test_sample_manipulator_runs():
     assert np.all(df["m_min"] > 0)
 
 
+def _panda():
+    try:
+        return safety.load_arm("erd:panda")
+    except ModelError as exc:
+        pytest.skip(f"example-robot-data not available: {exc}")
+
+
 def test_panda_comparison_runs():
-    erd = pytest.importorskip("example_robot_data")
-    robot = erd.load("panda")
-    model = robot.model
-    df = safety.arm_effective_masses(model, robot.q0, payload=1.0, region="hands_fingers")
-    assert len(df) == model.njoints - 1
-    assert np.all(df["m_min"] > 0)
-    # the standard's single number is not the exact mass: for the distal links it is far off
-    assert df["m_min"].iloc[-1] < df["m_R_iso"].iloc[-1]
+    model = _panda()
+    q = np.array(safety.READY_POSES["panda"])
+    df = safety.arm_effective_masses(model, q, payload=1.0, region="chest")
+    assert len(df) == model.njoints - 1 == 9
+    assert df.attrs["M_total"] == pytest.approx(sum(i.mass for i in model.inertias[1:]))
+    assert np.all(df["m_min"] > 0) and np.all(df["m_min"] <= df["m_max"])
+    # the standard's single number M/2 + m_L overestimates the mass of the distal links
+    # at this pose, so the exact speed limit is higher there
+    link7 = df.set_index("link").loc["panda_link7"]
+    assert link7["m_min"] < link7["m_R_iso"]
+    assert link7["v_exact_best"] > link7["v_iso"]
+    # cross-check one entry with point_effective_mass along sampled directions
+    p = model.inertias[model.getJointId("panda_joint7")].lever
+    U = np.random.default_rng(2).normal(size=(300, 3))
+    m = safety.point_effective_mass(model, q, "panda_link7", U, point=p)
+    assert m.min() >= link7["m_min"] * (1 - 1e-9) and m.max() <= link7["m_max"] * (1 + 1e-9)
+
+
+def test_cli_safety(capsys):
+    from roverimpact.cli import main
+
+    assert main(["safety", "regions", "--robot-mass", "20", "--payload", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "1.355" in out  # the hand, worked example above
+    assert main(["safety", "arm", "/nonexistent.urdf"]) == 2
+    assert "no such URDF" in capsys.readouterr().err
+    _panda()
+    assert main(["safety", "arm", "erd:panda", "--payload", "1", "--region", "chest"]) == 0
+    assert "M (moving parts) = 16.822 kg" in capsys.readouterr().out
+    assert main(["safety", "arm", "erd:panda", "--q", "1,2"]) == 2
+    assert "q must have shape (9,)" in capsys.readouterr().err
 
 
 def test_public_exports():

@@ -31,6 +31,7 @@ Pinocchio is imported lazily (only the arm functions need it).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,6 +45,7 @@ __all__ = [
     "BODY_AREAS",
     "BODY_REGIONS",
     "ISO_TS_15066_SOURCE",
+    "READY_POSES",
     "BodyArea",
     "BodyRegion",
     "arm_effective_masses",
@@ -311,8 +313,8 @@ def load_arm(source: str | Path):
     Parameters
     ----------
     source : str or Path
-        A URDF file, or ``"erd:<name>"`` for a robot of the ``example_robot_data`` package
-        (e.g. ``"erd:panda"``, ``"erd:ur5"``).
+        A URDF file, or ``"erd:<name>"`` for a robot of the ``example-robot-data`` package
+        (e.g. ``"erd:panda"``, ``"erd:ur5"``); only the kinematics and inertias are read.
 
     Raises
     ------
@@ -323,24 +325,46 @@ def load_arm(source: str | Path):
 
     s = str(source)
     if s.startswith("erd:"):
-        try:
-            import example_robot_data as erd
-        except ImportError:
-            raise ModelError(
-                f"{s}: the example_robot_data package is not installed "
-                "(pip install example-robot-data)"
-            ) from None
-        try:
-            return erd.load(s[4:]).model
-        except (ValueError, KeyError, ImportError, OSError, RuntimeError) as exc:
-            raise ModelError(f"{s}: cannot load this example_robot_data robot ({exc})") from None
-    path = Path(s)
+        path = _erd_urdf(s[4:])
+    else:
+        path = Path(s)
     if not path.is_file():
         raise ModelError(f"{path}: no such URDF file (or use erd:<name>)")
     try:
         return pin.buildModelFromUrdf(str(path))
     except (ValueError, RuntimeError) as exc:
         raise ModelError(f"{path}: not a readable URDF ({exc})") from None
+
+
+#: A configuration away from singularities for the arms of example-robot-data (rad, m).
+READY_POSES = {
+    "panda": [0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4, 0.02,
+              0.02],
+}
+
+
+def _erd_urdf(name: str) -> Path:
+    """URDF of robot ``name`` in the installed ``example-robot-data`` distribution.
+
+    Recent wheels install the robot files under ``cmeel.prefix/share/example-robot-data``
+    without an importable module, so the file is found through the distribution itself.
+    """
+    import importlib.metadata as md
+
+    try:
+        dist = md.distribution("example-robot-data")
+    except md.PackageNotFoundError:
+        raise ModelError(
+            f"erd:{name}: the example-robot-data package is not installed "
+            "(pip install example-robot-data)"
+        ) from None
+    root = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
+    for pattern in (f"*/urdf/{name}.urdf", f"*/urdf/{name}_robot.urdf"):
+        hits = sorted(root.glob(pattern))
+        if hits:
+            return hits[0]
+    known = sorted(p.stem for p in root.glob("*/urdf/*.urdf"))
+    raise ModelError(f"erd:{name}: no such robot in example-robot-data; known: {known}")
 
 
 def _mass_matrix(model, data, q):
