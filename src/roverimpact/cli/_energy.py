@@ -1,0 +1,61 @@
+"""``roverimpact energy SCENARIO.toml``: effective kinetic energy of an impact scenario."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from ..scenario import load_scenario
+from ._app import app, console
+
+
+def _peak_force(sc, e):
+    """Predicted peak force [N] if the scenario gives a contact law and contact is installed."""
+    if sc.contact_law is None or importlib.util.find_spec("roverimpact.contact") is None:
+        return None
+    if not (e.T_c_minus > 0 and e.v_n > 0):
+        return 0.0
+    from ..contact import get_law, peak_force
+
+    cl = sc.contact_law
+    kw = {k: v for k, v in (("e", cl.e), ("n", cl.n)) if v is not None}
+    return float(peak_force(float(e.T_c_minus), float(e.v_n), get_law(cl.name, k=cl.k, **kw)))
+
+
+@app.command("energy")
+def energy_cmd(
+    file: Path = typer.Argument(..., help="Scenario TOML file (see docs/models.md)."),
+    as_json: bool = typer.Option(False, "--json", help="Print machine-readable JSON."),
+) -> None:
+    """T, T_c^-, T_a, effective mass along the impact normal, approach speed, peak force."""
+    sc = load_scenario(file)
+    setup = sc.build()
+    e = setup.partition()
+    f_max = _peak_force(sc, e)
+    out = e.as_dict() | {
+        "labels": list(setup.labels), "contact_point": setup.contact_point.tolist(),
+        "normal": setup.normal.tolist(), "peak_force": f_max,
+    }
+    if as_json:
+        console.print_json(json.dumps(out))
+        return
+    if sc.description:
+        console.print(f"[bold]{sc.description}[/bold]")
+    t = Table(title=f"Impact energy of {file.name} ({setup.model.name})")
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    t.add_row("T (total)", f"{e.T:.6g} J")
+    t.add_row("T_c^- (effective)", f"{e.T_c_minus:.6g} J")
+    t.add_row("T_a (admissible)", f"{e.T_a:.6g} J")
+    t.add_row("m_eff along n (other rows held)", f"{e.m_eff:.6g} kg")
+    t.add_row("m_eff along n (obstacle row alone)", f"{e.m_eff_free:.6g} kg")
+    t.add_row("v_n (normal approach speed)", f"{e.v_n:.6g} m/s")
+    if f_max is not None:
+        t.add_row(f"peak force ({sc.contact_law.name})", f"{f_max:.6g} N")
+    t.add_row("active rows / rank", f"{len(setup.labels)} / {e.rank}")
+    console.print(t)
+    console.print("rows: " + ", ".join(setup.labels), highlight=False)

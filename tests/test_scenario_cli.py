@@ -1,0 +1,53 @@
+"""CLI: `roverimpact energy` and `roverimpact draw` on the shipped examples and bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from roverimpact.cli import main
+from roverimpact.scenario import energy_of, load_scenario
+
+EX = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_energy_json_matches_library(capsys):
+    f = EX / "rocker_bogie_beta30.toml"
+    assert main(["energy", str(f), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    e = energy_of(load_scenario(f))
+    assert out["T_c_minus"] == pytest.approx(float(e.T_c_minus))
+    assert out["labels"][-1] == "obstacle:left_front:normal"
+    assert out["v_n"] == pytest.approx(0.2 * 0.5)
+
+
+def test_energy_table_and_peak_force(capsys):
+    assert main(["energy", str(EX / "rover2d_beta45.toml")]) == 0
+    out = capsys.readouterr().out
+    assert "T_c^-" in out and "m_eff" in out and "peak force" in out
+
+
+def test_draw_writes_png(tmp_path):
+    for name in ("rover2d_beta45", "rocker_bogie_beta30"):
+        out = tmp_path / f"{name}.png"
+        assert main(["draw", str(EX / f"{name}.toml"), "-o", str(out)]) == 0
+        assert out.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("body,match", [
+    ("[model]\nname='rover2d'\n[obstacle]\nwheel='front'\nbeta_deg=120\n", "beta_deg"),
+    ("[model]\nname='rover2d'\n[obstacle]\nwheel='front'\nnormal=[0,0,0]\n", "non-zero"),
+    ("[model]\nname='rover2d'\n[obstacle]\nwheel='nose'\nbeta_deg=10\n", "unknown wheel"),
+    ("[model]\nname='rover2d'\nparams={wheel_radius=-0.1}\n[obstacle]\nwheel='front'\n"
+     "beta_deg=10\n", "wheel_radius"),
+    ("[model]\nname='rover2d'\n[obstacle\n", "malformed TOML"),
+    ("[model]\nfile='missing.urdf'\n[obstacle]\nframe='a'\nnormal=[0,0,1]\n", "no such"),
+])
+def test_bad_input_exit_2_one_line(tmp_path, capsys, body, match):
+    f = tmp_path / "s.toml"
+    f.write_text(body)
+    assert main(["energy", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert match in err and "Traceback" not in err
