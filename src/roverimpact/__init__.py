@@ -6,6 +6,7 @@ underscore are private.
 
 from . import contact
 from ._version import __version__
+from .activeset import UnilateralImpactResult, active_set, unilateral_impact
 from .contact import impact_1dof, peak_force
 from .energy import Partition, effective_mass, partition, projector
 from .exceptions import ConfigError, InputError, ModelError, RoverImpactError, SolverError
@@ -45,7 +46,9 @@ __all__ = [
     "RoverImpactError",
     "Scenario",
     "SolverError",
+    "UnilateralImpactResult",
     "__version__",
+    "active_set",
     "arm_effective_masses",
     "contact",
     "effective_mass",
@@ -63,4 +66,5 @@ __all__ = [
     "rocker_bogie",
     "rover2d",
     "sweep_energy",
+    "unilateral_impact",
 ]

@@ -1,0 +1,383 @@
+"""Unilateral impact problem and automatic active set (roverimpact.activeset).
+
+References: closed forms derived in the docstrings (momentum balance + Newton's law, by
+hand), the bilateral impact map ``impulsive_impact`` (an SVD solve, a different method)
+on the set the LCP finds, ``partition`` (rank-revealing QR) for T_c^-, and property
+tests over random SPD mass matrices that check complementarity and the energy balance
+from v+ and p alone.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import roverimpact as ri
+from roverimpact.activeset import active_set, unilateral_impact
+
+
+def _rod(m=2.0, length=1.0):
+    """Free planar rod, coordinates (x, z, theta) of the centre, M = diag(m, m, m l^2/12)."""
+    return np.diag([m, m, m * length**2 / 12])
+
+
+# ------------------------------------------------------------------------------------
+# Textbook cases
+# ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("e", [0.0, 0.4, 1.0])
+def test_rod_falls_flat_on_two_supports_both_hold(e):
+    r"""Horizontal rod (m = 2 kg, l = 1 m) falling flat at V onto supports at x = -a, +b.
+
+    ::
+
+            V |   |   |
+        ======G========
+          ^ -a     ^ +b
+
+    Row of a support at abscissa x: vertical velocity of that point, ``[0, 1, x]``. With
+    both holding, Newton's law gives both points the velocity e V upward, so the rod does
+    not rotate: :math:`\dot z^+ = eV`, :math:`\dot\theta^+ = 0`. Momentum:
+    :math:`p_1 + p_2 = (1+e) m V`; angular momentum about G: :math:`-a p_1 + b p_2 = 0`,
+    hence :math:`p_1 = (1+e) m V\, b/(a+b)`, :math:`p_2 = (1+e) m V\, a/(a+b)`, both
+    positive. All of the vertical energy is constrained: :math:`T_c^- = \tfrac12 m V^2`.
+    """
+    m, V, a, b = 2.0, 1.3, 0.3, 0.45
+    M = _rod(m)
+    N = np.array([[0.0, 1.0, -a], [0.0, 1.0, b]])
+    r = unilateral_impact(M, [0.2, -V, 0.0], N, e)
+    assert r.active.tolist() == [True, True]
+    np.testing.assert_allclose(r.impulse, [(1 + e) * m * V * b / (a + b),
+                                           (1 + e) * m * V * a / (a + b)], rtol=1e-12)
+    np.testing.assert_allclose(r.v_plus, [0.2, e * V, 0.0], atol=1e-12)
+    assert r.T_c_minus == pytest.approx(0.5 * m * V**2, rel=1e-12)
+    assert r.energy_lost == pytest.approx((1 - e**2) * 0.5 * m * V**2, rel=1e-12, abs=1e-14)
+
+
+def test_rod_overhanging_supports_outer_releases():
+    r"""Rod falling flat onto two supports on the same side of G, at x1 = -c and x2 = -a.
+
+    Both cannot hold: :math:`p_1 + p_2 > 0` and :math:`-c p_1 - a p_2 = 0` have no
+    non-negative solution but zero. With only the support at :math:`x_s` holding,
+    :math:`P = (1+e) V / (1/m + x_s^2/I)` and the other point's velocity changes by
+    :math:`P (1/m + x_s x_o / I)`; Newton's law at the other point needs
+    :math:`x_s x_o \ge x_s^2`, i.e. :math:`|x_o| \ge |x_s|`: the inner support (nearer
+    G) holds and the outer one lifts. e = 0.5, so :math:`T_c^- = \tfrac12 m_{eff} V^2`
+    with :math:`m_{eff} = 1/(1/m + c^2/I)`.
+    """
+    m, V, c, a, e = 2.0, 1.0, 0.1, 0.4, 0.5
+    M = _rod(m)
+    I = M[2, 2]
+    N = np.array([[0.0, 1.0, -a], [0.0, 1.0, -c]])  # outer first
+    r = unilateral_impact(M, [0.0, -V, 0.0], N, e)
+    assert r.active.tolist() == [False, True]
+    m_eff = 1 / (1 / m + c**2 / I)
+    P = (1 + e) * V * m_eff
+    np.testing.assert_allclose(r.impulse, [0.0, P], rtol=1e-12, atol=1e-14)
+    assert r.T_c_minus == pytest.approx(0.5 * m_eff * V**2, rel=1e-12)
+    # the outer point leaves faster than the restitution velocity e V
+    assert N[0] @ r.v_plus > e * V
+
+
+THRESHOLD = np.degrees(np.arccos(1 / np.sqrt(3)))  # 54.7356 deg
+
+
+@pytest.mark.parametrize("theta_deg", [10.0, 30.0, 50.0, 54.0, 55.5, 60.0, 75.0, 85.0])
+@pytest.mark.parametrize("e", [0.0, 0.6])
+def test_tilted_rod_resting_end_threshold(theta_deg, e):
+    r"""Rod tilted at theta, lower end B resting on the floor, upper end A landing on a ledge.
+
+    ::
+
+                   A  -> lands on a ledge (normal +z)
+                 /
+               G      theta from horizontal
+             /
+        ___B/_____   floor (normal +z), B at rest on it
+
+    Centre G, ``A,B = G ± (l/2)(cos θ, sin θ)``; vertical velocities
+    :math:`\dot z \pm c\dot\theta`, :math:`c = (l/2)\cos\theta`: rows
+    ``[0, 1, ±c]``. B at rest and A approaching at V give :math:`\dot z = -V/2`,
+    :math:`c\dot\theta = -V/2`. An upward impulse P at A alone changes B's vertical velocity
+    by :math:`P(1/m - c^2/I)`, :math:`I = m l^2/12`. So B lifts (releases) iff
+    :math:`c^2 < I/m`, i.e. :math:`\cos^2\theta < 1/3`, :math:`\theta > 54.74°`; at
+    shallower angles B would be driven into the floor and holds. Newton with one ``e``
+    scales the LCP by (1 + e), so the threshold does not depend on e.
+
+    T_c^-: A alone, :math:`\tfrac12 m_{eff} V^2` with :math:`m_{eff} = 1/(1/m + c^2/I)`;
+    A and B (independent rows in (z, θ)): all of the (z, θ) energy,
+    :math:`\tfrac12 m \dot z^2 + \tfrac12 I\dot\theta^2`.
+    """
+    m, length, V = 2.0, 1.0, 0.8
+    M = _rod(m, length)
+    I = M[2, 2]
+    c = 0.5 * length * np.cos(np.radians(theta_deg))
+    zd, thd = -V / 2, -V / (2 * c)
+    N = np.array([[0.0, 1.0, c], [0.0, 1.0, -c]])  # A (ledge), B (floor)
+    r = unilateral_impact(M, [0.1, zd, thd], N, e, obstacle=0)
+    b_holds = theta_deg < THRESHOLD
+    assert r.active.tolist() == [True, b_holds]
+    assert r.approaching.tolist() == [True, False]
+    if b_holds:
+        T_c = 0.5 * m * zd**2 + 0.5 * I * thd**2
+        np.testing.assert_allclose(r.v_plus[1:], [e * V / 2, e * V / (2 * c)], rtol=1e-11,
+                                       atol=1e-14)
+    else:
+        m_eff = 1 / (1 / m + c**2 / I)
+        T_c = 0.5 * m_eff * V**2
+        assert r.impulse[1] == 0.0
+        assert r.impulse[0] == pytest.approx((1 + e) * m_eff * V, rel=1e-12)
+    assert r.T_c_minus == pytest.approx(T_c, rel=1e-11)
+    assert active_set(M, [0.1, zd, thd], N, restitution=e).tolist() == [True, b_holds]
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 1.0])
+def test_ball_into_right_angle_corner(e):
+    r"""Point mass (frictionless ball) hitting a corner of two perpendicular walls.
+
+    Walls x = 0 (normal +x) and y = 0 (normal +y), velocity (-a, -b). The rows are
+    M-orthogonal, so the two contacts decouple: :math:`v^+ = (e a, e b)`, impulses
+    :math:`(1+e) m a`, :math:`(1+e) m b`; :math:`T_c^- = T`.
+    """
+    m, a, b = 3.0, 1.2, 0.7
+    r = unilateral_impact(m * np.eye(2), [-a, -b], [[1.0, 0.0], [0.0, 1.0]], e)
+    assert r.active.tolist() == [True, True]
+    np.testing.assert_allclose(r.v_plus, [e * a, e * b], rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(r.impulse, [(1 + e) * m * a, (1 + e) * m * b], rtol=1e-12)
+    assert r.T_c_minus == pytest.approx(0.5 * m * (a**2 + b**2), rel=1e-12)
+
+
+@pytest.mark.parametrize("phi_deg", [-40.0, -20.0, 0.0, 5.0, 20.0, 35.0, 60.0, 80.0])
+def test_ball_into_obtuse_corner(phi_deg):
+    r"""Ball on the floor (normal n1 = (0, 1)) moving into a slope of angle alpha = 40°.
+
+    Slope normal :math:`n_2 = (-\sin\alpha, \cos\alpha)`, :math:`c = n_1\cdot n_2 =
+    \cos\alpha`. Velocity :math:`V(\cos\phi, -\sin\phi)`: :math:`\gamma_1 = -V\sin\phi`,
+    :math:`\gamma_2 = -V\sin(\alpha + \phi)`. With e = 0 and :math:`G = (1/m)[[1, c],
+    [c, 1]]`, the 2x2 LCP has the cases
+
+    * both hold: :math:`p = -m(1-c^2)^{-1}(\gamma_1 - c\gamma_2, \gamma_2 - c\gamma_1)
+      \ge 0` iff :math:`\gamma_1 \le c\gamma_2` and :math:`\gamma_2 \le c\gamma_1`;
+      then :math:`v^+ = 0`;
+    * slope only: :math:`p_2 = -m\gamma_2`, needs :math:`\gamma_1 - c\gamma_2 \ge 0`;
+      :math:`v^+ = v - (n_2\cdot v) n_2`.
+
+    (The floor alone cannot occur here: the slope is always approached.) T_c^- is
+    :math:`\tfrac12 m V^2` for both, :math:`\tfrac12 m\gamma_2^2` for the slope only.
+    """
+    m, V, alpha = 2.0, 1.5, np.radians(40.0)
+    phi = np.radians(phi_deg)
+    n1 = np.array([0.0, 1.0])
+    n2 = np.array([-np.sin(alpha), np.cos(alpha)])
+    c = np.cos(alpha)
+    v = V * np.array([np.cos(phi), -np.sin(phi)])
+    g1, g2 = -V * np.sin(phi), -V * np.sin(alpha + phi)
+    r = unilateral_impact(m * np.eye(2), v, np.array([n1, n2]))
+    both = g1 <= c * g2 and g2 <= c * g1
+    if both:
+        assert r.active.tolist() == [True, True]
+        np.testing.assert_allclose(r.v_plus, 0.0, atol=1e-12)
+        assert r.T_c_minus == pytest.approx(0.5 * m * V**2, rel=1e-12)
+    else:
+        assert g1 - c * g2 >= 0
+        assert r.active.tolist() == [False, True]
+        np.testing.assert_allclose(r.v_plus, v - (n2 @ v) * n2, atol=1e-12)
+        assert r.impulse[1] == pytest.approx(-m * g2, rel=1e-12)
+        assert r.T_c_minus == pytest.approx(0.5 * m * g2**2, rel=1e-12)
+
+
+# ------------------------------------------------------------------------------------
+# Reduction to the bilateral map, bilateral rows, Poisson
+# ------------------------------------------------------------------------------------
+
+
+def test_one_contact_reduces_to_impulsive_impact(rng):
+    """One approaching contact plus bilateral rows at rest: the existing map, exactly."""
+    for _ in range(10):
+        n = int(rng.integers(3, 8))
+        M = _spd(rng, n)
+        B = rng.standard_normal((2, n))
+        a = rng.standard_normal(n)
+        v = _null_velocity(rng, B)
+        if a @ v > 0:
+            a = -a
+        e = float(rng.uniform(0, 1))
+        r = unilateral_impact(M, v, a, e, bilateral=B)
+        ref = ri.impulsive_impact(M, a[None], v, e, persistent=B)
+        np.testing.assert_allclose(r.v_plus, ref.v_plus, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(r.impulse, ref.impulse, rtol=1e-9)
+        np.testing.assert_allclose(r.impulse_bilateral, ref.impulse_persistent, rtol=1e-7,
+                                   atol=1e-9 * np.abs(ref.impulse_persistent).max())
+        assert r.T_c_minus == pytest.approx(float(ref.T_c_minus), rel=1e-9)
+        assert r.active.tolist() == [True]
+
+
+def test_poisson_equals_newton_for_one_contact_and_for_e0():
+    """One contact: both laws give p = (1+e) p_c. With e = 0 the laws coincide."""
+    M = _rod()
+    a = np.array([0.0, 1.0, -0.5])
+    v = [0.3, -1.0, 0.5]
+    rn = unilateral_impact(M, v, a, 0.7)
+    rp = unilateral_impact(M, v, a, 0.7, law="poisson")
+    np.testing.assert_allclose(rp.v_plus, rn.v_plus, rtol=1e-12)
+    N = np.array([[0.0, 1.0, 0.3], [0.0, 1.0, -0.3], [1.0, 0.2, 0.0]])
+    v2 = [-0.4, -1.0, 0.2]
+    r0 = unilateral_impact(M, v2, N, 0.0)
+    r1 = unilateral_impact(M, v2, N, 0.0, law="poisson")
+    np.testing.assert_allclose(r1.impulse, r0.impulse, rtol=1e-12, atol=1e-14)
+
+
+def test_redundant_ground_contacts_rank_deficient():
+    """Two identical floor rows (redundant): the impulse splits, v+ and T_c^- are unique.
+
+    Point mass 1 kg falling at 2 m/s onto a floor given twice, and a wall it does not touch
+    (separating): v+ = 0 vertically, total floor impulse 2 N s, wall released.
+    """
+    N = np.array([[0.0, 1.0], [0.0, 1.0], [1.0, 0.0]])
+    r = unilateral_impact(np.eye(2), [0.5, -2.0], N)
+    np.testing.assert_allclose(r.v_plus, [0.5, 0.0], atol=1e-12)
+    assert r.impulse[:2].sum() == pytest.approx(2.0, rel=1e-12)
+    assert r.active.tolist() == [True, True, False]
+    assert r.T_c_minus == pytest.approx(2.0, rel=1e-12)
+    assert int(r.rank) == 1
+
+
+def test_batched_matches_single_items(rng):
+    n, k = 5, 3
+    M = np.stack([_spd(rng, n) for _ in range(4)])
+    N = rng.standard_normal((4, k, n))
+    v = rng.standard_normal((4, n))
+    rb = unilateral_impact(M, v, N, 0.3)
+    for i in range(4):
+        ri_ = unilateral_impact(M[i], v[i], N[i], 0.3)
+        np.testing.assert_allclose(rb.v_plus[i], ri_.v_plus, rtol=1e-12, atol=1e-13)
+        assert rb.active[i].tolist() == ri_.active.tolist()
+        assert rb.T_c_minus[i] == pytest.approx(float(ri_.T_c_minus), rel=1e-12)
+    assert active_set(M, v, N, restitution=0.3).shape == (4, k)
+
+
+def test_no_approaching_contact_no_impact():
+    r = unilateral_impact(np.eye(2), [0.0, 1.0], [[0.0, 1.0]])
+    assert not bool(r.impact)
+    np.testing.assert_allclose(r.v_plus, [0.0, 1.0])
+    assert r.impulse.tolist() == [0.0]
+
+
+# ------------------------------------------------------------------------------------
+# Property tests: complementarity and energy from (v+, p) alone
+# ------------------------------------------------------------------------------------
+
+
+def _spd(rng, n, spread=1.0):
+    X = rng.standard_normal((n, n))
+    D = np.diag(10.0 ** rng.uniform(-spread / 2, spread / 2, n))
+    return D @ (X @ X.T + n * np.eye(n)) @ D
+
+
+def _null_velocity(rng, B):
+    """A random velocity with B v = 0 (bilateral rows at rest before the impact)."""
+    v = rng.standard_normal(B.shape[1])
+    if B.shape[0] == 0:
+        return v
+    return v - np.linalg.pinv(B) @ (B @ v)
+
+
+@settings(max_examples=int(os.environ.get("RI_AS_EXAMPLES", "120")), deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 9), k=st.integers(1, 6),
+       pb=st.integers(0, 3), e=st.floats(0.0, 1.0), law=st.sampled_from(["newton", "poisson"]),
+       redundant=st.booleans())
+def test_property_complementarity_and_energy(seed, n, k, pb, e, law, redundant):
+    rng = np.random.default_rng(seed)
+    pb = min(pb, n - 1)
+    M = _spd(rng, n)
+    N = rng.standard_normal((k, n))
+    if redundant and k >= 2:
+        N[-1] = 0.7 * N[0]  # a dependent contact row
+    B = rng.standard_normal((pb, n))
+    v = _null_velocity(rng, B)
+    r = unilateral_impact(M, v, N, e, bilateral=B if pb else None, law=law)
+    p, vp = r.impulse, r.v_plus
+    # momentum balance: M (v+ - v) = N^T p + B^T q, bilateral rows at rest after
+    lhs = M @ (vp - v) - N.T @ p - (B.T @ r.impulse_bilateral if pb else 0.0)
+    assert np.linalg.norm(lhs) <= 1e-9 * (np.linalg.norm(M @ v) + np.linalg.norm(N.T @ p))
+    if pb:
+        assert np.abs(B @ vp).max() <= 1e-9 * np.linalg.norm(v) * np.abs(B).max()
+    # complementarity in whitened, dimensionless units
+    Lc = np.linalg.cholesky(M)
+    wn = np.linalg.norm(np.linalg.solve(Lc, N.T), axis=0)
+    s = np.sqrt(2 * r.T_minus)
+    g_minus, g_plus = N @ v, N @ vp
+    w = g_plus + e * g_minus if law == "newton" else g_plus
+    ph, wh = p * wn / s, w / (wn * s)
+    assert ph.min() >= -1e-10
+    assert wh.min() >= -1e-10
+    if law == "newton":
+        assert np.abs(ph * wh).max() <= 1e-10
+    elif np.linalg.matrix_rank(np.vstack([N, B])) == k + pb:
+        # Poisson: p = (1 + e) p_c + x, p_c the compression impulse (Newton with e = 0,
+        # checked by the Newton examples), 0 <= x complementary to N v+ >= 0
+        p_c = unilateral_impact(M, v, N, 0.0, bilateral=B if pb else None).impulse
+        xh = (p - (1 + e) * p_c) * wn / s
+        assert xh.min() >= -1e-9
+        assert np.abs(xh * wh).max() <= 1e-9
+    assert float(r.residual) <= 1e-10
+    # energy: never added for a common e in [0, 1]
+    T_plus = 0.5 * vp @ M @ vp
+    assert T_plus <= r.T_minus * (1 + 1e-10) + 1e-14
+    assert float(r.T_plus) == pytest.approx(T_plus, rel=1e-9, abs=1e-14)
+    # T_c^- is the partition of v with the active rows plus the bilateral rows
+    rows = np.vstack([N[r.active], B]) if (r.active.any() or pb) else None
+    T_c = float(ri.partition(M, rows, v).T_c) if rows is not None else 0.0
+    assert float(r.T_c_minus) == pytest.approx(T_c, rel=1e-8, abs=1e-12 * r.T_minus)
+    if law == "newton":
+        # Newton with one e: the impact removes (1 - e^2) T_c^- (e = 0: T_c^- itself)
+        assert float(r.energy_lost) == pytest.approx((1 - e**2) * T_c, rel=1e-8,
+                                                     abs=1e-11 * r.T_minus)
+        # the active set held as bilateral rows through the existing map gives the same v+
+        if r.active.any() and np.linalg.matrix_rank(np.vstack([N[r.active], B])) == (
+                r.active.sum() + pb):
+            ref = ri.impulsive_impact(M, N[r.active], v, e, persistent=B if pb else None)
+            np.testing.assert_allclose(vp, ref.v_plus, rtol=1e-7,
+                                       atol=1e-9 * np.linalg.norm(v))
+
+
+# ------------------------------------------------------------------------------------
+# Errors
+# ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"unilateral": [[0.0, 0.0], [0.0, 1.0]]}, "unilateral row 0 is all zeros"),
+        ({"unilateral": [[0.0, 1.0]], "bilateral": [[0.0, 0.0]]}, "bilateral row 0"),
+        ({"v": [np.nan, 1.0]}, "v contains NaN"),
+        ({"unilateral": [[np.inf, 1.0]]}, "unilateral contains NaN"),
+        ({"unilateral": [[1.0, 0.0, 0.0]]}, "n = 2 columns"),
+        ({"restitution": 1.5}, "restitution must lie in"),
+        ({"law": "maxwell"}, "law must be one of"),
+        ({"M": [[1.0, 0.0], [0.0, -1.0]]}, "not positive definite"),
+        ({"obstacle": 1}, "obstacle row 1 is not approaching"),
+        ({"unilateral": np.zeros((0, 2))}, "no rows"),
+    ],
+)
+def test_bad_input_one_clear_error(kwargs, match):
+    args = {"M": np.eye(2), "v": [0.0, -1.0], "unilateral": [[0.0, 1.0], [1.0, 0.0]]}
+    args |= kwargs
+    with pytest.raises(ri.InputError, match=match):
+        unilateral_impact(args.pop("M"), args.pop("v"), args.pop("unilateral"), **args)
+
+
+def test_infeasible_and_locked_raise_solver_error():
+    """Two opposite walls touching a 1-D body: e1 = 0.8 demands a rebound of 0.8 m/s into
+    wall 2, whose Newton law allows at most 0.2 m/s: no impulses exist. And a contact
+    row equal to a bilateral row that is moving: it is forced closed but must rebound."""
+    with pytest.raises(ri.SolverError, match="no solution"):
+        unilateral_impact(np.eye(1), [-1.0], [[1.0], [-1.0]], [0.8, 0.2])
+    with pytest.raises(ri.SolverError, match="span of the bilateral rows"):
+        unilateral_impact(np.eye(2), [0.0, -1.0], [[0.0, 1.0]], 0.5, bilateral=[[0.0, 1.0]])
