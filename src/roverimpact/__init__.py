@@ -32,9 +32,11 @@ from .scenario import (
     load_scenario,
     sweep_energy,
 )
+from .simulate import GRAVITY, SimulationConfig, SimulationResult, simulate_impact
 
 __all__ = [
     "BODY_REGIONS",
+    "GRAVITY",
     "ConfigError",
     "ImpactEnergy",
     "ImpactResult",
@@ -45,6 +47,8 @@ __all__ = [
     "Partition",
     "RoverImpactError",
     "Scenario",
+    "SimulationConfig",
+    "SimulationResult",
     "SolverError",
     "UnilateralImpactResult",
     "__version__",
@@ -65,6 +69,7 @@ __all__ = [
     "projector",
     "rocker_bogie",
     "rover2d",
+    "simulate_impact",
     "sweep_energy",
     "unilateral_impact",
 ]

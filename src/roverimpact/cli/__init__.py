@@ -18,6 +18,7 @@ from ._app import app, err_console
 
 # Command modules register themselves on ``app`` when imported.
 from . import _partition  # noqa: F401  isort: skip
+from . import _simulate  # noqa: F401  isort: skip
 from . import _experiment  # noqa: F401  isort: skip
 from . import _safety  # noqa: F401  isort: skip
 from . import _contact  # noqa: F401  isort: skip

@@ -8,7 +8,7 @@ See docs/simulate.md for the equations, the contact geometry and the integrator.
 
 from ._config import GRAVITY, ContactSpec, IntegratorSpec, JointSpring, SimulationConfig
 from ._result import SimulationResult
-from ._run import build_system, effective_energy, simulate_impact
+from ._run import build_system, effective_energy, initial_state, simulate_impact
 from ._system import ContactSystem, Plane
 
 __all__ = [
@@ -22,5 +22,6 @@ __all__ = [
     "SimulationResult",
     "build_system",
     "effective_energy",
+    "initial_state",
     "simulate_impact",
 ]

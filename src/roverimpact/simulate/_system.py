@@ -120,6 +120,9 @@ class ContactSystem:
         self.N = np.array([p.n for p in self.planes]).reshape(-1, 3)
         self.offsets = np.array([p.n @ p.p0 for p in self.planes])
         self.z_max = np.array([p.z_max for p in self.planes])
+        self.bounded = bool(np.isfinite(self.z_max).any())
+        # contact point = centre - r n: J_p = J_lin - skew(-r n) J_ang = J_lin + r skew(n) J_ang
+        self.rSn = self.radii[None, :, None, None] * _skew(self.N)[:, None, :, :]
 
     # ------------------------------------------------------------------ manifold chart
     def config(self, q_ref: np.ndarray, dq: np.ndarray) -> np.ndarray:
@@ -155,8 +158,9 @@ class ContactSystem:
         return self._gaps(c)
 
     def _gaps(self, c):
-        g = c @ self.N.T - self.offsets  # (nw, np)
-        g = g.T - self.radii[None, :]
+        g = self.N @ c.T - self.offsets[:, None] - self.radii[None, :]   # (np, nw)
+        if not self.bounded:
+            return g
         # contact points above the top of a finite face do not touch it
         z_cp = c[None, :, 2] - self.radii[None, :] * self.N[:, None, 2]
         return np.where(z_cp <= self.z_max[:, None], g, np.inf)
@@ -167,27 +171,29 @@ class ContactSystem:
         c, J = self.wheel_kinematics(q)
         npl, nw = len(self.planes), len(self.fids)
         gap = self._gaps(c)
-        d = -self.radii[None, :, None] * self.N[:, None, :]          # centre -> contact point
-        Jp = J[None, :, :3, :] - _skew(d) @ J[None, :, 3:, :]        # (np, nw, 3, nv)
+        Jp = J[None, :, :3, :] + self.rSn @ J[None, :, 3:, :]        # (np, nw, 3, nv)
         vp = Jp @ v                                                  # (np, nw, 3)
-        vn = np.einsum("pwk,pk->pw", vp, self.N)
-        delta = np.where(np.isfinite(gap), -gap, -1.0)
+        vn = (vp * self.N[:, None, :]).sum(axis=-1)
+        delta = -gap if not self.bounded else np.where(np.isfinite(gap), -gap, -1.0)
         delta_dot = -vn
         f_n = np.zeros((npl, nw))
-        v_i = [p.v_i for p in self.planes] if v_i is None else v_i
-        for k, p in enumerate(self.planes):
-            on = delta[k] > 0.0
-            if on.any():
-                raw = np.asarray(p.law.force(delta[k][on], delta_dot[k][on], v_i[k]), float)
-                f_n[k, on] = np.maximum(raw, 0.0)
+        on_any = delta > 0.0
+        if on_any.any():
+            v_i = [p.v_i for p in self.planes] if v_i is None else v_i
+            for k, p in enumerate(self.planes):
+                on = on_any[k]
+                if on.any():
+                    raw = np.asarray(p.law.force(delta[k][on], delta_dot[k][on], v_i[k]),
+                                     float)
+                    f_n[k, on] = np.maximum(raw, 0.0)
         F = f_n[..., None] * self.N[:, None, :]
         f_t = np.zeros_like(f_n)
-        if self.mu > 0.0:
+        if self.mu > 0.0 and on_any.any():
             vt = vp - vn[..., None] * self.N[:, None, :]
-            s = np.linalg.norm(vt, axis=-1)
+            s = np.sqrt((vt * vt).sum(axis=-1))
             f_t = self.mu * f_n * np.tanh(s / self.v_slip)
             F = F - (f_t / np.maximum(s, 1e-300))[..., None] * vt
-        tau = np.einsum("pwkn,pwk->n", Jp, F)
+        tau = (Jp * F[..., None]).sum(axis=(0, 1, 2))
         return ContactState(gap, np.maximum(delta, 0.0), delta_dot, f_n, f_t, F, Jp, tau)
 
     # ------------------------------------------------------------------ dynamics

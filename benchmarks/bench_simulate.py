@@ -1,0 +1,80 @@
+"""Wall time of one compliant impact (2-D rover, 3-D rocker-bogie) vs the T_c^- evaluation.
+
+Each impact starts from a settled state (settling is done once, timed separately, as a
+study sweeping beta or the speed would do) 1 mm before a vertical wall at 0.3 m/s, Earth
+gravity, Hunt-Crossley k = 1e7 N/m^1.5, e = 0.5, default integrator (LSODA, rtol 1e-7).
+T_c^- is timed two ways on the pre-impact state of the same run: with the Pinocchio
+evaluation of M and the constraint rows (``effective_energy``), and the partition alone
+(``roverimpact.partition`` on the precomputed M, A, v).
+
+    python benchmarks/bench_simulate.py [--repeat 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import roverimpact as ri
+from roverimpact.models import rocker_bogie, rover2d
+from roverimpact.simulate import (
+    SimulationConfig,
+    build_system,
+    effective_energy,
+    initial_state,
+    simulate_impact,
+)
+
+
+def best_of(fn, repeat):
+    best = np.inf
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def case(name, mbm, cfg, repeat):
+    t_settle = best_of(lambda: initial_state(mbm, cfg), 1)
+    q0, v0 = initial_state(mbm, cfg)
+    r = simulate_impact(mbm, cfg, q0=q0, v0=v0)
+    t_sim = best_of(lambda: simulate_impact(mbm, cfg, q0=q0, v0=v0), repeat)
+    sys = build_system(mbm, cfg)
+    w = [x.name for x in mbm.wheels].index(r.contact_wheel)
+    # place the face through the contact point (gap 0) so the rows match the run
+    c = sys.wheel_centres(r.q_minus)[w] - sys.radii[w] * sys.planes[-1].n
+    sys.planes[-1].p0 = c
+    sys._set_planes()
+    n_tc = 2000
+    t_tc = best_of(lambda: [effective_energy(sys, r.q_minus, r.v_minus, w)
+                            for _ in range(n_tc)], 3) / n_tc
+    cs = sys.contacts(r.q_minus, r.v_minus)
+    M = sys.mass_matrix(r.q_minus)
+    A = np.array([sys.planes[-1].n @ cs.Jp[-1, w]]
+                 + [sys.planes[0].n @ cs.Jp[0, k] for k in np.flatnonzero(cs.delta[0] > 0)])
+    n_p = 20000
+    t_p = best_of(lambda: [ri.partition(M, A, r.v_minus, want_velocities=False)
+                           for _ in range(n_p)], 3) / n_p
+    print(f"{name}: nv = {mbm.model.nv}, F_max = {r.F_max_total:.5g} N, "
+          f"{r.stats['steps']} steps, {r.stats['nfev']} force evaluations")
+    print(f"  settle (once)            {1e3 * t_settle:8.2f} ms")
+    print(f"  impact run               {1e3 * t_sim:8.2f} ms")
+    print(f"  T_c^- with Pinocchio     {1e6 * t_tc:8.2f} us   ratio {t_sim / t_tc:9.0f}x")
+    print(f"  T_c^- partition only     {1e6 * t_p:8.2f} us   ratio {t_sim / t_p:9.0f}x")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=5)
+    a = ap.parse_args()
+    base = dict(speed=0.3, obstacle={"k": 1e7, "e": 0.5}, t_after=0.1)
+    case("2-D rover (rocker)", rover2d(suspension="rocker"),
+         SimulationConfig(**base, springs={"rocker": {"k": 50.0, "c": 2.0}}), a.repeat)
+    case("3-D rocker-bogie", rocker_bogie(), SimulationConfig(**base), a.repeat)
+
+
+if __name__ == "__main__":
+    main()

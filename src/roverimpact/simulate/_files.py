@@ -1,0 +1,78 @@
+"""Reading a simulation from a scenario TOML file.
+
+The file is a scenario file (see :mod:`roverimpact.scenario`) with an extra
+``[simulation]`` table holding a :class:`SimulationConfig`. From the scenario tables the
+simulator uses ``[model]`` (which rover or robot file), ``[obstacle] beta_deg``,
+``[contact_law]`` (the obstacle law) and ``[velocity] u`` (driving speed); values given
+in ``[simulation]`` win. The other scenario tables (configuration, contacts, constraints)
+describe the impulsive indicator and are ignored here: the run starts settled on flat
+ground.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .._io import read_toml
+from ..exceptions import ConfigError
+from ._config import SimulationConfig
+
+_SCENARIO_TABLES = {"description", "constraints", "model", "configuration", "velocity",
+                    "contacts", "obstacle", "contact_law", "simulation"}
+
+
+def build_model(spec: dict, base_dir: Path, where: str):
+    """Model from a ``[model]`` table: ``name`` (rover2d | rocker_bogie) with ``preset`` and
+    ``params``, or ``file`` (URDF/MJCF) with ``floating_base``."""
+    from ..models import load_robot, rocker_bogie, rover2d
+
+    if not isinstance(spec, dict):
+        raise ConfigError(f"{where}: [model] must be a table")
+    unknown = sorted(set(spec) - {"name", "file", "preset", "floating_base", "params"})
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) in [model]: {unknown}")
+    name, file = spec.get("name"), spec.get("file")
+    if (name is None) == (file is None):
+        raise ConfigError(f"{where}: give exactly one of model.name or model.file")
+    params = spec.get("params", {})
+    if file is not None:
+        path = Path(file)
+        if not path.is_absolute():
+            path = base_dir / path
+        return load_robot(str(path), floating_base=spec.get("floating_base"))
+    if name == "rover2d":
+        return rover2d(**params)
+    if name == "rocker_bogie":
+        return rocker_bogie(spec.get("preset"), **params)
+    raise ConfigError(f"{where}: unknown model.name {name!r}; use 'rover2d' or 'rocker_bogie'")
+
+
+def simulation_from_dict(raw: dict, *, where: str = "simulation config",
+                         base_dir: Path | None = None):
+    """``(model, SimulationConfig)`` from a parsed scenario/simulation dict."""
+    unknown = sorted(set(raw) - _SCENARIO_TABLES)
+    if unknown:
+        raise ConfigError(f"{where}: unknown table(s) {unknown}; known: "
+                          f"{sorted(_SCENARIO_TABLES)}")
+    if "model" not in raw:
+        raise ConfigError(f"{where}: missing [model] table (e.g. name = \"rover2d\")")
+    sim = dict(raw.get("simulation", {}))
+    if not isinstance(sim, dict):
+        raise ConfigError(f"{where}: [simulation] must be a table")
+    obstacle = raw.get("obstacle", {})
+    if "beta_deg" in obstacle and "beta_deg" not in sim:
+        sim["beta_deg"] = obstacle["beta_deg"]
+    law = raw.get("contact_law")
+    if law is not None and "obstacle" not in sim:
+        sim["obstacle"] = {("law" if k == "name" else k): v for k, v in law.items()}
+    if "u" in raw.get("velocity", {}) and "speed" not in sim:
+        sim["speed"] = raw["velocity"]["u"]
+    cfg = SimulationConfig.from_dict(sim, where)
+    model = build_model(raw["model"], base_dir or Path.cwd(), where)
+    return model, cfg
+
+
+def load_simulation(path: str | Path):
+    """``(model, SimulationConfig)`` from a TOML file (ConfigError naming the file)."""
+    path = Path(path)
+    return simulation_from_dict(read_toml(path), where=str(path), base_dir=path.parent)
