@@ -32,6 +32,7 @@ from .scenario import (
     load_scenario,
     sweep_energy,
 )
+from .studies.trust import TrustGrid, trust_map
 from .simulate import GRAVITY, SimulationConfig, SimulationResult, simulate_impact
 
 __all__ = [
@@ -50,6 +51,7 @@ __all__ = [
     "SimulationConfig",
     "SimulationResult",
     "SolverError",
+    "TrustGrid",
     "UnilateralImpactResult",
     "__version__",
     "active_set",
@@ -71,5 +73,6 @@ __all__ = [
     "rover2d",
     "simulate_impact",
     "sweep_energy",
+    "trust_map",
     "unilateral_impact",
 ]
