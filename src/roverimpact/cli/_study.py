@@ -49,16 +49,16 @@ def _progress_bar(label: str):
 
 
 def _print_stats(sections) -> None:
-    tab = Table(title="Indicator T_c^- vs simulated peak force F_max")
-    for col in ("study", "n", "Spearman", "Kendall", "Pearson", "concordant pairs"):
+    tab = Table(title="Indicator T_c^- vs simulated peak force F_max (95% bootstrap CI)")
+    for col in ("study", "n", "Spearman", "Kendall", "Pearson", "concordant"):
         tab.add_column(col, justify="right" if col != "study" else "left")
     for s in sections:
         a = s.agreement
         if a is None:
-            tab.add_row(s.name, str(len(s.table)), "-", "-", "-", "F_max unavailable")
+            tab.add_row(s.folder.name, str(len(s.table)), "-", "-", "-", "F_max unavailable")
         else:
-            tab.add_row(s.name, str(a.n), str(a.spearman), str(a.kendall), str(a.pearson),
-                        str(a.concordant_fraction))
+            tab.add_row(s.folder.name, str(a.n), str(a.spearman), str(a.kendall),
+                        str(a.pearson), str(a.concordant_fraction))
     console.print(tab)
 
 
@@ -109,3 +109,28 @@ def report_cmd(
     for s in sections:
         console.print(f"figure: {s.figures.get('png')}")
     console.print(f"report: [bold]{path}[/bold]")
+
+
+@app.command("reproduce")
+def reproduce_cmd(
+    out: Path = typer.Option(Path("roverimpact-results"), "-o", "--out", help="Output folder."),
+    quick: bool = typer.Option(False, "--quick", help="Smoke run: 5 points per study."),
+    workers: int = typer.Option(None, "--workers", help="Local Dask cluster of N processes."),
+    scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler tcp://HOST:PORT."),
+    n_boot: int = typer.Option(1000, "--n-boot", min=0, help="Bootstrap resamples."),
+) -> None:
+    """Reproduce the studies of DETC2014-35554 (Figs. 2, 3) and DETC2015-47747 (Fig. 2)."""
+    from ..studies.reproduce import BUILTIN_STUDIES, reproduce
+
+    with _progress_bar("reproduce") as update:
+        res = reproduce(out, quick=quick, workers=workers, scheduler=scheduler, n_boot=n_boot,
+                        progress=lambda name, d, t: update(d, t))
+    _print_stats(res.sections)
+    if not res.simulated:
+        console.print("[yellow]F_max unavailable: the simulator is not installed; only "
+                      "T_c^- and the predicted peak force were computed.[/yellow]")
+    for s in res.sections:
+        fig = BUILTIN_STUDIES.get(s.folder.name, s.name)
+        console.print(f"{fig}: {s.figures.get('png')}, {s.figures.get('svg')}, "
+                      f"{s.folder / 'results.parquet'}")
+    console.print(f"report: [bold]{res.report.resolve()}[/bold]")

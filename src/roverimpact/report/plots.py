@@ -18,6 +18,10 @@ __all__ = ["LABELS", "force_column", "plot_study", "save_figure"]
 LABELS = {
     "obstacle.beta_deg": r"impact angle $\beta$ [deg]",
     "model.params.com_height": r"COM height $h$ [m]",
+    "model.params.h": r"COM height $h$ [m]",
+    "velocity.u": r"speed $u$ [m/s]",
+    "contact_law.k": r"contact stiffness $k$",
+    "contact_law.e": r"coefficient of restitution $e$",
     "motion.speed": r"speed $u$ [m/s]",
     "T_c_minus": r"effective kinetic energy $T_c^-$ [J]",
     "F_max": r"simulated peak force $F_{max}$ [N]",
