@@ -10,9 +10,9 @@ from roverimpact.exceptions import ConfigError, ModelError
 from roverimpact.models import export_urdf, rocker_bogie, rover2d
 from roverimpact.scenario import Scenario, energy_of, load_scenario, sweep_energy
 
-ROVER2D = {"model": {"name": "rover2d"}, "velocity": {"u": 0.5},
+ROVER2D = {"model": {"name": "rover2d"}, "velocity": {"u": 0.5}, "constraints": "all",
            "obstacle": {"wheel": "front", "beta_deg": 45.0}}
-RB = {"model": {"name": "rocker_bogie"}, "velocity": {"u": 0.2},
+RB = {"model": {"name": "rocker_bogie"}, "velocity": {"u": 0.2}, "constraints": "all",
       "obstacle": {"wheel": "left_front", "beta_deg": 30.0}}
 
 
