@@ -381,3 +381,45 @@ def test_infeasible_and_locked_raise_solver_error():
         unilateral_impact(np.eye(1), [-1.0], [[1.0], [-1.0]], [0.8, 0.2])
     with pytest.raises(ri.SolverError, match="span of the bilateral rows"):
         unilateral_impact(np.eye(2), [0.0, -1.0], [[0.0, 1.0]], 0.5, bilateral=[[0.0, 1.0]])
+
+
+# ------------------------------------------------------------------------------------
+# Scenario integration: constraints = "auto"
+# ------------------------------------------------------------------------------------
+
+
+def _rover_scenario(beta_deg, constraints="auto"):
+    return ri.Scenario.model_validate({
+        "model": {"name": "rover2d", "params": {"suspension": "rigid"}},
+        "velocity": {"u": 0.5}, "constraints": constraints,
+        "contacts": {"ground_wheels": ["rear", "front"], "ground": "normal"},
+        "obstacle": {"wheel": "front", "beta_deg": beta_deg},
+    })
+
+
+def test_scenario_auto_releases_front_ground_contact():
+    """Front wheel meets a face at 45 deg: it is pushed up, its ground contact releases.
+    T_c^- is then the partition with exactly the rows kept, and "all" gives more (the
+    pitfall)."""
+    setup = _rover_scenario(45.0).build()
+    assert "ground:front:normal" not in setup.labels
+    assert "obstacle:front:normal" in setup.labels
+    e_auto = ri.energy_of(setup)
+    assert float(e_auto.T_c_minus) == pytest.approx(
+        float(ri.partition(setup.M, setup.A, setup.v).T_c), rel=1e-12)
+    e_all = ri.energy_of(_rover_scenario(45.0, "all"))
+    assert float(e_auto.T_c_minus) < float(e_all.T_c_minus)
+    sw = ri.sweep_energy(_rover_scenario(45.0), np.radians([30.0, 45.0, 80.0]))
+    assert sw.T_c_minus[1] == pytest.approx(float(e_auto.T_c_minus), rel=1e-9)
+
+
+def test_cli_energy_prints_holding_and_released(tmp_path, capsys):
+    from roverimpact.cli import main
+
+    f = tmp_path / "s.toml"
+    f.write_text('constraints = "auto"\n[model]\nname = "rover2d"\n[velocity]\nu = 0.5\n'
+                 '[contacts]\nground_wheels = ["rear", "front"]\nground = "normal"\n'
+                 '[obstacle]\nwheel = "front"\nbeta_deg = 45.0\n')
+    assert main(["energy", str(f)]) == 0
+    out = capsys.readouterr().out
+    assert "release" in out and "ground:front:normal" in out.split("release")[-1]

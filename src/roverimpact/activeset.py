@@ -78,7 +78,7 @@ MAX_RESIDUAL = 1e-7
 
 _LAWS = ("newton", "poisson")
 
-__all__ = ["TOL", "UnilateralImpactResult", "active_set", "unilateral_impact"]
+__all__ = ["TOL", "UnilateralImpactResult", "active_set", "holding_rows", "unilateral_impact"]
 
 
 @dataclass(frozen=True)
@@ -376,3 +376,59 @@ def active_set(M, v, unilateral, bilateral=None, *, restitution=0.0, law: str = 
     out, batch, *_ = _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol,
                             rtol, False)
     return out["active"].reshape(*batch, -1)
+
+
+def _row_kind(label: str) -> tuple[str, str | None]:
+    """Classify a scenario row label: ("unilateral" | "tangent" | "bilateral", wheel)."""
+    parts = label.split(":")
+    if len(parts) == 3 and parts[0] in ("ground", "obstacle") and parts[2] == "normal":
+        return "unilateral", parts[1] if parts[0] == "ground" else None
+    if len(parts) == 3 and parts[0] == "ground" and parts[2] in ("long", "lat"):
+        return "tangent", parts[1]
+    return "bilateral", None
+
+
+def holding_rows(labels, M, A, v, *, obstacle_row: int, restitution=0.0,
+                 tol: float = TOL) -> np.ndarray:
+    """Rows of a scenario's candidate Jacobian that hold through the impact (``"auto"``).
+
+    The ground normal rows (``"ground:<wheel>:normal"``) and the obstacle row are
+    unilateral; loop closures and locked joints (any other label) are bilateral. The
+    frictionless unilateral impact problem decides which contacts hold; the no-slip rows
+    of a wheel (``"ground:<wheel>:long"``, ``":lat"``) are kept exactly when that wheel's
+    normal contact holds. The obstacle row is always kept.
+
+    Parameters
+    ----------
+    labels : sequence of str
+        One label per row of ``A`` (see :mod:`roverimpact.models.kinematics`).
+    M : (n, n) array_like
+    A : (..., m, n) array_like
+        Candidate rows; a leading batch axis (e.g. over beta) is allowed.
+    v : (n,) array_like
+    obstacle_row : int
+        Index of the obstacle row in ``A``.
+
+    Returns
+    -------
+    (..., m) bool ndarray
+        ``True`` for the rows to hold when computing T_c^-.
+    """
+    labels = list(labels)
+    A = as_array(A, "A", min_ndim=2)
+    if A.shape[-2] != len(labels):
+        raise InputError(f"{len(labels)} labels for {A.shape[-2]} rows of A")
+    kinds = [_row_kind(lab) for lab in labels]
+    uni = [i for i, (kd, _) in enumerate(kinds) if kd == "unilateral" or i == obstacle_row]
+    bil = [i for i, (kd, _) in enumerate(kinds) if kd == "bilateral" and i not in uni]
+    keep = np.zeros((*A.shape[:-2], len(labels)), dtype=bool)
+    act = active_set(M, v, A[..., uni, :], A[..., bil, :] if bil else None,
+                     restitution=restitution, tol=tol)
+    keep[..., uni] = act
+    keep[..., bil] = True
+    wheel_row = {kinds[i][1]: i for i in uni if kinds[i][1] is not None}
+    for i, (kd, wheel) in enumerate(kinds):
+        if kd == "tangent" and wheel in wheel_row:
+            keep[..., i] = keep[..., wheel_row[wheel]]
+    keep[..., obstacle_row] = True
+    return keep

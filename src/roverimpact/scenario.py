@@ -20,7 +20,7 @@ approaching) and the normal approach speed is :math:`v_n = -a v`.
 TOML layout (see ``examples/*.toml``)::
 
     description = "..."
-    constraints = "all"            # or a list of row labels, e.g. ["ground:rear:normal"]
+    constraints = "auto"           # or "all", or a list of row labels ["ground:rear:normal"]
     [model]        name = "rover2d" | "rocker_bogie"  or  file = "arm.urdf"
                    preset = "mer"; floating_base = false
     [model.params] h = 0.4 ...     # builder parameters (SI)
@@ -176,9 +176,11 @@ class ContactLawSpec(_Strict):
 class Scenario(_Strict):
     """A complete impact scenario; see the module docstring for the TOML layout.
 
-    ``constraints`` selects the active rows among the candidates: ``"all"`` or a list of
-    labels (``fnmatch`` patterns allowed, e.g. ``"ground:*:normal"``); the obstacle row is
-    always active. The choice is made by :func:`choose_active_rows`.
+    ``constraints`` selects the active rows among the candidates: ``"auto"`` (default: the
+    contacts that hold through the impact, :func:`roverimpact.activeset.holding_rows`),
+    ``"all"`` or a list of labels (``fnmatch`` patterns allowed, e.g.
+    ``"ground:*:normal"``); the obstacle row is always active. The choice is made by
+    :func:`choose_active_rows`.
     """
 
     description: str = ""
@@ -187,7 +189,7 @@ class Scenario(_Strict):
     velocity: VelocitySpec = VelocitySpec()
     contacts: ContactsSpec = ContactsSpec()
     obstacle: ObstacleSpec
-    constraints: Literal["all"] | list[str] = "all"
+    constraints: Literal["auto", "all"] | list[str] = "auto"
     contact_law: ContactLawSpec | None = None
 
     def build(self, *, base_dir: str | Path | None = None) -> ImpactSetup:
@@ -538,9 +540,11 @@ def choose_active_rows(spec, labels, M, A, v, *, obstacle_row: int) -> np.ndarra
 
     Parameters
     ----------
-    spec : "all" or list of str
-        ``"all"``: every candidate row. A list: rows whose label matches an entry
-        (exact or ``fnmatch`` pattern); every entry must match at least one candidate.
+    spec : "auto", "all" or list of str
+        ``"auto"``: the rows that hold through the impact (unilateral LCP, see
+        :func:`roverimpact.activeset.holding_rows`). ``"all"``: every candidate row.
+        A list: rows whose label matches an entry (exact or ``fnmatch`` pattern); every
+        entry must match at least one candidate.
     labels : sequence of str
         Labels of all candidate rows (rows of ``A``).
     M, A, v : arrays
@@ -554,6 +558,10 @@ def choose_active_rows(spec, labels, M, A, v, *, obstacle_row: int) -> np.ndarra
     (k,) int ndarray, increasing.
     """
     labels = list(labels)
+    if spec == "auto":  # the contacts that hold through the impact (unilateral LCP)
+        from .activeset import holding_rows
+
+        return np.flatnonzero(holding_rows(labels, M, A, v, obstacle_row=obstacle_row))
     if spec == "all":
         keep = set(range(len(labels)))
     else:
@@ -698,6 +706,16 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
         d /= np.linalg.norm(d, axis=1, keepdims=True)
         r = -wheel.radius * d
         rows = N @ J[:3] + np.cross(r, N) @ J[3:]
+    if setup.scenario is not None and setup.scenario.constraints == "auto":
+        # the set that holds depends on beta: decide per beta among all candidate rows
+        from .activeset import holding_rows
+
+        A_all = setup._cs.evaluate(setup.q)[1]
+        obs = len(setup.candidate_labels) - 1
+        A = np.broadcast_to(A_all, (len(beta), *A_all.shape)).copy()
+        A[:, obs, :] = rows
+        keep = holding_rows(setup.candidate_labels, setup.M, A, setup.v, obstacle_row=obs)
+        return _energy(setup.M, A * keep[..., None], setup.v, obs)  # zero rows are dropped
     A = np.broadcast_to(setup.A, (len(beta), *setup.A.shape)).copy()
     A[:, setup.obstacle_row, :] = rows
     return _energy(setup.M, A, setup.v, setup.obstacle_row)

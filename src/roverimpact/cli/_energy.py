@@ -39,6 +39,8 @@ def energy_cmd(
     out = e.as_dict() | {
         "labels": list(setup.labels), "contact_point": setup.contact_point.tolist(),
         "normal": setup.normal.tolist(), "peak_force": f_max,
+        "constraints": sc.constraints if isinstance(sc.constraints, str) else "list",
+        "released": [lab for lab in setup.candidate_labels if lab not in setup.labels],
     }
     if as_json:
         console.print_json(json.dumps(out))
@@ -59,3 +61,8 @@ def energy_cmd(
     t.add_row("active rows / rank", f"{len(setup.labels)} / {e.rank}")
     console.print(t)
     console.print("rows: " + ", ".join(setup.labels), highlight=False)
+    if sc.constraints == "auto":
+        console.print("contacts that hold through the impact (auto): "
+                      + ", ".join(setup.labels), highlight=False)
+        console.print("contacts that release: " + (", ".join(out["released"]) or "none"),
+                      highlight=False)
