@@ -65,8 +65,8 @@ class IntegratorSpec(_Strict):
     """
 
     method: Literal["LSODA", "Radau", "BDF", "RK45", "DOP853"] = "LSODA"
-    rtol: float = Field(1e-7, gt=0.0, lt=1.0)
-    atol: float = Field(1e-9, gt=0.0)
+    rtol: float = Field(1e-6, gt=0.0, lt=1.0)
+    atol: float = Field(1e-8, gt=0.0)
     max_step: float = Field(math.inf, gt=0.0)
     first_step: float | None = Field(None, gt=0.0)
     baumgarte: float = Field(20.0, ge=0.0, allow_inf_nan=False)

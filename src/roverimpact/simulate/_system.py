@@ -215,8 +215,9 @@ class ContactSystem:
         """Generalized acceleration under the applied generalized force ``tau``."""
         if self.loop_closure is None:
             return pin.aba(self.model, self.data, q, v, tau)
-        M = self.mass_matrix(q)
-        h = pin.nonLinearEffects(self.model, self.data, q, v)
+        a0 = pin.aba(self.model, self.data, q, v, tau)          # unconstrained
+        Minv = pin.computeMinverse(self.model, self.data, q)
+        Minv = np.triu(Minv) + np.triu(Minv, 1).T
         phi, Jl = self.loop(q)
         eps = 1e-6 / max(1.0, float(np.max(np.abs(v))))
         Jp_ = self.loop(pin.integrate(self.model, q, eps * v))[1]
@@ -224,11 +225,9 @@ class ContactSystem:
         Jdv = (Jp_ - Jm_) @ v / (2 * eps)
         a = self.baumgarte
         gamma = -Jdv - 2 * a * (Jl @ v) - a * a * phi
-        L = np.linalg.cholesky(M)
-        a0 = np.linalg.solve(L.T, np.linalg.solve(L, tau - h))
-        W = np.linalg.solve(L, Jl.T)                 # L^-1 J^T
-        MinvJT = np.linalg.solve(L.T, W)
-        lam = np.linalg.lstsq(W.T @ W, gamma - Jl @ a0, rcond=1e-12)[0]
+        MinvJT = Minv @ Jl.T
+        G = Jl @ MinvJT                                          # J M^-1 J^T
+        lam = np.linalg.lstsq(G, gamma - Jl @ a0, rcond=1e-12)[0]
         return a0 + MinvJT @ lam
 
     def generalized_forces(self, q, v, v_i=None):
