@@ -41,7 +41,7 @@ def main(out: str | Path = "docs/img/active_set_beta.png") -> Path:
         "obstacle only": ri.sweep_energy(scenario(["obstacle:front:normal"]), beta).T_c_minus,
     }
     fig, ax = plt.subplots(figsize=(6, 4))
-    for (name, y), ls in zip(curves.items(), ["-", "--", ":"]):
+    for (name, y), ls in zip(curves.items(), ["-", "--", ":"], strict=True):
         ax.plot(beta_deg, y, ls, label=name, lw=2)
     ax.set_xlabel("impact angle beta [deg]")
     ax.set_ylabel("T_c^- [J]")
