@@ -157,10 +157,8 @@ def test_panda_tool_effective_mass_vs_finite_differences_and_aba():
     pytest.importorskip("pinocchio")
     from roverimpact.models.robot import example_robot_file
 
-    try:
-        urdf = example_robot_file("panda_description/urdf/panda.urdf")
-    except ModelError:
-        pytest.skip("example-robot-data is not installed")
+    # example-robot-data is a test dependency: a missing package fails here, never skips
+    urdf = example_robot_file("panda_description/urdf/panda.urdf")
     q_arm = {"panda_joint1": 0.3, "panda_joint2": -0.4, "panda_joint4": -2.0,
              "panda_joint6": 1.6, "panda_joint7": 0.7}
     n = np.array([0.2, -0.4, -0.9])

@@ -325,7 +325,9 @@ def load_arm(source: str | Path):
 
     s = str(source)
     if s.startswith("erd:"):
-        path = _erd_urdf(s[4:])
+        from .models.robot_data import example_robot_urdf
+
+        path = example_robot_urdf(s[4:])
     else:
         path = Path(s)
     if not path.is_file():
@@ -341,30 +343,6 @@ READY_POSES = {
     "panda": [0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4, 0.02,
               0.02],
 }
-
-
-def _erd_urdf(name: str) -> Path:
-    """URDF of robot ``name`` in the installed ``example-robot-data`` distribution.
-
-    Recent wheels install the robot files under ``cmeel.prefix/share/example-robot-data``
-    without an importable module, so the file is found through the distribution itself.
-    """
-    import importlib.metadata as md
-
-    try:
-        dist = md.distribution("example-robot-data")
-    except md.PackageNotFoundError:
-        raise ModelError(
-            f"erd:{name}: the example-robot-data package is not installed "
-            "(pip install example-robot-data)"
-        ) from None
-    root = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
-    for pattern in (f"*/urdf/{name}.urdf", f"*/urdf/{name}_robot.urdf"):
-        hits = sorted(root.glob(pattern))
-        if hits:
-            return hits[0]
-    known = sorted(p.stem for p in root.glob("*/urdf/*.urdf"))
-    raise ModelError(f"erd:{name}: no such robot in example-robot-data; known: {known}")
 
 
 def _mass_matrix(model, data, q):

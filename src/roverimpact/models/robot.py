@@ -31,35 +31,17 @@ ERD_SCHEME = "example-robot-data:"
 def example_robot_file(relpath: str) -> Path:
     """Path of a file shipped by the ``example-robot-data`` package (e.g. the Panda URDF).
 
-    Works with the Python module (``example_robot_data.getModelPath``) and with the
-    data-only wheel (files under ``cmeel.prefix/share/example-robot-data/robots``).
+    See :func:`roverimpact.models.robot_data.example_robot_urdf`.
 
     Raises
     ------
     ModelError
         If the package is not installed or has no such file.
     """
-    relpath = relpath.removeprefix(ERD_SCHEME).lstrip("/")
-    candidates = []
-    try:
-        import example_robot_data as erd
+    from .robot_data import example_robot_urdf
 
-        candidates.append(Path(erd.getModelPath(relpath)) / relpath)
-    except Exception:
-        pass
-    try:
-        from importlib.metadata import PackageNotFoundError, distribution
+    return example_robot_urdf(relpath.removeprefix(ERD_SCHEME))
 
-        dist = distribution("example-robot-data")
-        candidates.append(Path(str(dist.locate_file(
-            f"cmeel.prefix/share/example-robot-data/robots/{relpath}"))))
-    except PackageNotFoundError:
-        pass
-    for c in candidates:
-        if c.is_file():
-            return c
-    raise ModelError(f"{ERD_SCHEME}{relpath}: not found; install example-robot-data "
-                     "(pip install example-robot-data) or give a file path")
 
 _URDF_AXES = {"X": "1 0 0", "Y": "0 1 0", "Z": "0 0 1"}
 

@@ -48,7 +48,11 @@ def example_robots_dir() -> Path:
 
 
 def example_robot_urdf(name: str) -> Path:
-    """Path of the URDF of robot ``name`` (one of :data:`ROBOTS`, or a relative path).
+    """Path of the URDF of robot ``name``.
+
+    ``name`` is a short name of :data:`ROBOTS` (``"panda"``, ``"ur5"``), the stem of any
+    URDF in the package (``"ur3_gripper"``, ``"solo"`` ...), or a path relative to the
+    ``robots`` folder (``"panda_description/urdf/panda.urdf"``).
 
     Examples
     --------
@@ -56,8 +60,15 @@ def example_robot_urdf(name: str) -> Path:
     >>> example_robot_urdf("panda").name  # doctest: +SKIP
     'panda.urdf'
     """
-    rel = ROBOTS.get(name, name)
-    path = example_robots_dir() / rel
-    if not path.is_file():
-        raise ModelError(f"no robot {name!r} in example-robot-data (known: {sorted(ROBOTS)})")
-    return path
+    root = example_robots_dir()
+    path = root / ROBOTS.get(name, name.lstrip("/"))
+    if path.is_file():
+        return path
+    for pattern in (f"*/urdf/{name}.urdf", f"*/urdf/{name}_robot.urdf"):
+        hits = sorted(root.glob(pattern))
+        if hits:
+            return hits[0]
+    raise ModelError(
+        f"no robot {name!r} in example-robot-data (short names: {sorted(ROBOTS)}; or the "
+        "stem of any URDF under its robots folder, or a path relative to it)"
+    )
