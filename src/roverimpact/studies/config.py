@@ -127,7 +127,7 @@ class Study(_Strict):
         if grid is None:
             return grid
         if not grid:
-            raise ValueError("[grid] is empty: give at least one parameter to sweep")
+            raise ValueError("the grid table is empty: give at least one parameter to sweep")
         for key, val in grid.items():
             if isinstance(val, list) and not val:
                 raise ValueError(f"grid parameter {key!r} has an empty list of values")
@@ -137,7 +137,7 @@ class Study(_Strict):
     @classmethod
     def _cases_nonempty(cls, cases):
         if cases is not None and not cases:
-            raise ValueError("[[cases]] is empty: give at least one case")
+            raise ValueError("the cases list is empty: give at least one case")
         return cases
 
     @model_validator(mode="after")
@@ -145,7 +145,7 @@ class Study(_Strict):
         given = [k for k in ("grid", "cases", "random") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(
-                "a study needs exactly one of [grid], [[cases]] or [random]"
+                "a study needs exactly one of: a grid table, a cases list or a random table"
                 + (f" (got {', '.join(given)})" if given else "")
             )
         return self
@@ -190,7 +190,7 @@ def _format_errors(exc: ValidationError, where: str) -> str:
     parts = []
     for err in exc.errors():
         loc = ".".join(str(x) for x in err["loc"])
-        msg = err["msg"]
+        msg = err["msg"].removeprefix("Value error, ")
         val = err.get("input")
         if isinstance(val, str) and _UNIT_RE.match(val):
             msg += (f" (got {val!r}: write a plain number in the unit of the parameter "
@@ -401,13 +401,17 @@ def validate_scenarios(study: Study, validate) -> dict:
     ConfigError
         Unknown parameter (with close matches), bad value (type, unit, range).
     """
-    def _run(scn, where):
+    def _run(scn, where, value=None):
         try:
             return validate(scn)
         except ValidationError as exc:
             raise ConfigError(_format_errors(exc, where)) from None
         except ConfigError as exc:
-            raise ConfigError(f"{where}: {exc}") from None
+            hint = ""
+            if isinstance(value, str) and _UNIT_RE.match(value):
+                hint = (" (write a plain number in the unit of the parameter name: *_deg in "
+                        "degrees, everything else SI)")
+            raise ConfigError(f"{where}: {exc}{hint}") from None
 
     base = _run(study.base, f"study {study.name!r}: base scenario")
     leaves = flatten(base)
@@ -423,7 +427,7 @@ def validate_scenarios(study: Study, validate) -> dict:
                     raise _unknown_parameter(study, key, leaves)
                 continue
             _run(apply_overrides(study.base, {key: val}),
-                 f"study {study.name!r}: {key} = {val!r}")
+                 f"study {study.name!r}: {key} = {val!r}", val)
     if study.x is not None and study.x not in study.parameters():
         raise ConfigError(
             f"study {study.name!r}: x = {study.x!r} is not one of the swept parameters "

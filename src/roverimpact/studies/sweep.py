@@ -308,13 +308,13 @@ def run_study(
     if workers is not None and workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
     prep = prepare_study(study, evaluator=evaluator, chunk_size=chunk_size)
-    out_dir = Path(out_dir)
-    _check_out_dir(out_dir)
     if scheduler is not None:
         _need_dask()
         scheduler = check_scheduler(scheduler)
     elif workers is not None:
         _need_dask()
+    out_dir = Path(out_dir)
+    _check_out_dir(out_dir)
 
     st = prep.study
     fp = st.fingerprint()

@@ -1,0 +1,144 @@
+"""Study files and the `sweep` command: bad input fails early with one clear error (exit 2)."""
+
+from __future__ import annotations
+
+import os
+import socket
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from roverimpact.cli import main
+from roverimpact.exceptions import ConfigError
+from roverimpact.studies import run_study
+
+GOOD = """
+name = "rigid body"
+[base.model]
+name = "rigid_body"
+params = { mass = 20.0, inertia = 1.0, com_height = 0.3, lever = 0.4 }
+[base.motion]
+speed = 0.5
+[grid]
+"obstacle.beta_deg" = { start = 30, stop = 90, num = 4 }
+"""
+
+
+def _write(tmp_path: Path, text: str, name: str = "study.toml") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def _fails(capsys, argv, *patterns):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.strip().splitlines() if ln.strip()]
+    assert lines and lines[0].startswith("error:"), err
+    assert "Traceback" not in err
+    text = " ".join(err.split())
+    for pat in patterns:
+        assert pat in text, (pat, err)
+    return text
+
+
+def test_sweep_command_writes_table_report_and_csv(tmp_path, capsys):
+    study = _write(tmp_path, GOOD)
+    out = tmp_path / "res"
+    assert main(["sweep", str(study), "-o", str(out), "--csv"]) == 0
+    text = capsys.readouterr().out
+    assert "4 cases (4 computed, 0 reused)" in text and "report.html" in text
+    t = pd.read_parquet(out / "results.parquet")
+    assert len(t) == 4 and (out / "results.csv").is_file() and (out / "figure.png").is_file()
+    assert (out / "study.toml").read_text() == GOOD  # the study file, copied as given
+    assert main(["sweep", str(study), "-o", str(out), "--resume"]) == 0
+    assert "(0 computed, 4 reused)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("text", "patterns"),
+    [
+        (GOOD.replace('"obstacle.beta_deg"', '"obstacle.betta_deg"'),
+         ["unknown parameter 'obstacle.betta_deg'", "did you mean 'obstacle.beta_deg'"]),
+        (GOOD.split("[grid]")[0] + "[grid]\n", ["the grid table is empty"]),
+        (GOOD.replace('{ start = 30, stop = 90, num = 4 }', "[]"), ["empty list of values"]),
+        (GOOD.replace('{ start = 30, stop = 90, num = 4 }', '["30 deg", "60 deg"]'),
+         ["obstacle.beta_deg", "plain number", "*_deg in degrees"]),
+        (GOOD.replace('{ start = 30, stop = 90, num = 4 }', '{ start = 30, stop = "ninety", num = 4 }'),
+         ["grid.obstacle.beta_deg", "stop"]),
+        (GOOD.replace('{ start = 30, stop = 90, num = 4 }', "[30, 120]"),
+         ["obstacle.beta_deg = 120", "less than or equal to 90"]),
+        (GOOD.replace("mass = 20.0", "mass = -1.0"), ["base scenario", "mass", "greater than 0"]),
+        (GOOD.replace('name = "rigid body"', 'name = "x"\nsimulat = true'), ["simulat"]),
+        (GOOD + "[random]\nn = 3\nseed = 1\nparams = { 'motion.speed' = { low = 0.1, high = 1 } }\n",
+         ["exactly one of: a grid table, a cases list or a random table"]),
+        ("name = 'x'\n[base\n", ["malformed TOML"]),
+    ],
+    ids=["unknown-param", "empty-grid", "empty-list", "units-in-value", "wrong-type",
+         "out-of-range", "bad-base", "unknown-key", "two-designs", "bad-toml"],
+)
+def test_bad_study_files_fail_before_any_work(tmp_path, capsys, text, patterns):
+    study = _write(tmp_path, text)
+    out = tmp_path / "never"
+    _fails(capsys, ["sweep", str(study), "-o", str(out)], *patterns)
+    assert not out.exists()  # nothing was started
+
+
+def test_unknown_rover_parameter_is_named(tmp_path, capsys):
+    text = """
+name = "rover"
+[base]
+model = { name = "rover2d" }
+velocity = { u = 0.5 }
+obstacle = { wheel = "front", beta_deg = 60.0 }
+[grid]
+"model.params.com_height" = [0.3, 0.4]
+"""
+    _fails(capsys, ["sweep", str(_write(tmp_path, text)), "-o", str(tmp_path / "o")],
+           "unknown parameter 'model.params.com_height'")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root can write anywhere it has a path")
+def test_unwritable_output_folder_nonroot(tmp_path, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        _fails(capsys, ["sweep", str(_write(tmp_path, GOOD)), "-o", str(ro / "out")],
+               "not writable")
+    finally:
+        ro.chmod(0o700)
+
+
+def test_unwritable_output_folder(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("a file, not a folder")
+    _fails(capsys, ["sweep", str(_write(tmp_path, GOOD)), "-o", str(blocker / "out")],
+           "output folder", "not writable")
+
+
+def test_unreachable_or_malformed_scheduler(tmp_path, capsys):
+    pytest.importorskip("dask.distributed")
+    with socket.socket() as s:  # a free port that nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    study = str(_write(tmp_path, GOOD))
+    out = tmp_path / "o"
+    _fails(capsys, ["sweep", study, "-o", str(out), "--scheduler", f"tcp://127.0.0.1:{port}"],
+           "cannot reach the Dask scheduler", "dask scheduler")
+    _fails(capsys, ["sweep", study, "-o", str(out), "--scheduler", "http://host"],
+           "tcp://HOST:PORT")
+    _fails(capsys, ["sweep", study, "-o", str(out), "--workers", "2", "--scheduler",
+                    f"tcp://127.0.0.1:{port}"], "either --workers or --scheduler")
+    assert not out.exists()
+
+
+def test_report_of_a_folder_without_results(tmp_path, capsys):
+    _fails(capsys, ["report", str(tmp_path)], "no study results")
+
+
+def test_library_raises_config_error(tmp_path):
+    with pytest.raises(ConfigError, match="unknown parameter"):
+        run_study({"name": "x", "base": {"model": {"name": "rigid_body"}},
+                   "grid": {"motion.sped": [1.0]}}, tmp_path / "o")
