@@ -32,8 +32,9 @@ from .scenario import (
     load_scenario,
     sweep_energy,
 )
-from .studies.trust import TrustGrid, trust_map
 from .simulate import GRAVITY, SimulationConfig, SimulationResult, simulate_impact
+from .studies.optimize import optimize_setting
+from .studies.trust import TrustGrid, trust_map
 
 __all__ = [
     "BODY_REGIONS",
@@ -65,6 +66,7 @@ __all__ = [
     "load_robot",
     "load_scenario",
     "max_transient_speed",
+    "optimize_setting",
     "partition",
     "peak_force",
     "point_effective_mass",

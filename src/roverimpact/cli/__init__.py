@@ -24,6 +24,7 @@ from . import _safety  # noqa: F401  isort: skip
 from . import _contact  # noqa: F401  isort: skip
 from . import _study  # noqa: F401  isort: skip
 from . import _trust  # noqa: F401  isort: skip
+from . import _optimize  # noqa: F401  isort: skip
 from . import _energy  # noqa: F401  isort: skip
 from . import _draw  # noqa: F401  isort: skip
 

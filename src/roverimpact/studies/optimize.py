@@ -1,0 +1,508 @@
+r"""Suspension reconfiguration: the setting that minimises the effective kinetic energy.
+
+DETC2014-35554 proposes reconfiguring the suspension before a manoeuvre where impact is
+expected. Given a rover with adjustable parameters (COM height ``h``, wheelbase, rocker
+pivot height, ...) and an expected obstacle (a range of face angles beta and a speed u),
+:func:`optimize_setting` solves
+
+.. math::
+
+    \min_{x \in [lo, hi]}\; J(x) = \max_{\beta \in B} T_c^-(x, \beta)
+    \quad(\text{or } \operatorname{mean}_{\beta \in B})
+    \qquad \text{s.t.}\quad s(x) \ge s_{min},\;\; c(x) \ge c_{min}
+
+with
+
+* :math:`T_c^-(x, \beta)` the effective kinetic energy of the scenario built with the
+  parameters ``x`` (all betas of ``B`` in one stacked :func:`roverimpact.sweep_energy`
+  call, i.e. one batched :func:`roverimpact.partition`);
+* :math:`s(x)`, the **static stability margin** [m]: signed distance from the ground
+  projection of the centre of mass (Pinocchio ``centerOfMass``) to the boundary of the
+  support polygon of the wheel-ground contact points (2-D rover: the interval
+  ``[x_rear, x_front]`` of the contact points; 3-D: their convex hull in x-y),
+  positive inside;
+* :math:`c(x)`, the **ground clearance** [m]: the height above the ground (z = 0) of the
+  lowest of the chassis box corners (frame ``chassis``, dimensions ``chassis_length x
+  chassis_width x chassis_height`` of the model parameters, centred at the chassis COM)
+  and of the origins of the non-wheel suspension joints (rocker and bogie pivots).
+
+``scipy.optimize.minimize`` (SLSQP) runs from ``n_starts`` starts in the unit-scaled box:
+the nominal setting and seeded uniform draws; the best feasible end point wins. The
+result is then checked with the compliant-contact simulator at the worst-case betas of
+the nominal and of the optimum (:func:`roverimpact.simulate.simulate_impact`).
+
+Optimisation file (TOML, every table validated, unknown keys rejected)::
+
+    [scenario]                    # a scenario (same keys as a scenario file)
+    model = { name = "rover2d" }
+    velocity = { u = 0.3 }
+    obstacle = { wheel = "front", beta_deg = 45 }
+    [simulation]                  # optional: SimulationConfig options for the check
+    [optimize]
+    variables = { h = [0.25, 0.45], wheelbase = [0.5, 0.8] }   # model parameters, SI
+    objective = "worst"           # or "mean"
+    beta_deg = [20, 90]           # expected obstacle angles [deg]
+    n_beta = 8
+    speed = 0.3                   # [m/s], overrides velocity.u
+    stability_margin = 0.1        # [m]
+    min_clearance = 0.05          # [m]
+    n_starts = 6
+    seed = 0
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from ..exceptions import ConfigError, RoverImpactError, SolverError
+
+__all__ = [
+    "OptimizeProblem",
+    "OptimizeResult",
+    "OptimizeSpec",
+    "SettingReport",
+    "clearance",
+    "load_optimization",
+    "optimize_setting",
+    "plot_reconfiguration",
+    "stability_margin",
+]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class OptimizeSpec(_Strict):
+    """The ``[optimize]`` table (SI units; angles in degrees)."""
+
+    variables: dict[str, tuple[float, float]] = Field(min_length=1)
+    objective: Literal["worst", "mean"] = "worst"
+    beta_deg: tuple[float, float] = (20.0, 90.0)
+    n_beta: int = Field(8, ge=1, le=1000)
+    speed: float | None = Field(None, gt=0.0, allow_inf_nan=False)
+    stability_margin: float = Field(0.05, allow_inf_nan=False)
+    min_clearance: float = Field(0.0, allow_inf_nan=False)
+    n_starts: int = Field(6, ge=1, le=1000)
+    seed: int = 0
+    maxiter: int = Field(100, ge=1)
+
+    @field_validator("variables")
+    @classmethod
+    def _bounds(cls, v):
+        for name, (lo, hi) in v.items():
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise ValueError(f"variable {name!r}: bounds must be finite with lo < hi, got "
+                                 f"[{lo}, {hi}]")
+        return v
+
+    @field_validator("beta_deg")
+    @classmethod
+    def _beta(cls, b):
+        lo, hi = b
+        if not (0.0 < lo <= hi <= 90.0):
+            raise ValueError(f"beta_deg must be [lo, hi] with 0 < lo <= hi <= 90 degrees, got "
+                             f"{list(b)}")
+        return b
+
+
+class OptimizeFile(_Strict):
+    scenario: dict[str, Any]
+    simulation: dict[str, Any] = {}
+    optimize: OptimizeSpec
+
+    @model_validator(mode="after")
+    def _model(self):
+        m = self.scenario.get("model")
+        if not isinstance(m, Mapping) or m.get("name") not in ("rover2d", "rocker_bogie"):
+            raise ValueError("scenario.model.name must be 'rover2d' or 'rocker_bogie' (the "
+                             "built-in rovers have adjustable parameters)")
+        return self
+
+
+def _fmt(exc: ValidationError, where: str) -> str:
+    parts = []
+    for err in exc.errors():
+        loc = ".".join(str(x) for x in err["loc"]) or "(top level)"
+        msg = err["msg"].removeprefix("Value error, ")
+        if err["type"] == "extra_forbidden":
+            msg = "unknown key"
+        parts.append(f"{loc}: {msg}")
+    return f"{where}: " + "; ".join(parts)
+
+
+@dataclass
+class OptimizeProblem:
+    """A validated optimisation problem: base scenario, simulation options, spec."""
+
+    scenario: dict
+    simulation: dict
+    spec: OptimizeSpec
+    nominal: dict[str, float]
+
+    @property
+    def names(self) -> list[str]:
+        return list(self.spec.variables)
+
+    @property
+    def betas_deg(self) -> np.ndarray:
+        lo, hi = self.spec.beta_deg
+        return np.linspace(lo, hi, self.spec.n_beta)
+
+
+def load_optimization(source: str | Path | Mapping[str, Any]) -> OptimizeProblem:
+    """Read and validate an optimisation file (path) or dict.
+
+    Raises
+    ------
+    ConfigError
+        Malformed TOML, unknown keys, bad bounds, a variable that is not a numeric
+        parameter of the model, or a base scenario that does not build.
+    """
+    from dataclasses import fields
+
+    from .._io import read_toml
+    from ..models import RockerBogieParams, Rover2DParams
+    from ..scenario import scenario_from_dict
+
+    where = str(source) if isinstance(source, (str, Path)) else "optimisation"
+    raw = read_toml(Path(source)) if isinstance(source, (str, Path)) else dict(source)
+    try:
+        f = OptimizeFile.model_validate(raw)
+    except ValidationError as exc:
+        raise ConfigError(_fmt(exc, where)) from None
+    scn = dict(f.scenario)
+    if f.optimize.speed is not None:
+        scn["velocity"] = {**dict(scn.get("velocity") or {}), "u": f.optimize.speed}
+    name = scn["model"]["name"]
+    cls = Rover2DParams if name == "rover2d" else RockerBogieParams
+    numeric = sorted(x.name for x in fields(cls) if x.type in ("float", float))
+    for var in f.optimize.variables:
+        if var not in numeric:
+            raise ConfigError(f"{where}: optimize.variables: {var!r} is not a numeric parameter "
+                              f"of {name}; choose from {', '.join(numeric)}")
+    try:
+        setup = scenario_from_dict(scn, where=f"{where}: scenario").build()
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(f"{where}: scenario: {exc}") from None
+    if setup.scenario.obstacle.wheel is None:
+        raise ConfigError(f"{where}: scenario.obstacle must name a wheel")
+    nominal = {v: float(setup.model.params[v]) for v in f.optimize.variables}
+    return OptimizeProblem(scenario=scn, simulation=dict(f.simulation), spec=f.optimize,
+                           nominal=nominal)
+
+
+# -------------------------------------------------------------------------------------
+# Constraints from the model geometry
+# -------------------------------------------------------------------------------------
+
+
+def _kinematics(mbm, q):
+    import pinocchio as pin
+
+    model = mbm.model
+    data = model.createData()
+    pin.forwardKinematics(model, data, q)
+    pin.updateFramePlacements(model, data)
+    return data
+
+
+def _support_points(mbm, data, tol: float = 1e-4) -> np.ndarray:
+    """World contact points (k, 3) of the wheels touching the ground z = 0."""
+    from ..models.kinematics import wheel_contact_point
+
+    n = np.array([0.0, 0.0, 1.0])
+    pts = np.array([wheel_contact_point(data, mbm.model.getFrameId(w.frame), w, n)
+                    for w in mbm.wheels])
+    zmin = pts[:, 2].min()
+    return pts[pts[:, 2] <= zmin + tol]
+
+
+def stability_margin(mbm, q) -> float:
+    """Static stability margin [m]: signed distance of the COM ground projection to the
+    boundary of the support polygon (positive inside).
+
+    Planar models (``params['planar']``): ``min(x_G - x_min, x_max - x_G)`` over the
+    x of the wheel-ground contact points. 3-D: ``min_i (b_i - a_i . p_G)`` over the edges
+    ``a_i . p <= b_i`` of the convex hull (scipy ``ConvexHull``) of the contact points.
+    """
+    import pinocchio as pin
+    from scipy.spatial import ConvexHull
+
+    data = _kinematics(mbm, q)
+    com = pin.centerOfMass(mbm.model, data, q)
+    pts = _support_points(mbm, data)
+    if mbm.params.get("planar", False):
+        xs = pts[:, 0]
+        return float(min(com[0] - xs.min(), xs.max() - com[0]))
+    if len(pts) < 3:
+        return -math.inf
+    hull = ConvexHull(pts[:, :2])
+    # equations: a . p + b <= 0 inside (unit a); distance inside = -(a . p + b)
+    return float(np.min(-(hull.equations[:, :2] @ com[:2] + hull.equations[:, 2])))
+
+
+def clearance(mbm, q) -> float:
+    """Ground clearance [m]: lowest z of the chassis box corners and of the non-wheel
+    suspension joint origins (rocker/bogie pivots, prismatic struts)."""
+    import itertools
+
+    data = _kinematics(mbm, q)
+    model = mbm.model
+    p = mbm.params
+    oMf = data.oMf[model.getFrameId("chassis")]
+    half = 0.5 * np.array([p["chassis_length"], p["chassis_width"], p["chassis_height"]])
+    corners = np.array([oMf.act(np.array(s) * half)
+                        for s in itertools.product((-1.0, 1.0), repeat=3)])
+    z = [corners[:, 2].min()]
+    wheel_joints = {model.frames[model.getFrameId(w.frame)].parentJoint for w in mbm.wheels}
+    for j in range(1, model.njoints):
+        name = model.names[j]
+        if j in wheel_joints or name in ("root_joint", "base_x", "base_z", "base_pitch"):
+            continue
+        z.append(data.oMi[j].translation[2])
+    return float(min(z))
+
+
+# -------------------------------------------------------------------------------------
+# Evaluation of a setting
+# -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class SettingReport:
+    """A setting and its figures.
+
+    Attributes
+    ----------
+    values : dict
+        Parameter name -> value (SI).
+    T_c : (n_beta,) ndarray
+        T_c^- at each beta of the range [J].
+    objective : float
+        Worst (max) or mean T_c^- [J].
+    beta_worst_deg : float
+        Beta of the largest T_c^- [deg].
+    margin, clearance : float
+        Static stability margin and ground clearance [m].
+    F_pred : float
+        Peak force predicted from the worst T_c^- by the obstacle contact law [N].
+    """
+
+    values: dict
+    T_c: np.ndarray
+    v_n: np.ndarray
+    objective: float
+    beta_worst_deg: float
+    margin: float
+    clearance: float
+    F_pred: float
+
+
+def _scenario_with(problem: OptimizeProblem, values: Mapping[str, float]) -> dict:
+    scn = dict(problem.scenario)
+    model = dict(scn["model"])
+    model["params"] = {**dict(model.get("params") or {}), **{k: float(v) for k, v in
+                                                            values.items()}}
+    scn["model"] = model
+    return scn
+
+
+def _law(problem: OptimizeProblem):
+    """Obstacle contact law of the simulator check (used for the predicted peak force)."""
+    from ..contact import get_law
+
+    o = _sim_config(problem, 90.0).obstacle
+    e = None if o.law == "hertz" and o.e == 1.0 else o.e
+    return get_law(o.law, k=o.k, e=e, n=o.n)
+
+
+def _sim_config(problem: OptimizeProblem, beta_deg: float):
+    from ..scenario import scenario_from_dict
+    from .evaluate import simulation_config
+
+    sc = scenario_from_dict(problem.scenario)
+    return simulation_config(sc, {**problem.simulation, "beta_deg": float(beta_deg)})
+
+
+def evaluate_setting(problem: OptimizeProblem, values: Mapping[str, float],
+                     law=None) -> SettingReport:
+    """T_c^- over the beta range, objective, margin, clearance and F_pred of a setting."""
+    from ..contact import peak_force
+    from ..scenario import scenario_from_dict, sweep_energy
+
+    try:
+        setup = scenario_from_dict(_scenario_with(problem, values)).build()
+    except (RoverImpactError, ValueError) as exc:
+        raise ConfigError(f"setting {dict(values)} does not build: {exc}") from None
+    betas = problem.betas_deg
+    en = sweep_energy(setup, np.deg2rad(betas))
+    T = np.asarray(en.T_c_minus, float)
+    i = int(np.argmax(T))
+    obj = float(T.max() if problem.spec.objective == "worst" else T.mean())
+    law = law or _law(problem)
+    v_n = np.asarray(en.v_n, float)
+    F = float(peak_force(T[i], v_n[i], law)) if T[i] > 0 and v_n[i] > 0 else 0.0
+    return SettingReport(values={k: float(v) for k, v in values.items()}, T_c=T, v_n=v_n,
+                         objective=obj, beta_worst_deg=float(betas[i]),
+                         margin=stability_margin(setup.model, setup.q),
+                         clearance=clearance(setup.model, setup.q), F_pred=F)
+
+
+@dataclass
+class OptimizeResult:
+    """Outcome of :func:`optimize_setting`.
+
+    Attributes
+    ----------
+    nominal, best : SettingReport
+    betas_deg : (n_beta,) ndarray
+    reduction : float
+        Relative reduction of the objective, ``1 - J(best) / J(nominal)``.
+    F_sim_nominal, F_sim_best : float
+        Worst simulated peak obstacle force [N] over the worst-case betas of the nominal
+        and of the optimum (NaN if not simulated).
+    sim_betas_deg : list of float
+        Betas simulated.
+    starts : list of dict
+        Per start: start point, end point, objective, feasible, success.
+    """
+
+    problem: OptimizeProblem
+    nominal: SettingReport
+    best: SettingReport
+    betas_deg: np.ndarray
+    reduction: float
+    F_sim_nominal: float = math.nan
+    F_sim_best: float = math.nan
+    sim_betas_deg: list = field(default_factory=list)
+    starts: list = field(default_factory=list)
+
+
+def _feasible(r: SettingReport, spec: OptimizeSpec, tol: float = 1e-6) -> bool:
+    return r.margin >= spec.stability_margin - tol and r.clearance >= spec.min_clearance - tol
+
+
+def optimize_setting(problem: OptimizeProblem | str | Path | Mapping[str, Any], *,
+                     simulate: bool = True) -> OptimizeResult:
+    """Find the setting of minimum worst-case (or mean) T_c^- under the constraints.
+
+    Parameters
+    ----------
+    problem : OptimizeProblem, path or dict
+        See the module docstring for the file layout.
+    simulate : bool
+        Confirm with the compliant-contact simulator (nominal and optimum, at the
+        worst-case betas of both).
+
+    Returns
+    -------
+    OptimizeResult
+
+    Raises
+    ------
+    ConfigError
+        Bad file (see :func:`load_optimization`).
+    SolverError
+        No start reached a setting that satisfies the constraints.
+    """
+    from scipy.optimize import minimize
+
+    if not isinstance(problem, OptimizeProblem):
+        problem = load_optimization(problem)
+    spec = problem.spec
+    names = problem.names
+    lo = np.array([spec.variables[n][0] for n in names])
+    hi = np.array([spec.variables[n][1] for n in names])
+    law = _law(problem)
+    cache: dict[tuple, SettingReport] = {}
+
+    def report(u: np.ndarray) -> SettingReport:
+        u = np.clip(u, 0.0, 1.0)
+        key = tuple(np.round(u, 12))
+        if key not in cache:
+            cache[key] = evaluate_setting(problem, dict(zip(names, lo + u * (hi - lo),
+                                                            strict=True)), law)
+        return cache[key]
+
+    nominal = evaluate_setting(problem, problem.nominal, law)
+    scale = max(nominal.objective, 1e-12)
+    cons = [{"type": "ineq", "fun": lambda u: report(u).margin - spec.stability_margin},
+            {"type": "ineq", "fun": lambda u: report(u).clearance - spec.min_clearance}]
+    rng = np.random.default_rng(spec.seed)
+    u_nom = np.clip((np.array([problem.nominal[n] for n in names]) - lo) / (hi - lo), 0, 1)
+    starts = [u_nom] + [rng.uniform(0.0, 1.0, len(names)) for _ in range(spec.n_starts - 1)]
+    best, log = None, []
+    for u0 in starts:
+        res = minimize(lambda u: report(u).objective / scale, u0, method="SLSQP",
+                       bounds=[(0.0, 1.0)] * len(names), constraints=cons,
+                       options={"maxiter": spec.maxiter, "ftol": 1e-9})
+        r = report(res.x)
+        ok = _feasible(r, spec)
+        log.append({"start": dict(zip(names, (lo + u0 * (hi - lo)).tolist(), strict=True)),
+                    "end": r.values, "objective": r.objective, "feasible": ok,
+                    "success": bool(res.success)})
+        if ok and (best is None or r.objective < best.objective):
+            best = r
+    if _feasible(nominal, spec) and (best is None or nominal.objective < best.objective):
+        best = nominal
+    if best is None:
+        raise SolverError(
+            f"no setting within the bounds satisfies stability margin >= "
+            f"{spec.stability_margin} m and clearance >= {spec.min_clearance} m from "
+            f"{spec.n_starts} starts: widen the bounds or relax the constraints")
+    out = OptimizeResult(problem=problem, nominal=nominal, best=best,
+                         betas_deg=problem.betas_deg,
+                         reduction=1.0 - best.objective / scale, starts=log)
+    if simulate:
+        out.sim_betas_deg = sorted({nominal.beta_worst_deg, best.beta_worst_deg})
+        out.F_sim_nominal = _simulated_peak(problem, problem.nominal, out.sim_betas_deg)
+        out.F_sim_best = _simulated_peak(problem, best.values, out.sim_betas_deg)
+    return out
+
+
+def _simulated_peak(problem: OptimizeProblem, values, betas_deg) -> float:
+    """Largest simulated F_max [N] of a setting over ``betas_deg``."""
+    from ..scenario import scenario_from_dict
+    from ..simulate import simulate_impact
+
+    setup = scenario_from_dict(_scenario_with(problem, values)).build()
+    return float(max(simulate_impact(setup.model, _sim_config(problem, b)).F_max_total
+                     for b in betas_deg))
+
+
+def plot_reconfiguration(result: OptimizeResult, stem: str | Path) -> dict[str, Path]:
+    """T_c^- against beta at the nominal and at the optimal setting (PNG and SVG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    stem = Path(stem)
+    fig, ax = plt.subplots(figsize=(6.0, 3.8), constrained_layout=True)
+    b = result.betas_deg
+    fmt = ", ".join
+    ax.plot(b, result.nominal.T_c, "o-", label="nominal: " + fmt(
+        f"{k} = {v:.3g}" for k, v in result.nominal.values.items()))
+    ax.plot(b, result.best.T_c, "s-", label="optimum: " + fmt(
+        f"{k} = {v:.3g}" for k, v in result.best.values.items()))
+    ax.set_xlabel(r"obstacle angle $\beta$ [deg]")
+    ax.set_ylabel(r"$T_c^-$ [J]")
+    ax.set_title(f"{result.problem.spec.objective}-case $T_c^-$ reduced by "
+                 f"{100 * result.reduction:.1f} %")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    files = {}
+    for ext in ("png", "svg"):
+        path = stem.with_suffix(f".{ext}")
+        fig.savefig(path, dpi=120)
+        files[ext] = path
+    plt.close(fig)
+    return files

@@ -1,0 +1,168 @@
+"""Suspension reconfiguration (studies.optimize).
+
+Independent references:
+
+* stability margin of the planar rover by hand: the wheel-ground contact points are at
+  ``x = +-L/2 - com_x`` from the chassis COM and the vehicle COM is at
+  ``x_G = m_w ((-L/2 - com_x) + (L/2 - com_x)) / m_tot = -2 m_w com_x / m_tot``
+  (rigid suspension, two wheels), so ``margin = min(x_G - x_rear, x_front - x_G)``;
+* clearance by hand: the chassis box is centred at the chassis COM height
+  ``z_c = (m_tot h - 2 m_w r) / m_c`` (pitch 0), so ``clearance = z_c - chassis_height/2``;
+* the objective of the optimum recomputed one beta at a time with ``energy_of`` (no
+  batching), and the peak force with ``simulate_impact`` called directly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from roverimpact.exceptions import ConfigError
+
+PROBLEM = {
+    "scenario": {"model": {"name": "rover2d"}, "velocity": {"u": 0.3},
+                 "obstacle": {"wheel": "front", "beta_deg": 45.0}},
+    "simulation": {"obstacle": {"law": "hunt-crossley", "k": 1e7, "e": 0.5}},
+    "optimize": {"variables": {"h": [0.25, 0.5], "wheelbase": [0.45, 0.8]},
+                 "objective": "worst", "beta_deg": [20.0, 90.0], "n_beta": 6,
+                 "stability_margin": 0.25, "min_clearance": 0.05, "n_starts": 3, "seed": 1},
+}
+
+
+def _hand_margin(p) -> float:
+    L, cx = p["wheelbase"], p["com_x"]
+    x_rear, x_front = -L / 2 - cx, L / 2 - cx
+    x_G = p["wheel_mass"] * (x_rear + x_front) / p["total_mass"]
+    return min(x_G - x_rear, x_front - x_G)
+
+
+def _hand_clearance(p) -> float:
+    z_c = (p["total_mass"] * p["h"] - 2 * p["wheel_mass"] * p["wheel_radius"]) / p["chassis_mass"]
+    return z_c - p["chassis_height"] / 2
+
+
+@pytest.mark.parametrize("over", [{}, {"com_x": 0.05, "wheelbase": 0.7, "h": 0.3}])
+def test_margin_and_clearance_by_hand(over):
+    from roverimpact.models import rover2d
+    from roverimpact.studies.optimize import clearance, stability_margin
+
+    mbm = rover2d(**over)
+    q = np.array(mbm.params["q_nominal"])
+    assert stability_margin(mbm, q) == pytest.approx(_hand_margin(mbm.params), abs=1e-12)
+    assert clearance(mbm, q) == pytest.approx(_hand_clearance(mbm.params), abs=1e-12)
+
+
+def test_margin_3d_rectangle():
+    """Rocker-bogie on flat ground: the support polygon is the rectangle of the front and
+    rear contact points, so the margin is the smallest distance of the COM to its sides."""
+    import pinocchio as pin
+
+    from roverimpact.models import rocker_bogie
+    from roverimpact.studies.optimize import stability_margin
+
+    mbm = rocker_bogie()
+    q = np.array(mbm.params["q_nominal"])
+    data = mbm.model.createData()
+    com = pin.centerOfMass(mbm.model, data, q)
+    pin.updateFramePlacements(mbm.model, data)
+    xs = [data.oMf[mbm.model.getFrameId(w.frame)].translation[0] for w in mbm.wheels]
+    ys = [data.oMf[mbm.model.getFrameId(w.frame)].translation[1] for w in mbm.wheels]
+    ref = min(com[0] - min(xs), max(xs) - com[0], com[1] - min(ys), max(ys) - com[1])
+    assert stability_margin(mbm, q) == pytest.approx(ref, abs=1e-9)
+
+
+@pytest.fixture(scope="module")
+def result():
+    from roverimpact.studies.optimize import optimize_setting
+
+    return optimize_setting(PROBLEM)
+
+
+def test_optimum_feasible_better_and_confirmed(result):
+    from roverimpact.models import rover2d
+    from roverimpact.scenario import energy_of, scenario_from_dict
+    from roverimpact.simulate import SimulationConfig, simulate_impact
+
+    best = result.best.values
+    spec = PROBLEM["optimize"]
+    for name, (lo, hi) in spec["variables"].items():
+        assert lo - 1e-12 <= best[name] <= hi + 1e-12
+    p = rover2d(**best).params
+    assert _hand_margin(p) >= spec["stability_margin"] - 1e-6
+    assert _hand_clearance(p) >= spec["min_clearance"] - 1e-6
+    # worst-case T_c^- of the optimum, one beta at a time (no batched sweep)
+    betas = np.linspace(*spec["beta_deg"], spec["n_beta"])
+
+    def worst(values):
+        scn = PROBLEM["scenario"]
+        out = []
+        for b in betas:
+            s = {**scn, "model": {"name": "rover2d", "params": values},
+                 "obstacle": {"wheel": "front", "beta_deg": float(b)}}
+            out.append(float(energy_of(scenario_from_dict(s)).T_c_minus))
+        return max(out), float(betas[int(np.argmax(out))])
+
+    w_best, b_best = worst(best)
+    w_nom, b_nom = worst({"h": 0.35, "wheelbase": 0.6})
+    assert result.best.objective == pytest.approx(w_best, rel=1e-9)
+    assert result.nominal.objective == pytest.approx(w_nom, rel=1e-9)
+    assert w_best <= w_nom
+    assert result.reduction > 0.05
+    # simulator: worst simulated F_max over the worst-case betas, computed directly
+    law = PROBLEM["simulation"]["obstacle"]
+
+    def fmax(values):
+        mbm = rover2d(**values)
+        return max(simulate_impact(mbm, SimulationConfig(speed=0.3, beta_deg=b, obstacle=law))
+                   .F_max_total for b in sorted({b_best, b_nom}))
+
+    f_nom, f_best = fmax({"h": 0.35, "wheelbase": 0.6}), fmax(best)
+    assert result.F_sim_nominal == pytest.approx(f_nom, rel=1e-9)
+    assert result.F_sim_best == pytest.approx(f_best, rel=1e-9)
+    assert f_best < f_nom
+
+
+def test_plot(result, tmp_path):
+    from roverimpact.studies.optimize import plot_reconfiguration
+
+    files = plot_reconfiguration(result, tmp_path / "r")
+    assert files["png"].stat().st_size > 1000 and files["svg"].is_file()
+
+
+def _bad(section, **kw):
+    d = {k: dict(v) for k, v in PROBLEM.items()}
+    d[section] = {**d[section], **kw}
+    return d
+
+
+@pytest.mark.parametrize("data, match", [
+    (_bad("optimize", typo=1), "unknown key"),
+    (_bad("optimize", variables={"mass": [1, 2]}), "not a numeric parameter"),
+    (_bad("optimize", variables={"h": [0.5, 0.3]}), "lo < hi"),
+    (_bad("optimize", variables={}), "variables"),
+    (_bad("optimize", beta_deg=[10, 120]), "beta_deg"),
+    (_bad("optimize", objective="best"), "objective"),
+    (_bad("scenario", model={"name": "rigid_body"}), "rover2d"),
+])
+def test_bad_files(data, match):
+    from roverimpact.studies.optimize import load_optimization
+
+    with pytest.raises(ConfigError, match=match):
+        load_optimization(data)
+
+
+def test_cli(tmp_path, capsys):
+    from roverimpact.cli import main
+
+    f = tmp_path / "opt.toml"
+    f.write_text('[scenario]\nmodel = { name = "rover2d" }\nvelocity = { u = 0.3 }\n'
+                 'obstacle = { wheel = "front", beta_deg = 45 }\n[optimize]\n'
+                 'variables = { h = [0.3, 0.45] }\nbeta_deg = [30, 90]\nn_beta = 4\n'
+                 'n_starts = 2\nstability_margin = 0.2\n')
+    assert main(["optimize", str(f), "--no-simulate", "--plot", str(tmp_path / "p")]) == 0
+    out = capsys.readouterr().out
+    assert "optimum" in out and "reduced by" in out and (tmp_path / "p.png").is_file()
+    f.write_text("[optimize]\nvariables = { h = [0.3, 0.45] }\n")
+    assert main(["optimize", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert "scenario" in err and "Traceback" not in err
