@@ -310,8 +310,12 @@ class Case:
 
 
 def case_id(index: int, overrides: Mapping[str, Any]) -> str:
-    text = json.dumps({k: overrides[k] for k in sorted(overrides)}, sort_keys=True,
-                      separators=(",", ":"), default=float)
+    """``"<index>-<hash of the parameter values>"``, e.g. ``"0000012-3f9a01bc"``.
+
+    The hash is over ``repr`` of the sorted (path, value) pairs (Python's shortest
+    round-trip float repr), so it is the same in every run and on every machine.
+    """
+    text = repr(sorted(overrides.items()))
     return f"{index:07d}-{hashlib.sha1(text.encode()).hexdigest()[:8]}"
 
 
@@ -386,24 +390,26 @@ def _unknown_parameter(study: Study, name: str, leaves: Mapping[str, Any]) -> Co
     )
 
 
-def validate_scenarios(study: Study, validate) -> dict:
+def validate_scenarios(study: Study, validate, check=None) -> dict:
     """Check a study against the evaluator's scenario validator before any work.
 
-    ``validate(scenario_dict) -> normalized dict`` raises :class:`ConfigError` (or a
-    pydantic ``ValidationError``) for a bad scenario. The base is validated, then every
-    distinct swept value (grid values, sample bounds, listed cases); a swept parameter
-    must name a leaf of the normalized scenario (free-form tables such as
-    ``model.params`` count once the validator accepts the key). Returns the normalized
-    base.
+    ``validate(scenario_dict) -> normalized dict`` (a cheap schema check) raises
+    :class:`ConfigError` (or a pydantic ``ValidationError``) for a bad scenario; the
+    optional ``check(scenario_dict)`` is a deep check (e.g. building the model). The base
+    is validated and checked; every distinct swept value (grid values, sample bounds,
+    listed cases) is validated, and the smallest and largest value of each numeric
+    parameter (every value of the others) is checked. A swept parameter must name a leaf
+    of the normalized scenario (free-form tables such as ``model.params`` count once the
+    checks accept the key). Returns the normalized base.
 
     Raises
     ------
     ConfigError
         Unknown parameter (with close matches), bad value (type, unit, range).
     """
-    def _run(scn, where, value=None):
+    def _run(fn, scn, where, value=None):
         try:
-            return validate(scn)
+            return fn(scn)
         except ValidationError as exc:
             raise ConfigError(_format_errors(exc, where)) from None
         except ConfigError as exc:
@@ -413,24 +419,36 @@ def validate_scenarios(study: Study, validate) -> dict:
                         "degrees, everything else SI)")
             raise ConfigError(f"{where}: {exc}{hint}") from None
 
-    base = _run(study.base, f"study {study.name!r}: base scenario")
+    where = f"study {study.name!r}"
+    base = _run(validate, study.base, f"{where}: base scenario")
+    if check is not None:
+        _run(check, study.base, f"{where}: base scenario")
     leaves = flatten(base)
     for key, values in distinct_values(study).items():
-        for i, val in enumerate(values):
-            val = list(val) if isinstance(val, tuple) else val
-            if i == 0 and key not in leaves:
-                try:
-                    got = validate(apply_overrides(study.base, {key: val}))
-                except (ValidationError, ConfigError):
-                    raise _unknown_parameter(study, key, leaves) from None
-                if key not in flatten(got):
-                    raise _unknown_parameter(study, key, leaves)
-                continue
-            _run(apply_overrides(study.base, {key: val}),
-                 f"study {study.name!r}: {key} = {val!r}", val)
+        values = [list(v) if isinstance(v, tuple) else v for v in values]
+        if key not in leaves:
+            try:
+                scn = apply_overrides(study.base, {key: values[0]})
+                got = validate(scn)
+                if check is not None:
+                    check(scn)
+            except (ValidationError, ConfigError):
+                raise _unknown_parameter(study, key, leaves) from None
+            if key not in flatten(got):
+                raise _unknown_parameter(study, key, leaves)
+        for val in values:
+            _run(validate, apply_overrides(study.base, {key: val}), f"{where}: {key} = {val!r}",
+                 val)
+        if check is not None:
+            numeric = [v for v in values if isinstance(v, (int, float))
+                       and not isinstance(v, bool)]
+            deep = ([min(numeric), max(numeric)] if len(numeric) == len(values) else values)
+            for val in dict.fromkeys(deep):
+                _run(check, apply_overrides(study.base, {key: val}), f"{where}: {key} = {val!r}",
+                     val)
     if study.x is not None and study.x not in study.parameters():
         raise ConfigError(
-            f"study {study.name!r}: x = {study.x!r} is not one of the swept parameters "
+            f"{where}: x = {study.x!r} is not one of the swept parameters "
             f"{study.parameters()}"
         )
     return base

@@ -208,22 +208,31 @@ class ScenarioEvaluator:
     name = "scenario"
 
     def validate(self, scenario: Mapping[str, Any]) -> dict:
+        """Schema check (cheap): the normalized scenario, ConfigError if invalid."""
         if _is_rigid_body(scenario):
             return RigidBodyEvaluator().validate(scenario)
         sc, sim = _parse(scenario)
         try:
-            setup = sc.build()
             simulation_config(sc, sim)
-            _law_of(sc)
-        except ConfigError:
-            raise
         except _LAYER_ERRORS as exc:
             raise ConfigError(str(exc)) from None
-        del setup
         out = sc.model_dump(mode="json")
         if sim:
             out[SIMULATION_KEY] = sim
         return out
+
+    def check(self, scenario: Mapping[str, Any]) -> None:
+        """Deep check (builds the model): unknown model parameters, bad geometry, law."""
+        if _is_rigid_body(scenario):
+            return
+        sc, _ = _parse(scenario)
+        try:
+            sc.build()
+            _law_of(sc)
+        except ConfigError:
+            raise
+        except _LAYER_ERRORS as exc:
+            raise ConfigError(f"{type(exc).__name__}: {exc}") from None
 
     def evaluate(self, base, overrides, *, simulate: bool = False) -> dict[str, np.ndarray]:
         if _is_rigid_body(base):

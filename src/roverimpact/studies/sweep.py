@@ -104,7 +104,7 @@ def prepare_study(study, *, evaluator=None, chunk_size: int | None = None) -> Pr
     else:
         study = study_from_dict(study)
     ev = get_evaluator(evaluator)
-    base = validate_scenarios(study, ev.validate)
+    base = validate_scenarios(study, ev.validate, getattr(ev, "check", None))
     cases = expand(study)
     cs = chunk_size or study.chunk_size or _auto_chunk(len(cases))
     return PreparedStudy(study, text, ev, base, cases, int(cs))
@@ -210,7 +210,9 @@ def compute_chunk(evaluator, base: Mapping, normalized_base: Mapping, cases: Seq
         cols[p] = [_cell(ov.get(p, default)) for ov in overrides]
     for k, v in flat.items():
         if k not in cols:
-            cols[k] = [_cell(v)] * n
+            v = _cell(v)
+            cols[k] = (np.full(n, v) if isinstance(v, (bool, int, float)) and v is not None
+                       else [v] * n)
     for k, v in outputs.items():
         arr = np.asarray(v)
         if arr.shape != (n,):
@@ -377,9 +379,12 @@ def run_study(
     args = (prep.evaluator, st.base, prep.base)
     params = st.parameters()
 
+    fresh: dict[int, pd.DataFrame] = {}
+
     def _store(k: int, df: pd.DataFrame) -> None:
         nonlocal n_done
         _atomic_parquet(df, _chunk_path(out_dir, k))
+        fresh[k] = df
         n_done += len(df)
         if progress:
             progress(n_done, total)
@@ -391,7 +396,7 @@ def run_study(
         for k in pending:
             _store(k, compute_chunk(*args, chunks[k], params, st.simulate))
 
-    table = _assemble(out_dir, chunks)
+    table = _assemble(out_dir, chunks, fresh)
     files = {"study": out_dir / STUDY_COPY, "manifest": manifest_path,
              "results": out_dir / RESULTS}
     _atomic_parquet(table, files["results"])
@@ -409,8 +414,10 @@ def run_study(
     )
 
 
-def _assemble(out_dir: Path, chunks: list[list[Case]]) -> pd.DataFrame:
-    frames = [pd.read_parquet(_chunk_path(out_dir, k)) for k in range(len(chunks))]
+def _assemble(out_dir: Path, chunks: list[list[Case]], fresh: dict) -> pd.DataFrame:
+    """The full table: chunks computed in this run (as written) and finished ones (read)."""
+    frames = [fresh[k] if k in fresh else pd.read_parquet(_chunk_path(out_dir, k))
+              for k in range(len(chunks))]
     table = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
     expected = [c.case_id for chunk in chunks for c in chunk]
     if table.empty and not expected:
