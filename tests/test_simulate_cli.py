@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -56,3 +57,42 @@ def test_scenario_tables_feed_the_config():
 def test_bad_simulation_files(raw, match):
     with pytest.raises(ConfigError, match=match):
         simulation_from_dict(raw)
+
+
+def test_scenario_constraint_choice_reaches_the_indicator():
+    """contacts.ground = "noslip" adds tangential ground rows to T_c^-'s A, as the
+    scenario layer does; more constraints can only raise T_c (a larger SCM)."""
+    from roverimpact.simulate import simulate_impact
+
+    base = {"model": {"name": "rover2d", "params": {"suspension": "rocker"}},
+            "simulation": {"speed": 0.3, "t_after": 0.05}}
+    m1, c1 = simulation_from_dict(base)
+    m2, c2 = simulation_from_dict({**base, "contacts": {"ground": "noslip"}})
+    assert (c1.indicator.ground, c2.indicator.ground) == ("normal", "noslip")
+    r1, r2 = simulate_impact(m1, c1), simulate_impact(m2, c2)
+    assert "ground:rear:long" in r2.A_rows and "ground:rear:long" not in r1.A_rows
+    assert r2.T_c_minus >= r1.T_c_minus - 1e-12
+    assert r1.F_max_total == pytest.approx(r2.F_max_total, rel=1e-12)  # same run
+
+
+def test_indicator_rows_match_the_scenario_constraint_set():
+    """T_c^- of the run equals partition(M, A) with A from the models' ConstraintSet (the
+    scenario layer's own row builder) at the recorded pre-impact state."""
+    from roverimpact import partition
+    from roverimpact.models.kinematics import ConstraintSet, GroundContact, PointContact
+    from roverimpact.simulate import simulate_impact
+
+    model, cfg = simulation_from_dict(
+        {"model": {"name": "rover2d", "params": {"suspension": "rocker"}},
+         "contacts": {"ground": "noslip"}, "obstacle": {"beta_deg": 70.0},
+         "simulation": {"speed": 0.3, "t_after": 0.05}})
+    r = simulate_impact(model, cfg)
+    wheels = {w.name: w for w in model.wheels}
+    front, rear = wheels["front"], wheels["rear"]
+    assert r.contact_wheel == "front"
+    n = (-np.sin(np.radians(70.0)), 0.0, np.cos(np.radians(70.0)))
+    cset = ConstraintSet(model, [GroundContact(rear, noslip=True, planar=True),
+                                 PointContact(front.name, front.frame, n, wheel=front)])
+    assert list(cset.labels) == r.A_rows
+    M, A = cset.evaluate(r.q_minus)
+    assert r.T_c_minus == pytest.approx(float(partition(M, A, r.v_minus).T_c), rel=1e-9)

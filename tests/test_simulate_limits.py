@@ -105,7 +105,7 @@ def test_loop_closure_holds_through_impact_3d():
     cfg = SimulationConfig(speed=0.3, obstacle={"k": 1e6, "e": 0.5}, t_after=0.05)
     r = simulate_impact(rv, cfg, q0=q0)
     assert r.contact_wheel == "right_front"     # yawed by +8 deg: right front hits first
-    assert [a for a in r.A_rows if a.startswith("obstacle")] == ["obstacle_right_front"]
+    assert [a for a in r.A_rows if a.startswith("obstacle")] == ["obstacle:right_front:normal"]
     assert r.F_max_total > 0
     h = r.history
     worst = 0.0
@@ -113,7 +113,7 @@ def test_loop_closure_holds_through_impact_3d():
         q = h.loc[i, [f"q_{j}" for j in range(rv.model.nq)]].to_numpy(float)
         worst = max(worst, float(np.max(np.abs(rv.loop_closure(q)[0]))))
     assert worst < 1e-8
-    assert "loop_0" in r.A_rows
+    assert "loop:differential" in r.A_rows
 
 
 def test_default_tolerances_converge_peak_force_to_one_percent():

@@ -135,3 +135,22 @@ def test_moving_away_never_hits():
     cfg = SimulationConfig(**FREE, t_max=0.05)
     with pytest.raises(SolverError, match="no obstacle contact"):
         simulate_impact(free_sphere(), cfg, v0=np.r_[-1.0, 0, 0, 0, 0, 0])
+
+
+def test_sliding_sphere_reaches_rolling_by_friction():
+    """A solid sphere set sliding without spin on the ground rolls after friction has
+    acted: v_roll = 5/7 v0 (angular momentum about the contact point is conserved), so its
+    kinetic energy is T = 7/10 m v_roll^2 = 5/14 m v0^2 when it reaches the wall."""
+    m, v0 = 2.0, 1.0
+    cfg = SimulationConfig(gravity="earth", speed=v0, mu=0.5, distance=0.1, t_max=0.5,
+                           ground_contact={"k": 1e7, "e": 0.3},
+                           obstacle={"law": "hertz", "k": 1e7, "e": 1})
+    r = simulate_impact(free_sphere(mass=m), cfg)
+    assert r.T_minus == pytest.approx(5 / 14 * m * v0**2, rel=1e-2)
+    assert r.history["ground_ball_ft"].max() == pytest.approx(0.5 * m * 9.81, rel=2e-2)
+
+
+def test_obstacle_lower_than_the_wheels_is_input_error():
+    cfg = SimulationConfig(**FREE, obstacle_height=0.5)     # ball centre at z = 1 m
+    with pytest.raises(InputError, match="lower than the contact points"):
+        simulate_impact(free_sphere(), cfg, v0=np.r_[1.0, 0, 0, 0, 0, 0])

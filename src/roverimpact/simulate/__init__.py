@@ -6,7 +6,14 @@ into an obstacle face with a contact law of :mod:`roverimpact.contact` and retur
 See docs/simulate.md for the equations, the contact geometry and the integrator.
 """
 
-from ._config import GRAVITY, ContactSpec, IntegratorSpec, JointSpring, SimulationConfig
+from ._config import (
+    GRAVITY,
+    ContactSpec,
+    IndicatorSpec,
+    IntegratorSpec,
+    JointSpring,
+    SimulationConfig,
+)
 from ._result import SimulationResult
 from ._run import build_system, effective_energy, initial_state, simulate_impact
 from ._system import ContactSystem, Plane
@@ -15,6 +22,7 @@ __all__ = [
     "GRAVITY",
     "ContactSpec",
     "ContactSystem",
+    "IndicatorSpec",
     "IntegratorSpec",
     "JointSpring",
     "Plane",

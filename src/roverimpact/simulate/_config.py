@@ -17,8 +17,8 @@ from ..exceptions import ConfigError
 #: Gravity presets [m/s^2], magnitude of the acceleration along -z.
 GRAVITY: dict[str, float] = {"earth": 9.81, "mars": 3.721, "moon": 1.62, "none": 0.0}
 
-__all__ = ["GRAVITY", "ContactSpec", "IntegratorSpec", "JointSpring", "SimulationConfig",
-           "gravity_vector"]
+__all__ = ["GRAVITY", "ContactSpec", "IndicatorSpec", "IntegratorSpec", "JointSpring",
+           "SimulationConfig", "gravity_vector"]
 
 
 class _Strict(BaseModel):
@@ -72,6 +72,20 @@ class IntegratorSpec(_Strict):
     baumgarte: float = Field(20.0, ge=0.0, allow_inf_nan=False)
 
 
+class IndicatorSpec(_Strict):
+    """Constraint rows of the T_c^- computed at the pre-impact state (as in a scenario).
+
+    ``ground``: ``"normal"`` rows or ``"noslip"`` (normal + tangential) for every wheel in
+    ground contact; ``locked``: joints held fixed; ``constraints``: ``"all"`` candidate
+    rows, ``"auto"`` (those that hold through the impact) or a list of row labels /
+    patterns, chosen by :func:`roverimpact.scenario.choose_active_rows`.
+    """
+
+    ground: Literal["normal", "noslip"] = "normal"
+    locked: list[str] = Field(default_factory=list)
+    constraints: Literal["all", "auto"] | list[str] = "all"
+
+
 class SimulationConfig(_Strict):
     """Everything a compliant-contact impact run needs besides the model.
 
@@ -108,6 +122,8 @@ class SimulationConfig(_Strict):
     t_after : float
         Maximum duration simulated after the first obstacle contact [s].
     integrator : IntegratorSpec
+    indicator : IndicatorSpec
+        Constraint rows of T_c^- at the pre-impact state.
     """
 
     gravity: str | float = "earth"
@@ -126,6 +142,7 @@ class SimulationConfig(_Strict):
     t_max: float = Field(1.0, gt=0.0, allow_inf_nan=False)
     t_after: float = Field(0.2, gt=0.0, allow_inf_nan=False)
     integrator: IntegratorSpec = IntegratorSpec()
+    indicator: IndicatorSpec = IndicatorSpec()
 
     @field_validator("gravity")
     @classmethod

@@ -3,10 +3,10 @@
 The file is a scenario file (see :mod:`roverimpact.scenario`) with an extra
 ``[simulation]`` table holding a :class:`SimulationConfig`. From the scenario tables the
 simulator uses ``[model]`` (which rover or robot file), ``[obstacle] beta_deg``,
-``[contact_law]`` (the obstacle law) and ``[velocity] u`` (driving speed); values given
-in ``[simulation]`` win. The other scenario tables (configuration, contacts, constraints)
-describe the impulsive indicator and are ignored here: the run starts settled on flat
-ground.
+``[contact_law]`` (the obstacle law), ``[velocity] u`` (driving speed) and, for the T_c^-
+of the pre-impact state, ``[contacts] ground, locked`` and ``constraints`` (the
+``indicator`` table); values given in ``[simulation]`` win. ``[configuration]`` and the
+rest of ``[velocity]`` are not used: the run starts settled on flat ground.
 """
 
 from __future__ import annotations
@@ -65,6 +65,15 @@ def simulation_from_dict(raw: dict, *, where: str = "simulation config",
     law = raw.get("contact_law")
     if law is not None and "obstacle" not in sim:
         sim["obstacle"] = {("law" if k == "name" else k): v for k, v in law.items()}
+    contacts = raw.get("contacts", {})
+    ind = dict(sim.get("indicator", {}))
+    for key in ("ground", "locked"):
+        if key in contacts and key not in ind:
+            ind[key] = contacts[key]
+    if "constraints" in raw and "constraints" not in ind:
+        ind["constraints"] = raw["constraints"]
+    if ind:
+        sim["indicator"] = ind
     if "u" in raw.get("velocity", {}) and "speed" not in sim:
         sim["speed"] = raw["velocity"]["u"]
     cfg = SimulationConfig.from_dict(sim, where)

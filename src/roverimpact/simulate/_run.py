@@ -204,42 +204,80 @@ def _driving_velocity(sys: ContactSystem, q, u: float) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- indicator
-def effective_energy(sys: ContactSystem, q, v, wheel: int, simultaneous: float = 1e-6):
+def effective_energy(sys: ContactSystem, mbm, q, v, wheel: int, indicator=None,
+                     simultaneous: float = 1e-6):
     """``T_c^-`` and ``m_eff`` of the state (q, v) for an obstacle contact of ``wheel``.
 
-    Constraint rows ``A`` (in this order): the obstacle normal of ``wheel`` and of every
-    other wheel within ``simultaneous`` [m] of touching (a symmetric rover hits with both
-    front wheels at once), the ground
-    normal of every wheel in ground contact (indentation > 0) and the loop-closure rows.
-    ``m_eff`` is the effective mass along the obstacle row alone.
+    Candidate rows and labels follow the scenario layer (``"obstacle:<wheel>:normal"``,
+    ``"ground:<wheel>:normal|long|lat"``, ``"loop:<name>"``, ``"lock:<joint>"``) and the
+    active ones are chosen by :func:`roverimpact.scenario.choose_active_rows`, so the
+    indicator is the one a scenario computes with the same choice: the obstacle normal of
+    ``wheel`` (and of every other wheel within ``simultaneous`` [m] of touching, e.g. both
+    front wheels of a symmetric rover), ground rows (``indicator.ground``) of every other
+    wheel in ground contact, the loop closure and the locked joints. Rows are taken at the
+    simulator's contact points (sphere wheels: centre - r n; the scenario's rim point is
+    the same point for upright wheels). ``m_eff`` is the effective mass along the primary
+    obstacle row alone (others free).
 
     Returns
     -------
-    T_c : float, m_eff : float, labels : list of str
+    T_c : float, m_eff : float, labels : list of str (active rows)
     """
+    from ..scenario import choose_active_rows
+    from ._config import IndicatorSpec
+
+    spec = IndicatorSpec() if indicator is None else indicator
     cs = sys.contacts(q, v)
     names = [p.name for p in sys.planes]
     io = names.index("obstacle")
-    rows = [sys.planes[io].n @ cs.Jp[io, wheel]]
-    labels = [f"obstacle_{wheel}"]
-    for w in np.flatnonzero(cs.gap[io] <= cs.gap[io, wheel] + simultaneous):
-        if w != wheel:                         # wheels touching at the same instant
-            rows.append(sys.planes[io].n @ cs.Jp[io, w])
-            labels.append(f"obstacle_{w}")
+    hit = [int(w) for w in np.flatnonzero(cs.gap[io] <= cs.gap[io, wheel] + simultaneous)]
+    hit = [wheel] + [w for w in hit if w != wheel]
+    rows, labels = [], []
     if "ground" in names:
         ig = names.index("ground")
+        n_g = sys.planes[ig].n
+        planar = bool((mbm.params or {}).get("planar", False))
         for w in np.flatnonzero(cs.delta[ig] > 0):
-            rows.append(sys.planes[ig].n @ cs.Jp[ig, w])
-            labels.append(f"ground_{w}")
+            if int(w) in hit:
+                continue
+            wn = mbm.wheels[w].name
+            rows.append(n_g @ cs.Jp[ig, w])
+            labels.append(f"ground:{wn}:normal")
+            if spec.ground == "noslip":
+                R = sys.data.oMf[sys.fids[w]].rotation
+                t = np.cross(R @ np.asarray(mbm.wheels[w].axis, float), n_g)
+                t /= np.linalg.norm(t)
+                rows.append(t @ cs.Jp[ig, w])
+                labels.append(f"ground:{wn}:long")
+                if not planar:
+                    rows.append(np.cross(n_g, t) @ cs.Jp[ig, w])
+                    labels.append(f"ground:{wn}:lat")
     if sys.loop_closure is not None:
         Jl = sys.loop(q)[1]
         rows.extend(Jl)
-        labels.extend(f"loop_{i}" for i in range(Jl.shape[0]))
+        names_l = list(mbm.loop_names) or [str(i) for i in range(Jl.shape[0])]
+        labels.extend(f"loop:{nm}" for nm in names_l[: Jl.shape[0]])
+    model = sys.model
+    for jn in spec.locked:
+        if not model.existJointName(jn):
+            raise ConfigError(f"indicator.locked: unknown joint {jn!r}; joints: "
+                              f"{list(model.names[1:])}")
+        j = model.joints[model.getJointId(jn)]
+        for k in range(j.nv):
+            r = np.zeros(sys.nv)
+            r[j.idx_v + k] = 1.0
+            rows.append(r)
+            labels.append(f"lock:{jn}")
+    for w in hit[::-1]:                       # the primary obstacle row last
+        rows.append(sys.planes[io].n @ cs.Jp[io, w])
+        labels.append(f"obstacle:{mbm.wheels[w].name}:normal")
+    A_all = np.array(rows)
     M = sys.mass_matrix(q)
-    A = np.array(rows)
-    T_c = float(partition(M, A, v, want_velocities=False).T_c)
-    m_eff = float(effective_mass(M, rows[0]))
-    return T_c, m_eff, labels
+    io_row = len(labels) - 1
+    active = choose_active_rows(spec.constraints, labels, M, A_all, v, obstacle_row=io_row)
+    T_c = float(partition(M, A_all[active], v, want_velocities=False).T_c)
+    m_eff = float(effective_mass(M, A_all[io_row]))
+    return T_c, m_eff, [labels[i] for i in active]
 
 
 # ---------------------------------------------------------------------- integration
@@ -308,11 +346,6 @@ def _run_phase(sys, q_ref, v, imp, t0, t1, cfg, v_i, obstacle_event, direction, 
             return t, sys.config(q_ref_box[0], y[:nv]), y[nv:], True
         q_ref_box[0] = sys.config(q_ref_box[0], y[:nv])   # re-anchor the chart
         y[:nv] = 0.0
-
-
-def _label(lab: str, wheel_names) -> str:
-    kind, idx = lab.rsplit("_", 1)
-    return f"{kind}_{wheel_names[int(idx)]}" if kind in ("obstacle", "ground") else lab
 
 
 def _state_at(sys, segs, k, t):
@@ -448,7 +481,8 @@ def simulate_impact(mbm, config: SimulationConfig | dict | None = None, *, q0=No
     v_i = [p.v_i for p in sys.planes]
     v_i[-1] = v_n
     obst.v_i = v_n
-    T_c, m_eff, labels = effective_energy(sys, q_minus, v_minus, wheel)
+    T_c, m_eff, labels = effective_energy(sys, mbm, q_minus, v_minus, wheel,
+                                          config.indicator)
     T_minus = sys.kinetic_energy(q_minus, v_minus)
     E_minus = float(T_minus + sys.potential_energy(q_minus))
     i_contact = len(segs.t) - 1
@@ -533,7 +567,7 @@ def simulate_impact(mbm, config: SimulationConfig | dict | None = None, *, q0=No
         T_minus=T_minus, T_plus=T_plus, E_minus=E_minus, E_plus=E_plus,
         q_minus=q_minus, v_minus=v_minus, q_plus=q_plus, v_plus=v_plus,
         T_c_minus=T_c, m_eff=m_eff, v_n=v_n, contact_wheel=names_w[wheel],
-        A_rows=[_label(lab, names_w) for lab in labels],
+        A_rows=labels,
         stats={"nfev": counter[0], "steps": len(T), "segments": len(segs.sols),
                "t_contact": float(t_c)},
     )
