@@ -58,12 +58,14 @@ def test_quick_outputs_exist_and_are_well_formed(quick):
 
 
 def test_indicator_tracks_the_simulation_on_the_quick_beta_sweeps(quick):
+    # 5 angles; Spearman 0.9 = one swapped pair: at 70 and 90 deg F_max differs by 0.4 %
+    # (the force saturates near a wall), T_c^- by 10 %. Deterministic, so the bound is exact.
     stats2d = json.loads((quick / "detc2014_fig2_beta" / "stats.json").read_text())
-    assert stats2d["spearman"]["value"] >= 0.9
+    assert stats2d["spearman"]["value"] >= 0.9 - 1e-12
     h = json.loads((quick / "detc2014_fig3_com_height" / "stats.json").read_text())
     assert h["spearman"]["value"] >= 0.9
     s3 = json.loads((quick / "detc2015_fig2_beta" / "stats.json").read_text())
-    assert s3["spearman"]["value"] >= 0.9 - 1e-12  # one swapped pair of five near the peak
+    assert s3["spearman"]["value"] >= 0.9 - 1e-12
 
 
 def test_report_html_is_self_contained(quick):
