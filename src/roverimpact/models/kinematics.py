@@ -63,7 +63,8 @@ def point_jacobian(model, data, frame_id: int, r_world) -> np.ndarray:
 
     Requires ``pin.computeJointJacobians`` and ``pin.updateFramePlacements`` on ``data``.
     """
-    J = pin.getFrameJacobian(model, data, frame_id, _LWA)
+    # pinocchio returns a 1-D array for nv = 1: keep the (6, nv) shape
+    J = np.asarray(pin.getFrameJacobian(model, data, frame_id, _LWA)).reshape(6, model.nv)
     return J[:3] - _skew(np.asarray(r_world, dtype=float)) @ J[3:]
 
 
