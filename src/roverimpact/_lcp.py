@@ -22,13 +22,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._checks import (
-    STATUS_ASYMMETRIC_M,
-    STATUS_NONFINITE_M,
-    STATUS_NOT_PD,
-    STATUS_OK,
-    SYM_RTOL,
-)
+from ._checks import STATUS_OK
+from ._kernels import _factor  # the same checked Cholesky as the partition kernel
 
 #: kernel status codes beyond the mass-matrix codes of ``_checks`` (1..5)
 STATUS_INFEASIBLE = 10  # Lemke ended on a secondary ray: no impulse can stop penetration
@@ -37,42 +32,6 @@ STATUS_LOCKED = 12  # a unilateral row lies in the span of the bilateral rows an
 
 _PIV = 1e-12  # smallest tableau entry accepted as a pivot (problem scaled to O(1))
 
-
-_EPS = np.finfo(np.float64).eps
-
-
-@njit(cache=True, nogil=True)
-def _factor(Mi, L):  # pragma: no cover - compiled
-    """Cholesky ``M = L L^T`` with the finiteness/symmetry/definiteness status codes."""
-    n = Mi.shape[0]
-    maxdiag = 0.0
-    for i in range(n):
-        for j in range(n):
-            if not np.isfinite(Mi[i, j]):
-                return STATUS_NONFINITE_M
-        maxdiag = max(maxdiag, abs(Mi[i, i]))
-    for i in range(n):
-        for j in range(i):
-            tol = SYM_RTOL * max(abs(Mi[i, i]), abs(Mi[j, j]))
-            if abs(Mi[i, j] - Mi[j, i]) > tol:
-                return STATUS_ASYMMETRIC_M
-    thresh = n * _EPS * maxdiag
-    for j in range(n):
-        s = Mi[j, j]
-        for c in range(j):
-            s -= L[j, c] * L[j, c]
-        if not s > thresh:
-            return STATUS_NOT_PD
-        d = np.sqrt(s)
-        L[j, j] = d
-        for i in range(j + 1, n):
-            t = Mi[i, j]
-            for c in range(j):
-                t -= L[i, c] * L[j, c]
-            L[i, j] = t / d
-        for i in range(j):
-            L[i, j] = 0.0
-    return STATUS_OK
 
 
 @njit(cache=True, nogil=True)
@@ -400,6 +359,7 @@ def impact_kernel(
     k = N.shape[1]
     pb = B.shape[1]
     L = np.zeros((n, n))
+    invd = np.empty(n)  # 1 / diag(L), filled by _factor
     u = np.empty(n)
     u0 = np.empty(n)
     up = np.empty(n)
@@ -429,7 +389,7 @@ def impact_kernel(
     for b in range(nb):
         im = iM[b]
         if im != last:
-            last_code = _factor(M[im], L)
+            last_code = _factor(M[im], L, invd)
             last = im
         if last_code != STATUS_OK:
             status[b] = last_code
