@@ -33,12 +33,15 @@ from .scenario import (
     sweep_energy,
 )
 from .simulate import GRAVITY, SimulationConfig, SimulationResult, simulate_impact
+from .studies import Agreement, Study, StudyResult, agreement, run_study
 from .studies.optimize import optimize_setting
+from .studies.reproduce import reproduce
 from .studies.trust import TrustGrid, trust_map
 
 __all__ = [
     "BODY_REGIONS",
     "GRAVITY",
+    "Agreement",
     "ConfigError",
     "ImpactEnergy",
     "ImpactResult",
@@ -52,10 +55,13 @@ __all__ = [
     "SimulationConfig",
     "SimulationResult",
     "SolverError",
+    "Study",
+    "StudyResult",
     "TrustGrid",
     "UnilateralImpactResult",
     "__version__",
     "active_set",
+    "agreement",
     "arm_effective_masses",
     "contact",
     "effective_mass",
@@ -71,8 +77,10 @@ __all__ = [
     "peak_force",
     "point_effective_mass",
     "projector",
+    "reproduce",
     "rocker_bogie",
     "rover2d",
+    "run_study",
     "simulate_impact",
     "sweep_energy",
     "trust_map",
