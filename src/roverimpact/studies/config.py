@@ -108,7 +108,8 @@ class Study(_Strict):
         Parameter drawn on the x axis of the figures (default: first swept parameter).
     chunk_size : int, optional
         Cases per result chunk (the unit of resume and of distribution); default:
-        about 1/100 of the cases, at least 16.
+        about 1/100 of the cases (at least 16) with ``simulate``, else about 1/20 (at
+        least 256).
     """
 
     name: str = Field(min_length=1)

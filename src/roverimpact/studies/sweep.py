@@ -86,8 +86,10 @@ class PreparedStudy:
     chunk_size: int
 
 
-def _auto_chunk(n: int) -> int:
-    return max(16, math.ceil(n / 100))
+def _auto_chunk(n: int, simulate: bool) -> int:
+    """About 100 chunks of simulated cases (fine-grained resume and load balance), about
+    20 of indicator-only cases (fast: fewer, larger Parquet writes)."""
+    return max(16, math.ceil(n / 100)) if simulate else max(256, math.ceil(n / 20))
 
 
 def prepare_study(study, *, evaluator=None, chunk_size: int | None = None) -> PreparedStudy:
@@ -106,7 +108,7 @@ def prepare_study(study, *, evaluator=None, chunk_size: int | None = None) -> Pr
     ev = get_evaluator(evaluator)
     base = validate_scenarios(study, ev.validate, getattr(ev, "check", None))
     cases = expand(study)
-    cs = chunk_size or study.chunk_size or _auto_chunk(len(cases))
+    cs = chunk_size or study.chunk_size or _auto_chunk(len(cases), study.simulate)
     return PreparedStudy(study, text, ev, base, cases, int(cs))
 
 
