@@ -142,3 +142,14 @@ def test_library_raises_config_error(tmp_path):
     with pytest.raises(ConfigError, match="unknown parameter"):
         run_study({"name": "x", "base": {"model": {"name": "rigid_body"}},
                    "grid": {"motion.sped": [1.0]}}, tmp_path / "o")
+
+
+def test_example_study_files_are_valid():
+    from roverimpact.studies import prepare_study
+
+    root = Path(__file__).resolve().parents[1] / "examples"
+    files = sorted(root.glob("study_*.toml"))
+    assert len(files) >= 2
+    for f in files:
+        prep = prepare_study(f)
+        assert prep.cases and prep.study.n_cases() == len(prep.cases)
