@@ -205,3 +205,29 @@ def test_killed_worker_loses_and_duplicates_no_row(tmp_path):
     assert killed and killed[0] not in after  # the worker really died (the nanny restarted it)
     assert res.table["case_id"].is_unique and len(res.table) == 18
     pd.testing.assert_frame_equal(res.table, serial)
+
+
+def test_serial_run_needs_no_dask(tmp_path):
+    """A serial study runs with dask made unimportable (it is an optional extra)."""
+    import subprocess
+    import textwrap
+
+    code = textwrap.dedent(f"""
+        import sys
+        class Block:
+            def find_spec(self, name, path=None, target=None):
+                if name.split(".")[0] in ("dask", "distributed"):
+                    raise ImportError("dask is blocked for this test")
+        sys.meta_path.insert(0, Block())
+        from roverimpact.studies import RigidBodyEvaluator, run_study
+        study = {{"name": "rb", "base": {{"model": {{"name": "rigid_body"}}}},
+                  "grid": {{"obstacle.beta_deg": [30.0, 60.0]}}}}
+        res = run_study(study, {str(tmp_path / "o")!r})
+        assert len(res.table) == 2
+        assert not any(m.split(".")[0] in ("dask", "distributed") for m in sys.modules)
+        print("ok")
+    """)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().endswith("ok")

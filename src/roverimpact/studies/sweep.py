@@ -160,15 +160,19 @@ def _need_dask() -> None:
 
 def _versions() -> dict[str, str]:
     import platform
+    from importlib import metadata
 
     from .._version import __version__
 
     out = {"roverimpact": __version__, "python": platform.python_version()}
-    for mod in ("numpy", "scipy", "pandas", "pyarrow", "pinocchio", "matplotlib", "dask"):
+    # distribution metadata only: nothing is imported (a serial run never imports dask)
+    for name, dist in (("numpy", "numpy"), ("scipy", "scipy"), ("pandas", "pandas"),
+                       ("pyarrow", "pyarrow"), ("pinocchio", "pin"),
+                       ("matplotlib", "matplotlib"), ("dask", "dask"),
+                       ("distributed", "distributed")):
         try:
-            m = __import__(mod)
-            out[mod] = str(getattr(m, "__version__", "?"))
-        except ImportError:
+            out[name] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
             pass
     return out
 
