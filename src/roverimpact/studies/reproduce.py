@@ -18,6 +18,7 @@ from importlib import resources
 from pathlib import Path
 
 from .._io import read_toml
+from ..exceptions import ConfigError
 from .config import study_from_dict
 from .evaluate import simulator_available
 from .sweep import run_study
@@ -115,10 +116,25 @@ def reproduce(
         if not simulated:
             data["simulate"] = False
         studies.append((stem, study_from_dict(data, where=f"built-in study {stem}")))
-    for stem, study in studies:
-        cb = (lambda d, t, s=stem: progress(s, d, t)) if progress else None
-        run_study(study, out_dir / stem, overwrite=True, workers=workers, scheduler=scheduler,
-                  progress=cb)
+    cluster = None
+    if workers is not None and scheduler is None:
+        if workers < 1:
+            raise ConfigError(f"--workers must be >= 1, got {workers}")
+        try:
+            from dask.distributed import LocalCluster
+        except ImportError:
+            raise ConfigError("--workers needs Dask: pip install 'roverimpact[dask]'") from None
+        # one local cluster for all studies
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None)
+        scheduler = cluster.scheduler_address
+    try:
+        for stem, study in studies:
+            cb = (lambda d, t, s=stem: progress(s, d, t)) if progress else None
+            run_study(study, out_dir / stem, overwrite=True, scheduler=scheduler, progress=cb)
+    finally:
+        if cluster is not None:
+            cluster.close()
     intro = INTRO + (" <b>Quick smoke run</b> (5 points per study)." if quick else "")
     if not simulated:
         intro += (" <b>F<sub>max</sub> is unavailable: the compliant-contact simulator is "
