@@ -231,3 +231,31 @@ def test_serial_run_needs_no_dask(tmp_path):
                          timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip().endswith("ok")
+
+
+def test_batched_rover_evaluator_equals_one_build_per_case():
+    """Grouped evaluation (one build per configuration, stacked sweep_energy over beta,
+    one peak_force call per law) equals building every case on its own."""
+    from roverimpact.contact import get_law, peak_force
+    from roverimpact.studies import ScenarioEvaluator, evaluate_case
+
+    base = {
+        "model": {"name": "rocker_bogie", "preset": "prototype"},
+        "velocity": {"u": 0.3},
+        "obstacle": {"wheel": "left_front", "beta_deg": 60.0},
+        "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 1.0},
+    }
+    ovs = [{"obstacle.beta_deg": b, "model.params.chassis_com_above_pivot": h,
+            "contact_law.k": k}
+           for h in (0.05, 0.15) for k in (1e6, 1e7) for b in (15.0, 40.0, 65.0, 90.0)]
+    got = ScenarioEvaluator().evaluate(base, ovs)
+    for i, ov in enumerate(ovs):
+        one = evaluate_case(apply_overrides(base, ov))
+        for col in ("T_c_minus", "m_eff", "v_n", "F_pred"):
+            assert got[col][i] == pytest.approx(one[col], rel=1e-9), (col, ov)
+        law = get_law("hunt-crossley", k=ov["contact_law.k"], e=1.0)
+        assert got["F_pred"][i] == pytest.approx(
+            float(peak_force(one["T_c_minus"], one["v_n"], law)), rel=1e-12)
+    # the contact stiffness changes F_pred, not the indicator
+    assert got["T_c_minus"][0] == pytest.approx(got["T_c_minus"][4], rel=1e-12)
+    assert got["F_pred"][0] < got["F_pred"][4]
