@@ -57,6 +57,15 @@ def test_quick_outputs_exist_and_are_well_formed(quick):
         assert b"<svg" in (d / "figure.svg").read_bytes()[:2000]
 
 
+def test_simulator_and_indicator_see_the_same_impact(quick):
+    """The simulator's own T_c^- at its pre-impact state (same constraint choice, the
+    obstacle in front of the scenario's wheel only) equals the indicator's T_c^-: the two
+    columns describe one event. (Differences come only from the settled pre-impact state.)"""
+    for stem in BUILTIN_STUDIES:
+        t = pd.read_parquet(quick / stem / "results.parquet")
+        np.testing.assert_allclose(t["T_c_minus_sim"], t["T_c_minus"], rtol=1e-3, err_msg=stem)
+
+
 def test_indicator_tracks_the_simulation_on_the_quick_beta_sweeps(quick):
     # 5 angles; Spearman 0.9 = one swapped pair: at 70 and 90 deg F_max differs by 0.4 %
     # (the force saturates near a wall), T_c^- by 10 %. Deterministic, so the bound is exact.

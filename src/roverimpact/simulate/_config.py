@@ -105,6 +105,10 @@ class SimulationConfig(_Strict):
         is ``n = (-sin beta, 0, cos beta)``; 90 is a vertical wall facing the rover.
     obstacle_height : float
         Height of the obstacle face above the ground [m]; contacts above it are ignored.
+    obstacle_wheels : list of str or None
+        Names of the wheels the obstacle is in front of (a rock in the path of one wheel,
+        as in DETC2015-47747, Fig. 1); ``None``: a face across the whole path, every wheel
+        can touch it. A scenario's ``obstacle.wheel`` sets it.
     ground : bool
         Whether the wheels touch the ground plane z = 0.
     settle : bool
@@ -132,6 +136,7 @@ class SimulationConfig(_Strict):
     obstacle_x: float | None = None
     beta_deg: float = Field(90.0, allow_inf_nan=False)
     obstacle_height: float = Field(math.inf, gt=0.0)
+    obstacle_wheels: list[str] | None = None
     ground: bool = True
     settle: bool = True
     obstacle: ContactSpec = ContactSpec()

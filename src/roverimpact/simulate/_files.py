@@ -47,6 +47,41 @@ def build_model(spec: dict, base_dir: Path, where: str):
     raise ConfigError(f"{where}: unknown model.name {name!r}; use 'rover2d' or 'rocker_bogie'")
 
 
+def simulation_settings(raw: dict, where: str = "simulation config") -> dict:
+    """The ``[simulation]`` table completed from the scenario tables.
+
+    ``beta_deg`` and ``obstacle_wheels`` (the obstacle is in front of ``obstacle.wheel``
+    only) from ``[obstacle]``, the obstacle law from ``[contact_law]``, ``speed``
+    from ``[velocity] u`` and the indicator's ``ground``, ``locked`` (``[contacts]``) and
+    ``constraints``, so that the simulator's T_c^- uses the scenario's constraint choice.
+    Values given in ``[simulation]`` win. Used for scenario files and for study cases.
+    """
+    if not isinstance(raw.get("simulation", {}), dict):
+        raise ConfigError(f"{where}: [simulation] must be a table")
+    sim = dict(raw.get("simulation") or {})
+    obstacle = raw.get("obstacle") or {}
+    if obstacle.get("beta_deg") is not None and "beta_deg" not in sim:
+        sim["beta_deg"] = obstacle["beta_deg"]
+    if obstacle.get("wheel") is not None and "obstacle_wheels" not in sim:
+        sim["obstacle_wheels"] = [obstacle["wheel"]]  # the obstacle is in that wheel's path
+    law = raw.get("contact_law")
+    if law is not None and "obstacle" not in sim:
+        sim["obstacle"] = {("law" if k == "name" else k): v for k, v in law.items()
+                           if v is not None}
+    contacts = raw.get("contacts") or {}
+    ind = dict(sim.get("indicator", {}))
+    for key in ("ground", "locked"):
+        if key in contacts and key not in ind:
+            ind[key] = contacts[key]
+    if "constraints" in raw and "constraints" not in ind:
+        ind["constraints"] = raw["constraints"]
+    if ind:
+        sim["indicator"] = ind
+    if "u" in (raw.get("velocity") or {}) and "speed" not in sim:
+        sim["speed"] = raw["velocity"]["u"]
+    return sim
+
+
 def simulation_from_dict(raw: dict, *, where: str = "simulation config",
                          base_dir: Path | None = None):
     """``(model, SimulationConfig)`` from a parsed scenario/simulation dict."""
@@ -56,27 +91,7 @@ def simulation_from_dict(raw: dict, *, where: str = "simulation config",
                           f"{sorted(_SCENARIO_TABLES)}")
     if "model" not in raw:
         raise ConfigError(f"{where}: missing [model] table (e.g. name = \"rover2d\")")
-    sim = dict(raw.get("simulation", {}))
-    if not isinstance(sim, dict):
-        raise ConfigError(f"{where}: [simulation] must be a table")
-    obstacle = raw.get("obstacle", {})
-    if "beta_deg" in obstacle and "beta_deg" not in sim:
-        sim["beta_deg"] = obstacle["beta_deg"]
-    law = raw.get("contact_law")
-    if law is not None and "obstacle" not in sim:
-        sim["obstacle"] = {("law" if k == "name" else k): v for k, v in law.items()}
-    contacts = raw.get("contacts", {})
-    ind = dict(sim.get("indicator", {}))
-    for key in ("ground", "locked"):
-        if key in contacts and key not in ind:
-            ind[key] = contacts[key]
-    if "constraints" in raw and "constraints" not in ind:
-        ind["constraints"] = raw["constraints"]
-    if ind:
-        sim["indicator"] = ind
-    if "u" in raw.get("velocity", {}) and "speed" not in sim:
-        sim["speed"] = raw["velocity"]["u"]
-    cfg = SimulationConfig.from_dict(sim, where)
+    cfg = SimulationConfig.from_dict(simulation_settings(raw, where), where)
     model = build_model(raw["model"], base_dir or Path.cwd(), where)
     return model, cfg
 

@@ -86,9 +86,17 @@ def build_system(mbm, cfg: SimulationConfig, *, law=None, ground_law=None) -> Co
     if cfg.ground:
         planes.append(Plane("ground", np.array([0.0, 0.0, 1.0]), np.zeros(3),
                             _law(cfg.ground_contact, ground_law), cfg.ground_contact.v_ref))
+    wheels = None
+    if cfg.obstacle_wheels is not None:
+        names = [w.name for w in mbm.wheels]
+        unknown = sorted(set(cfg.obstacle_wheels) - set(names))
+        if unknown or not cfg.obstacle_wheels:
+            raise ConfigError(f"obstacle_wheels: unknown or empty wheel list {unknown or []}; "
+                              f"wheels of this model: {names}")
+        wheels = np.array([n in cfg.obstacle_wheels for n in names])
     planes.append(Plane("obstacle", _obstacle_normal(cfg.beta), np.array([_FAR, 0.0, 0.0]),
                         _law(cfg.obstacle, law), cfg.obstacle.v_ref,
-                        z_max=cfg.obstacle_height))
+                        z_max=cfg.obstacle_height, wheels=wheels))
     return ContactSystem(
         model=model,
         wheel_frames=[w.frame for w in mbm.wheels],

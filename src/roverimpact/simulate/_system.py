@@ -44,8 +44,9 @@ class Plane:
     """A contact plane ``n . (x - p0) = 0`` with outward unit normal ``n``.
 
     ``z_max`` bounds a half-plane face (obstacle of finite height): contact points above
-    it do not touch. ``law`` is a contact law object, ``v_i`` the penetration velocity
-    passed to it.
+    it do not touch. ``wheels`` (a bool per wheel, ``None`` for all) says which wheels
+    can touch it: an obstacle in front of some wheels only. ``law`` is a contact law
+    object, ``v_i`` the penetration velocity passed to it.
     """
 
     name: str
@@ -54,6 +55,7 @@ class Plane:
     law: object
     v_i: float
     z_max: float = np.inf
+    wheels: np.ndarray | None = None
 
 
 @dataclass
@@ -120,7 +122,10 @@ class ContactSystem:
         self.N = np.array([p.n for p in self.planes]).reshape(-1, 3)
         self.offsets = np.array([p.n @ p.p0 for p in self.planes])
         self.z_max = np.array([p.z_max for p in self.planes])
-        self.bounded = bool(np.isfinite(self.z_max).any())
+        nw = len(self.radii)
+        self.touch = np.array([np.ones(nw, bool) if p.wheels is None
+                               else np.asarray(p.wheels, bool) for p in self.planes])
+        self.bounded = bool(np.isfinite(self.z_max).any() or not self.touch.all())
         # contact point = centre - r n: J_p = J_lin - skew(-r n) J_ang = J_lin + r skew(n) J_ang
         self.rSn = self.radii[None, :, None, None] * _skew(self.N)[:, None, :, :]
 
@@ -161,9 +166,10 @@ class ContactSystem:
         g = self.N @ c.T - self.offsets[:, None] - self.radii[None, :]   # (np, nw)
         if not self.bounded:
             return g
-        # contact points above the top of a finite face do not touch it
+        # contact points above the top of a finite face, and wheels the face is not in
+        # front of, do not touch it
         z_cp = c[None, :, 2] - self.radii[None, :] * self.N[:, None, 2]
-        return np.where(z_cp <= self.z_max[:, None], g, np.inf)
+        return np.where((z_cp <= self.z_max[:, None]) & self.touch, g, np.inf)
 
     # ------------------------------------------------------------------ contact forces
     def contacts(self, q, v, v_i=None) -> ContactState:

@@ -118,21 +118,21 @@ def _peak_force(T_c_minus, v_n, law) -> np.ndarray:
 def simulation_config(sc, sim: Mapping[str, Any]):
     """The :class:`~roverimpact.simulate.SimulationConfig` of a study scenario.
 
-    ``speed`` defaults to ``velocity.u``, ``beta_deg`` to ``obstacle.beta_deg`` and the
-    obstacle contact law to the scenario's ``[contact_law]``.
+    Completed from the scenario as for a scenario file
+    (:func:`roverimpact.simulate._files.simulation_settings`): ``speed`` from
+    ``velocity.u``, ``beta_deg`` from ``obstacle.beta_deg``, the obstacle law from
+    ``[contact_law]``, and the simulator's T_c^- with the scenario's constraint choice.
     """
     from ..simulate import SimulationConfig
+    from ..simulate._files import simulation_settings
 
-    data = dict(sim)
-    if "speed" not in data and sc.velocity.u > 0:
-        data["speed"] = sc.velocity.u
-    if "beta_deg" not in data and sc.obstacle.beta_deg is not None:
-        data["beta_deg"] = sc.obstacle.beta_deg
-    if "obstacle" not in data and sc.contact_law is not None:
-        law = sc.contact_law
-        data["obstacle"] = {k: v for k, v in (("law", law.name), ("k", law.k), ("e", law.e),
-                                              ("n", law.n)) if v is not None}
-    return SimulationConfig.from_dict(data, source="study scenario [simulation]")
+    raw = sc.model_dump(include={"obstacle", "contact_law", "contacts", "constraints",
+                                 "velocity"})
+    if not raw["velocity"].get("u"):
+        raw["velocity"].pop("u", None)  # unset speed: the simulation table must give it
+    raw["simulation"] = dict(sim)
+    where = "study scenario [simulation]"
+    return SimulationConfig.from_dict(simulation_settings(raw, where), source=where)
 
 
 def _simulate_one(sc, sim: Mapping[str, Any], model) -> dict[str, Any]:
