@@ -94,6 +94,8 @@ def test_cli_version(capsys):
         ("M = [[-1.0]]\nA = [[1.0]]\nv = [1.0]\n", ".toml", "not positive definite"),
         ("M = [[1.0, 2.0], [1.0]]\nA = [[1.0]]\nv = [1.0]\n", ".toml", "rectangular"),
         ("hello", ".npz", "not a readable .npz"),
+        ("M = [[1.0]]\nA = [[1.0]]\nv = [-1.0]\nrestitution = 1.5\n", ".toml",
+         "restitution must lie in [0, 1]"),  # brackets survive the rich console
         ("x", ".csv", "unknown file type"),
     ],
 )

@@ -18,6 +18,8 @@ from ._app import app, err_console
 
 # Command modules register themselves on ``app`` when imported.
 from . import _partition  # noqa: F401  isort: skip
+from . import _energy  # noqa: F401  isort: skip
+from . import _draw  # noqa: F401  isort: skip
 from . import _simulate  # noqa: F401  isort: skip
 from . import _experiment  # noqa: F401  isort: skip
 from . import _safety  # noqa: F401  isort: skip
@@ -25,8 +27,12 @@ from . import _contact  # noqa: F401  isort: skip
 from . import _study  # noqa: F401  isort: skip
 from . import _trust  # noqa: F401  isort: skip
 from . import _optimize  # noqa: F401  isort: skip
-from . import _energy  # noqa: F401  isort: skip
-from . import _draw  # noqa: F401  isort: skip
+
+
+def _print_error(exc: BaseException) -> None:
+    """One red 'error:' prefix, then the message verbatim (no rich markup: brackets stay)."""
+    err_console.print("[bold red]error:[/bold red] ", end="")
+    err_console.print(str(exc), markup=False, highlight=False)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -42,13 +48,13 @@ def main(argv: list[str] | None = None) -> int:
         if hasattr(exc, "show"):
             exc.show()
         else:  # pragma: no cover
-            err_console.print(f"[bold red]error:[/bold red] {exc}", highlight=False)
+            _print_error(exc)
         return int(getattr(exc, "exit_code", 2))
     except RoverImpactError as exc:
-        err_console.print(f"[bold red]error:[/bold red] {exc}", highlight=False)
+        _print_error(exc)
         return 2
     except (OSError, UnicodeDecodeError) as exc:
-        err_console.print(f"[bold red]error:[/bold red] {exc}", highlight=False)
+        _print_error(exc)
         return 2
     except KeyboardInterrupt:
         err_console.print("[red]interrupted[/red]")
