@@ -15,6 +15,21 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 
+def validation_message(exc, where: str, what: str = "") -> str:
+    """One line from a pydantic ``ValidationError``: ``where: what loc: msg; loc: msg``.
+
+    ``extra_forbidden`` errors read "unknown key", so a misspelt option names itself.
+    """
+    parts = []
+    for err in exc.errors():
+        loc = ".".join(str(x) for x in err["loc"]) or "(top level)"
+        msg = err["msg"].removeprefix("Value error, ")
+        if err["type"] == "extra_forbidden":
+            msg = "unknown key"
+        parts.append(f"{loc}: {msg}")
+    return f"{where}: {what}" + "; ".join(parts)
+
+
 def read_toml(path: str | Path) -> dict:
     """Read a TOML file, turning syntax errors into :class:`ConfigError`."""
     path = Path(path)

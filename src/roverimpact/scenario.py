@@ -43,6 +43,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, ValidationError, field_validator, model_validator
 
+from ._io import validation_message
 from .energy import partition
 from .exceptions import ConfigError, InputError
 
@@ -207,17 +208,6 @@ class Scenario(_Strict):
         return self.model_copy(update={"obstacle": obs})
 
 
-def _format_validation(exc: ValidationError, where: str) -> str:
-    parts = []
-    for err in exc.errors():
-        loc = ".".join(str(x) for x in err["loc"]) or "(top level)"
-        msg = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            msg = "unknown key"
-        parts.append(f"{loc}: {msg}")
-    return f"{where}: invalid scenario: " + "; ".join(parts)
-
-
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario TOML file.
 
@@ -250,7 +240,7 @@ def scenario_from_dict(raw: dict, *, where: str = "scenario") -> Scenario:
     try:
         return Scenario.model_validate(raw)
     except ValidationError as exc:
-        raise ConfigError(_format_validation(exc, where)) from None
+        raise ConfigError(validation_message(exc, where, "invalid scenario: ")) from None
 
 
 # ----------------------------------------------------------------------------------------

@@ -61,6 +61,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .._io import validation_message
 from ..exceptions import ConfigError, RoverImpactError, SolverError
 
 __all__ = [
@@ -127,17 +128,6 @@ class OptimizeFile(_Strict):
         return self
 
 
-def _fmt(exc: ValidationError, where: str) -> str:
-    parts = []
-    for err in exc.errors():
-        loc = ".".join(str(x) for x in err["loc"]) or "(top level)"
-        msg = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            msg = "unknown key"
-        parts.append(f"{loc}: {msg}")
-    return f"{where}: " + "; ".join(parts)
-
-
 @dataclass
 class OptimizeProblem:
     """A validated optimisation problem: base scenario, simulation options, spec."""
@@ -177,7 +167,7 @@ def load_optimization(source: str | Path | Mapping[str, Any]) -> OptimizeProblem
     try:
         f = OptimizeFile.model_validate(raw)
     except ValidationError as exc:
-        raise ConfigError(_fmt(exc, where)) from None
+        raise ConfigError(validation_message(exc, where)) from None
     scn = dict(f.scenario)
     if f.optimize.speed is not None:
         scn["velocity"] = {**dict(scn.get("velocity") or {}), "u": f.optimize.speed}
