@@ -2,8 +2,18 @@
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import typer
 from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
 from .._version import __version__
 
@@ -34,3 +44,29 @@ def _root(
     ),
 ) -> None:
     """Impact analysis of planetary rovers and other multibody systems."""
+
+
+@contextmanager
+def progress_bar(label: str, unit: str = "cases"):
+    """A rich progress bar with ETA, shown from the first report on (so that a study
+    rejected before any work prints only its error); yields ``progress(done, total)``."""
+    bar = Progress(
+        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+        TextColumn(unit), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+        console=console, transient=False,
+    )
+    task = bar.add_task(label, total=None)
+    started = False
+
+    def update(done: int, total: int) -> None:
+        nonlocal started
+        if not started:
+            bar.start()
+            started = True
+        bar.update(task, completed=done, total=total)
+
+    try:
+        yield update
+    finally:
+        if started:
+            bar.stop()

@@ -5,47 +5,12 @@ Thin: parses, calls :mod:`roverimpact.studies` / :mod:`roverimpact.report`, prin
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from pathlib import Path
 
 import typer
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
 
-from ._app import app, console
-
-
-@contextmanager
-def _progress_bar(label: str):
-    """A rich progress bar with ETA, shown from the first report on (so that a study
-    rejected before any work prints only its error); yields ``progress(done, total)``."""
-    bar = Progress(
-        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-        TextColumn("cases"), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
-        console=console, transient=False,
-    )
-    task = bar.add_task(label, total=None)
-    started = False
-
-    def update(done: int, total: int) -> None:
-        nonlocal started
-        if not started:
-            bar.start()
-            started = True
-        bar.update(task, completed=done, total=total)
-
-    try:
-        yield update
-    finally:
-        if started:
-            bar.stop()
+from ._app import app, console, progress_bar
 
 
 def _print_stats(sections) -> None:
@@ -77,7 +42,7 @@ def sweep_cmd(
     """Run a study: every case's T_c^-, effective mass, predicted (and simulated) peak force."""
     from ..studies.sweep import run_study
 
-    with _progress_bar(study.stem) as update:
+    with progress_bar(study.stem) as update:
         res = run_study(study, out, resume=resume, overwrite=overwrite, csv=csv,
                         workers=workers, scheduler=scheduler, chunk_size=chunk_size,
                         progress=update)
@@ -122,7 +87,7 @@ def reproduce_cmd(
     """Reproduce the studies of DETC2014-35554 (Figs. 2, 3) and DETC2015-47747 (Fig. 2)."""
     from ..studies.reproduce import BUILTIN_STUDIES, reproduce
 
-    with _progress_bar("reproduce") as update:
+    with progress_bar("reproduce") as update:
         res = reproduce(out, quick=quick, workers=workers, scheduler=scheduler, n_boot=n_boot,
                         progress=lambda name, d, t: update(d, t))
     _print_stats(res.sections)

@@ -8,10 +8,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ._app import app, console
+from ._app import app, console, progress_bar
 
 
 def _floats(text: str | None, what: str) -> list[float] | None:
@@ -43,24 +42,9 @@ def trust_cmd(
 
     grid = grid_from_options(laws.split(",") if laws else None, _floats(k, "k"),
                              _floats(e, "e"), quick=quick)
-    bar = Progress(TextColumn("[bold]trust map"), BarColumn(), MofNCompleteColumn(),
-                   TextColumn("runs"), TimeElapsedColumn(), console=console)
-    task = bar.add_task("trust", total=None)
-    started = False
-
-    def update(done: int, total: int) -> None:
-        nonlocal started
-        if not started:
-            bar.start()
-            started = True
-        bar.update(task, completed=done, total=total)
-
-    try:
+    with progress_bar("trust map", unit="runs") as update:
         res = trust_map(study, out, grid=grid, quick=quick, workers=workers, resume=resume,
                         overwrite=overwrite, progress=update)
-    finally:
-        if started:
-            bar.stop()
     tab = Table(title=f"Kendall tau of T_c^- vs F_max ({res.n_configs} configurations)")
     for col in ("law", "k [N/m^n]", "e", "tau", "Spearman", "n", "failed"):
         tab.add_column(col, justify="left" if col == "law" else "right")
