@@ -3,10 +3,11 @@
     python examples/experiment/make_synthetic.py
 
 Writes trial_*.csv (2 load cells, 5 kHz, gains 250 and 240 N/V, offset drift, white
-noise, 16-bit quantisation), trials.toml and truth.csv (the true peak force, impulse and
-duration of every trial) next to this script. The true force comes from the STAND-IN
-impact model roverimpact.studies.experiment.PlanarBodyImpact (a rigid planar body whose
-corner hits an inclined face, Hunt-Crossley contact), not from the rover simulator.
+noise, 16-bit quantisation), trials.toml, rover.toml (the scenario of the model
+comparison: obstacle stiffness 20 % below the data's) and truth.csv (the true peak force,
+impulse and duration of every trial) next to this script. The true force is the obstacle
+normal force simulated by roverimpact.simulate_impact for the built-in 2-D rover
+(roverimpact.studies.experiment.SYNTHETIC_TRUTH), beta = 30..90 deg at 0.3 and 0.5 m/s.
 """
 
 from pathlib import Path

@@ -14,7 +14,7 @@ from ._app import app, console, err_console
 
 @app.command("experiment")
 def experiment_cmd(
-    trials: Path = typer.Argument(..., help="Trials file (TOML): sensors, filter, trials."),
+    trials: Path = typer.Argument(..., help="Trials file (TOML): sensors, filter, trials, model."),
     outdir: Path = typer.Option(Path("experiment_out"), "-o", "--outdir",
                                 help="Directory for tables, plot and a copy of the inputs."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the overlay figure."),
@@ -27,7 +27,7 @@ def experiment_cmd(
     result = run_experiment(cfg, base)
     comparison = None
     if cfg.model is not None and not result.trials.empty:
-        comparison = compare_with_model(result.trials, cfg.model.build())
+        comparison = compare_with_model(result.trials, cfg.model.build(base))
     files = write_outputs(result, outdir, comparison=comparison, trials_path=trials,
                           plot=not no_plot)
 
@@ -43,7 +43,8 @@ def experiment_cmd(
         console.print(tab)
     if comparison is not None:
         s = comparison.stats
-        ct = Table(title="Model comparison (stand-in model: planar body + Hunt-Crossley)")
+        ct = Table(title=f"Model comparison ({cfg.model.scenario}: scenario T_c^- and "
+                           "simulated F_max)")
         for col in ("beta [deg]", "speed [m/s]", "n", "F_peak mean [N]", "T_c^- [J]",
                     "F_max model [N]", "measured/model"):
             ct.add_column(col, justify="right")

@@ -17,10 +17,11 @@ others still run. :func:`compare_with_model` puts the measured peaks next to a m
 agreement (Kendall :math:`\tau`, Spearman :math:`\rho`).
 
 The model is any callable ``model_fn(beta_rad, speed) -> {"T_c_minus": J, "F_max": N}``.
-:class:`PlanarBodyImpact` is a **stand-in** until the rover models and the simulator are
-wired in: a rigid planar body whose corner hits an inclined face, with :math:`T_c^-` from
-the kinetic-energy partition and :math:`F_{max}` from a 1-DOF Hunt-Crossley impact of the
-effective mass, integrated with ``scipy.integrate.solve_ivp``.
+The trials file's ``[model]`` table (``kind = "scenario"``) builds a :class:`ScenarioModel`:
+a scenario TOML file (the rover, its contacts, the obstacle law and a ``[simulation]``
+table) whose obstacle angle and driving speed are set per condition; :math:`T_c^-` comes
+from :mod:`roverimpact.scenario` and :math:`F_{max}` from the compliant-contact simulator
+:mod:`roverimpact.simulate`, both through :func:`roverimpact.studies.evaluate.evaluate_case`.
 """
 
 from __future__ import annotations
@@ -37,7 +38,6 @@ import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from .._io import read_toml
-from ..energy import effective_mass, partition
 from ..exceptions import ConfigError, InputError
 
 __all__ = [
@@ -45,8 +45,8 @@ __all__ = [
     "ExperimentResult",
     "FilterConfig",
     "ModelComparison",
-    "PlanarBodyImpact",
-    "PlanarBodyModelConfig",
+    "ScenarioModel",
+    "ScenarioModelConfig",
     "SensorsConfig",
     "TrialConfig",
     "TrialFailure",
@@ -152,24 +152,19 @@ class TrialConfig(_Strict):
     notes: str = ""
 
 
-class PlanarBodyModelConfig(_Strict):
-    """``[model]`` with ``kind = "planar-body"``: parameters of :class:`PlanarBodyImpact`."""
+class ScenarioModelConfig(_Strict):
+    """``[model]`` with ``kind = "scenario"``: the rover model of the comparison.
 
-    kind: Literal["planar-body"] = "planar-body"
-    mass: float = Field(gt=0, allow_inf_nan=False)
-    inertia: float = Field(gt=0, allow_inf_nan=False)
-    contact_point: tuple[float, float]
-    descent_deg: float = Field(30.0, ge=0, le=90)
-    stiffness: float = Field(gt=0, allow_inf_nan=False)
-    restitution: float = Field(0.8, gt=0, le=1)
-    exponent: float = Field(1.5, gt=0)
+    ``scenario`` is a scenario TOML file (path relative to the trials file) with an
+    optional ``[simulation]`` table; see :class:`ScenarioModel`.
+    """
 
-    def build(self) -> PlanarBodyImpact:
-        return PlanarBodyImpact(
-            mass=self.mass, inertia=self.inertia, contact_point=self.contact_point,
-            descent=math.radians(self.descent_deg), stiffness=self.stiffness,
-            restitution=self.restitution, exponent=self.exponent,
-        )
+    kind: Literal["scenario"]
+    scenario: str
+
+    def build(self, base_dir: str | Path = ".") -> ScenarioModel:
+        """The :class:`ScenarioModel` of ``base_dir / scenario``."""
+        return ScenarioModel.from_file(Path(base_dir) / self.scenario)
 
 
 class TrialsFile(_Strict):
@@ -180,7 +175,7 @@ class TrialsFile(_Strict):
     filter: FilterConfig = FilterConfig()
     detection: DetectionConfig = DetectionConfig()
     trial: list[TrialConfig] = Field(min_length=1)
-    model: PlanarBodyModelConfig | None = None
+    model: ScenarioModelConfig | None = None
     description: str = ""
 
 
@@ -629,99 +624,96 @@ def fit_gain(raw, force):
 # ----------------------------------------------------------------------------------------
 
 
+#: Keys of the scenario's ``[simulation]`` table that each condition sets.
+_PER_CONDITION = ("speed", "beta_deg")
+
+
 @dataclass(frozen=True)
-class PlanarBodyImpact:
-    r"""STAND-IN impact model: a rigid planar body hits an inclined face with one corner.
+class ScenarioModel:
+    r"""The rover model of the comparison: a scenario evaluated at each (beta, speed).
 
-    Until the rover models (:mod:`roverimpact.models`) and the simulator
-    (:mod:`roverimpact.simulate`) are wired into the experiment comparison, this model
-    gives :math:`T_c^-` and :math:`F_{max}` for a face angle :math:`\beta` and a speed.
+    For a condition the scenario gets ``obstacle.beta_deg`` = :math:`\beta` and
+    ``velocity.u`` = speed (the driving speed, m/s); then
 
-    ::
+    - :math:`T_c^-` [J] is the effective kinetic energy of the scenario
+      (:func:`roverimpact.energy_of`, with the scenario's constraint choice),
+    - :math:`F_{max}` [N] is the peak of the summed obstacle normal force of the
+      compliant-contact simulation (:func:`roverimpact.simulate_impact`) configured from
+      the scenario as for ``roverimpact simulate`` (obstacle law from ``[contact_law]``,
+      the rest from ``[simulation]``).
 
-         body (mass m, inertia I about its COM), velocity V (cos g, -sin g), no spin
-            +---------+
-            |   COM   |      contact point r = (r_x, r_z) from the COM
-            +---------o  <-- corner hits the face
-                       \  face with outward normal n = (-cos b, sin b)
-                        \   (b = 0: vertical wall ahead, b = 90 deg: floor)
-
-    Generalized velocity :math:`v = (\dot x, \dot z, \dot\theta)`, :math:`M =
-    \mathrm{diag}(m, m, I)`, impact row :math:`a = [n_x, n_z, r_x n_z - r_z n_x]`
-    (:math:`a v < 0` approaching). :math:`T_c^-` comes from :func:`roverimpact.partition`,
-    :math:`m_{eff} = 1/(a M^{-1} a^T)` from :func:`roverimpact.effective_mass`, and
-    :math:`F_{max}` from the 1-DOF impact :math:`m_{eff}\ddot\delta = -f(\delta,
-    \dot\delta)`, :math:`\delta(0)=0`, :math:`\dot\delta(0) = v_n = -a v`, with the
-    Hunt-Crossley law :math:`f = k\delta^n(1 + \tfrac32(1-e)\dot\delta/v_n)`
-    (:class:`roverimpact.contact.HuntCrossley`) integrated by ``solve_ivp``.
+    Both come from :func:`roverimpact.studies.evaluate.evaluate_case`, the studies' single
+    entry point into the scenario and simulate layers.
 
     Attributes
     ----------
-    mass [kg], inertia [kg m^2], contact_point (r_x, r_z) [m], descent g [rad],
-    stiffness k [N/m^n], restitution e, exponent n.
+    scenario : dict
+        The scenario as read from TOML (with its optional ``simulation`` table).
+    source : str
+        Where it came from (for messages).
     """
 
-    mass: float
-    inertia: float
-    contact_point: tuple[float, float]
-    descent: float
-    stiffness: float
-    restitution: float = 0.8
-    exponent: float = 1.5
+    scenario: dict
+    source: str = "scenario"
 
-    def system(self, beta: float, speed: float):
-        """(M (3,3), a (3,), v (3,)) for face angle ``beta`` [rad] and speed [m/s]."""
-        rx, rz = self.contact_point
-        n = np.array([-math.cos(beta), math.sin(beta)])
-        M = np.diag([self.mass, self.mass, self.inertia])
-        a = np.array([n[0], n[1], rx * n[1] - rz * n[0]])
-        v = speed * np.array([math.cos(self.descent), -math.sin(self.descent), 0.0])
-        return M, a, v
+    @classmethod
+    def from_file(cls, path: str | Path) -> ScenarioModel:
+        """Read a scenario TOML file; a relative ``model.file`` is taken from its folder.
 
-    def _law(self):
-        from ..contact import HuntCrossley
+        Raises
+        ------
+        ConfigError
+            Missing or malformed file, invalid scenario, or a ``[simulation]`` table that
+            sets ``speed`` or ``beta_deg`` (each condition sets them).
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise ConfigError(f"{path}: no such scenario file (model.scenario of the trials "
+                              "file, relative to the trials file)")
+        return cls.from_dict(read_toml(path), source=str(path), base_dir=path.parent)
 
-        return HuntCrossley(k=self.stiffness, e=self.restitution, n=self.exponent)
+    @classmethod
+    def from_dict(cls, raw: dict, *, source: str = "scenario",
+                  base_dir: str | Path | None = None) -> ScenarioModel:
+        """Validate a scenario dict (schema and simulation settings; the model is built
+        on the first call)."""
+        from .evaluate import ScenarioEvaluator
 
-    def force_history(self, beta: float, speed: float, *, n_eval: int = 4000):
-        """Contact force of the 1-DOF impact: ``(t (n,), F (n,))`` from first touch to
-        separation, plus ``info`` dict (m_eff, v_n, T_c_minus)."""
-        from scipy.integrate import solve_ivp
+        raw = dict(raw)
+        sim = raw.get("simulation") or {}
+        clash = sorted(set(_PER_CONDITION) & set(sim)) if isinstance(sim, dict) else []
+        if clash:
+            raise ConfigError(f"{source}: [simulation] must not set {clash}: the speed and "
+                              "beta of every trial are used")
+        model = raw.get("model")
+        if isinstance(model, dict) and isinstance(model.get("file"), str) and base_dir:
+            f = model["file"]
+            if "://" not in f and not Path(f).is_absolute():
+                raw["model"] = model | {"file": str(Path(base_dir) / f)}
+        out = cls(raw, source)
+        try:
+            ScenarioEvaluator().validate(out.case(math.radians(45.0), 0.5))
+        except ConfigError as exc:
+            raise ConfigError(f"{source}: {exc}") from None
+        return out
 
-        M, a, v = self.system(beta, speed)
-        v_n = float(-a @ v)
-        if v_n <= 0:
-            raise InputError(f"beta = {math.degrees(beta):.3g} deg: the body does not approach "
-                             "the face (normal speed <= 0)")
-        m_eff = float(effective_mass(M, a))
-        law = self._law()
+    def case(self, beta: float, speed: float) -> dict:
+        """The scenario dict of one condition (``beta`` [rad], ``speed`` [m/s])."""
+        from .config import apply_overrides
 
-        def rhs(_t, y):
-            f = max(float(law.force(y[0], y[1], v_n)), 0.0)
-            return [y[1], -f / m_eff]
-
-        def separated(_t, y):
-            return y[0]
-
-        separated.terminal = True
-        separated.direction = -1
-        # elastic closed form gives the scale of the contact time
-        dmax = (self.exponent + 1) * m_eff * v_n**2 / (2 * self.stiffness)
-        dmax = dmax ** (1 / (self.exponent + 1))
-        t_scale = 10 * dmax / v_n
-        sol = solve_ivp(rhs, (0.0, t_scale), [0.0, v_n], events=separated, dense_output=True,
-                        rtol=1e-10, atol=[1e-12 * dmax, 1e-12 * v_n], max_step=t_scale / 200)
-        t_end = float(sol.t_events[0][0]) if sol.t_events[0].size else float(sol.t[-1])
-        t = np.linspace(0.0, t_end, n_eval)
-        y = sol.sol(t)
-        F = np.maximum(law.force(np.maximum(y[0], 0), y[1], v_n), 0.0)
-        T_c = float(partition(M, a, v, want_velocities=False).T_c)
-        return t, F, {"m_eff": m_eff, "v_n": v_n, "T_c_minus": T_c}
+        return apply_overrides(self.scenario, {
+            "obstacle.beta_deg": round(math.degrees(beta), 9), "obstacle.normal": None,
+            "velocity.u": float(speed)})
 
     def __call__(self, beta: float, speed: float) -> dict:
-        """``{"T_c_minus": J, "F_max": N, "m_eff": kg, "v_n": m/s}`` for ``beta`` [rad]."""
-        _, F, info = self.force_history(beta, speed)
-        return info | {"F_max": float(F.max())}
+        """``{"T_c_minus": J, "F_max": N, "m_eff": kg, "v_n": m/s, "contact_duration": s,
+        "sim_error": str}`` for ``beta`` [rad] and ``speed`` [m/s]; F_max is NaN and
+        ``sim_error`` says why if the simulation failed."""
+        from .evaluate import evaluate_case
+
+        out = evaluate_case(self.case(beta, speed), simulate=True)
+        keys = ("T_c_minus", "F_max", "m_eff", "v_n", "contact_duration", "sim_error")
+        return {k: out[k] for k in keys}
 
 
 @dataclass
@@ -732,7 +724,8 @@ class ModelComparison:
     ----------
     table : pandas.DataFrame
         One row per condition (beta, speed): ``n``, ``F_peak_mean``, ``F_peak_std``,
-        ``T_c_minus``, ``F_max`` (model) and ``F_ratio`` = measured / model.
+        ``T_c_minus``, ``F_max`` (model), ``F_ratio`` = measured / model and any other
+        scalar the model returns (e.g. ``m_eff``, ``v_n``, ``sim_error``).
     stats : dict
         ``kendall_tau_Tc``, ``kendall_p_Tc``, ``spearman_rho_Tc``, ``spearman_p_Tc`` (measured
         peak vs model T_c^-) and the same with suffix ``_Fmax`` (vs model F_max).
@@ -753,13 +746,15 @@ def compare_with_model(trials_df: pd.DataFrame, model_fn: Callable[[float, float
         :attr:`ExperimentResult.trials`). Repeats are averaged per (beta, speed).
     model_fn : callable
         ``model_fn(beta_rad, speed) -> {"T_c_minus": ..., "F_max": ...}`` (SI units), e.g.
-        a :class:`PlanarBodyImpact` or a wrapper around the rover simulator.
+        a :class:`ScenarioModel` (the rover scenario and simulator). Other keys of the
+        dict become columns of the table.
 
     Returns
     -------
     ModelComparison
-        Kendall tau and Spearman rho (``scipy.stats``) over the conditions; NaN with fewer
-        than 3 conditions or a constant column.
+        Kendall tau and Spearman rho (``scipy.stats``) over the conditions where the
+        model value is finite (``n_conditions_Tc``, ``n_conditions_Fmax`` count them);
+        NaN with fewer than 3 such conditions or a constant column.
     """
     from scipy.stats import kendalltau, spearmanr
 
@@ -773,19 +768,25 @@ def compare_with_model(trials_df: pd.DataFrame, model_fn: Callable[[float, float
     for beta_deg, speed in zip(table["beta_deg"], table["speed"], strict=True):
         res = model_fn(math.radians(beta_deg), float(speed))
         try:
-            out.append((float(res["T_c_minus"]), float(res["F_max"])))
+            out.append({"T_c_minus": float(res["T_c_minus"]), "F_max": float(res["F_max"])}
+                       | {k: v for k, v in res.items() if k not in ("T_c_minus", "F_max")})
         except (KeyError, TypeError):
             raise InputError("model_fn must return a dict with keys 'T_c_minus' and 'F_max'"
                              ) from None
-    table["T_c_minus"] = [o[0] for o in out]
-    table["F_max"] = [o[1] for o in out]
+    model_cols = pd.DataFrame(out)
+    table["T_c_minus"] = model_cols["T_c_minus"].to_numpy()
+    table["F_max"] = model_cols["F_max"].to_numpy()
     table["F_ratio"] = table["F_peak_mean"] / table["F_max"]
-    stats: dict = {"n_conditions": len(table)}
+    for col in model_cols.columns.drop(["T_c_minus", "F_max"]):
+        table[col] = model_cols[col].to_numpy()
+    stats: dict = {}
     for key, col in (("Tc", "T_c_minus"), ("Fmax", "F_max")):
-        constant = table["F_peak_mean"].nunique() < 2 or table[col].nunique() < 2
-        if len(table) >= 3 and not constant:
-            kt = kendalltau(table["F_peak_mean"], table[col])
-            sr = spearmanr(table["F_peak_mean"], table[col])
+        ok = table[np.isfinite(table[col].to_numpy(float))]
+        stats[f"n_conditions_{key}"] = len(ok)
+        constant = ok["F_peak_mean"].nunique() < 2 or ok[col].nunique() < 2
+        if len(ok) >= 3 and not constant:
+            kt = kendalltau(ok["F_peak_mean"], ok[col])
+            sr = spearmanr(ok["F_peak_mean"], ok[col])
             stats |= {f"kendall_tau_{key}": float(kt.statistic),
                       f"kendall_p_{key}": float(kt.pvalue),
                       f"spearman_rho_{key}": float(sr.statistic),
@@ -793,6 +794,7 @@ def compare_with_model(trials_df: pd.DataFrame, model_fn: Callable[[float, float
         else:
             stats |= {f"{s}_{key}": math.nan for s in
                       ("kendall_tau", "kendall_p", "spearman_rho", "spearman_p")}
+    stats = {"n_conditions": len(table)} | stats
     return ModelComparison(table, stats)
 
 
@@ -882,6 +884,11 @@ def write_outputs(result: ExperimentResult, outdir, *, comparison: ModelComparis
         dst = out / ("inputs_" + Path(trials_path).name)
         shutil.copyfile(trials_path, dst)
         files["inputs"] = dst
+        if result.config.model is not None:
+            scn = result.base_dir / result.config.model.scenario
+            if scn.is_file():
+                files["inputs_model"] = out / ("inputs_" + scn.name)
+                shutil.copyfile(scn, files["inputs_model"])
     if plot and not result.trials.empty:
         files["plot"] = plot_overlay(result.trials, comparison, out / "overlay.png")
     return files
@@ -891,38 +898,71 @@ def write_outputs(result: ExperimentResult, outdir, *, comparison: ModelComparis
 # Synthetic data set
 # ----------------------------------------------------------------------------------------
 
-#: The "true" system of the shipped synthetic data set (a :class:`PlanarBodyImpact`).
-SYNTHETIC_TRUTH = {"mass": 20.0, "inertia": 1.0, "contact_point": (0.35, -0.15),
-                   "descent_deg": 30.0, "stiffness": 1.0e7, "restitution": 0.8}
+#: The "true" system of the shipped synthetic data set: the built-in 2-D rover (rigid
+#: suspension) whose front wheel hits an obstacle face, Hunt-Crossley contact, simulated by
+#: :func:`roverimpact.simulate_impact`. ``obstacle.beta_deg`` and ``velocity.u`` are set per
+#: trial.
+SYNTHETIC_TRUTH = {
+    "description": "built-in 2-D rover, front wheel hits an obstacle face",
+    "model": {"name": "rover2d"},
+    "velocity": {"u": 0.5},
+    "contacts": {"ground": "normal"},
+    "obstacle": {"wheel": "front", "beta_deg": 45.0},
+    "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8, "n": 1.5},
+    "simulation": {"mu": 0.3, "t_after": 0.05},
+}
 
 
-def make_synthetic_trials(outdir, *, betas_deg=tuple(range(0, 91, 10)), speeds=(0.5,),
+def _simulated_force(case: dict, max_step: float):
+    """Obstacle normal force history of one simulated impact: ``(t, F, result)``.
+
+    ``F`` [N] is the sum of the ``obstacle_*_fn`` columns of the simulator's history;
+    ``t`` [s] is 0 at first contact. ``max_step`` [s] bounds the integrator step, so that
+    the history resolves the pulse finely enough to be resampled."""
+    from ..simulate import simulate_impact
+    from .evaluate import _parse, simulation_config
+
+    sc, sim = _parse(case)
+    sim["integrator"] = dict(sim.get("integrator") or {}) | {"max_step": max_step}
+    res = simulate_impact(sc.build().model, simulation_config(sc, sim))
+    h = res.history
+    cols = [c for c in h.columns if c.startswith("obstacle_") and c.endswith("_fn")]
+    return h["t"].to_numpy(), h[cols].to_numpy().sum(axis=1), res
+
+
+def make_synthetic_trials(outdir, *, betas_deg=tuple(range(30, 91, 10)), speeds=(0.3, 0.5),
                           repeats: int = 1, seed: int = 20150802, fs: float = 5000.0,
                           record_s: float = 0.5, gains=(250.0, 240.0), noise_v: float = 0.002,
-                          model_stiffness: float = 8.0e6, truth: dict | None = None
+                          model_stiffness_factor: float = 0.8, truth: dict | None = None
                           ) -> pd.DataFrame:
-    """Write a realistic synthetic experiment: CSV recordings, ``trials.toml``, ``truth.csv``.
+    """Write a realistic synthetic experiment: CSV recordings, ``trials.toml``, ``rover.toml``
+    and ``truth.csv``.
 
-    The true force of each trial is the Hunt-Crossley impact of :class:`PlanarBodyImpact`
-    with :data:`SYNTHETIC_TRUTH` (a STAND-IN for the rover simulator). It is split between
-    two load cells (random share 35-65 %), converted to volts with the known ``gains``
-    [N/V], and corrupted like a real recording: per-channel offset (0.1 V order) and
-    linear drift (up to 0.02 V/s), white noise ``noise_v`` [V] and 16-bit quantisation
-    of a +-10 V range. The trials file's ``[model]`` uses ``model_stiffness``, not the true
-    stiffness: the comparison model is, as in reality, not exact.
+    The true force of each trial is the summed obstacle normal force of the rover simulator
+    (:func:`roverimpact.simulate_impact`) for the scenario ``truth`` (default
+    :data:`SYNTHETIC_TRUTH`) at that trial's beta and speed, resampled at ``fs``. It is split
+    between two load cells (random share 35-65 %), converted to volts with the known
+    ``gains`` [N/V], and corrupted like a real recording: per-channel offset (0.1 V order)
+    and linear drift (up to 0.02 V/s), white noise ``noise_v`` [V] and 16-bit quantisation of
+    a +-10 V range. The trials file's ``[model]`` points to ``rover.toml``, the same scenario
+    with the obstacle stiffness multiplied by ``model_stiffness_factor``: the comparison
+    model is, as in reality, not exact.
 
     Returns
     -------
     pandas.DataFrame
         The truth table (also written to ``truth.csv``): per trial ``file, beta_deg,
-        speed, repeat, F_peak, impulse, duration, t_impact, share_ch1``.
+        speed, repeat, F_peak, impulse, duration`` (of the simulated force: refined peak,
+        integral, first contact to separation), ``T_c_minus`` (simulator's, at first
+        contact), ``t_impact`` and ``share_ch1``.
     """
     import tomli_w
+
+    from .config import apply_overrides
 
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     tr = dict(SYNTHETIC_TRUTH if truth is None else truth)
-    true_model = PlanarBodyModelConfig(**tr).build()
     rng = np.random.default_rng(seed)
     gains = np.asarray(gains, float)
     lsb = 20.0 / 2**16
@@ -933,8 +973,13 @@ def make_synthetic_trials(outdir, *, betas_deg=tuple(range(0, 91, 10)), speeds=(
     k = 0
     for speed in speeds:
         for beta in betas_deg:
+            th, Fh, res = _simulated_force(
+                apply_overrides(tr, {"obstacle.beta_deg": float(beta),
+                                     "velocity.u": float(speed)}), 0.1 / fs)
+            if not res.separated:
+                raise InputError(f"beta = {beta:g} deg, speed = {speed:g} m/s: the wheel "
+                                 "does not leave the obstacle in the simulated time")
             for rep in range(1, repeats + 1):
-                th, Fh, _ = true_model.force_history(math.radians(beta), speed)
                 t0 = 0.15 + rng.uniform(0.0, 0.05)
                 F = np.interp(t - t0, th, Fh, left=0.0, right=0.0)
                 share = rng.uniform(0.35, 0.65)
@@ -955,24 +1000,36 @@ def make_synthetic_trials(outdir, *, betas_deg=tuple(range(0, 91, 10)), speeds=(
                 text = text.replace("# time_s,ch1_V,ch2_V", "time_s,ch1_V,ch2_V")
                 (out / name).write_text(text)
                 rows.append({"file": name, "beta_deg": float(beta), "speed": float(speed),
-                             "repeat": rep, "F_peak": float(Fh.max()),
-                             "impulse": float(np.trapezoid(Fh, th)),
-                             "duration": float(th[-1]), "t_impact": t0, "share_ch1": share})
+                             "repeat": rep, "F_peak": float(res.F_max_total),
+                             "impulse": float(sum(res.impulse.values())),
+                             "duration": float(res.contact_duration),
+                             "T_c_minus": float(res.T_c_minus), "t_impact": t0,
+                             "share_ch1": share})
                 trials.append({"file": name, "beta_deg": float(beta), "speed": float(speed),
                                "repeat": rep, "notes": "synthetic"})
                 k += 1
-    model = {"kind": "planar-body"} | {key: (list(v) if isinstance(v, tuple) else v)
-                                       for key, v in tr.items()}
-    model["stiffness"] = float(model_stiffness)
+    law = dict(tr["contact_law"])
+    law["k"] = float(law["k"]) * model_stiffness_factor
+    model_scn = {key: v for key, v in tr.items() if key != "obstacle"} | {
+        "description": f"Model of the synthetic experiment: {tr.get('description', '')}, "
+                       f"obstacle stiffness x {model_stiffness_factor:g} of the data's",
+        "contact_law": law,
+        "obstacle": {key: v for key, v in tr["obstacle"].items() if key != "normal"},
+    }
+    (out / "rover.toml").write_text(
+        "# Scenario of the model comparison (examples/experiment/trials.toml [model]); the\n"
+        "# trials set obstacle.beta_deg and velocity.u. Written by make_synthetic_trials.\n"
+        + tomli_w.dumps(model_scn))
     doc = {
-        "description": "Synthetic impact experiment (stand-in model, known calibration); "
-                       "generated by roverimpact.studies.experiment.make_synthetic_trials",
+        "description": "Synthetic impact experiment: rover simulator force, known "
+                       "calibration, offset drift and noise; generated by "
+                       "roverimpact.studies.experiment.make_synthetic_trials",
         "sensors": {"channels": ["ch1", "ch2"], "units": "V", "gains": gains.tolist(),
                     "sample_rate_hz": fs},
         "filter": {"cutoff_hz": 300.0, "order": 4},
         "detection": {"noise_sigmas": 10.0, "baseline_s": 0.1},
         "trial": trials,
-        "model": model,
+        "model": {"kind": "scenario", "scenario": "rover.toml"},
     }
     (out / "trials.toml").write_text(tomli_w.dumps(doc))
     truth_df = pd.DataFrame(rows)
