@@ -103,7 +103,7 @@ def plot_study(table: pd.DataFrame, x: str, *, title: str = "", subtitle: str = 
     return fig
 
 
-def save_figure(fig, stem: str | Path) -> dict[str, Path]:
+def save_figure(fig, stem: str | Path, dpi: float | None = None) -> dict[str, Path]:
     """Write ``stem.png`` and ``stem.svg``; close the figure; return the paths."""
     import matplotlib.pyplot as plt
 
@@ -111,7 +111,7 @@ def save_figure(fig, stem: str | Path) -> dict[str, Path]:
     out = {}
     for ext in ("png", "svg"):
         path = stem.with_suffix(f".{ext}")
-        fig.savefig(path)
+        fig.savefig(path, dpi=dpi or "figure")
         out[ext] = path
     plt.close(fig)
     return out

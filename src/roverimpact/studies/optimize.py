@@ -489,10 +489,6 @@ def plot_reconfiguration(result: OptimizeResult, stem: str | Path) -> dict[str, 
                  f"{100 * result.reduction:.1f} %")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    files = {}
-    for ext in ("png", "svg"):
-        path = stem.with_suffix(f".{ext}")
-        fig.savefig(path, dpi=120)
-        files[ext] = path
-    plt.close(fig)
-    return files
+    from ..report.plots import save_figure
+
+    return save_figure(fig, stem, dpi=120)

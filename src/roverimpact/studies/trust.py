@@ -328,13 +328,9 @@ def plot_trust_map(table: pd.DataFrame, stem: str | Path, *,
     fig.colorbar(mesh, ax=axes[0].tolist(), label=r"Kendall $\tau$ ($T_c^-$ vs $F_{max}$)")
     if title:
         fig.suptitle(title)
-    files = {}
-    for ext in ("png", "svg"):
-        path = stem.with_suffix(f".{ext}")
-        fig.savefig(path, dpi=120)
-        files[ext] = path
-    plt.close(fig)
-    return files
+    from ..report.plots import save_figure
+
+    return save_figure(fig, stem, dpi=120)
 
 
 def _edges(c: np.ndarray) -> np.ndarray:
