@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import roverimpact as ri
-from roverimpact.activeset import active_set, unilateral_impact
+from roverimpact.activeset import TOL, active_set, unilateral_impact
 
 
 def _rod(m=2.0, length=1.0):
@@ -315,7 +315,10 @@ def test_property_complementarity_and_energy(seed, n, k, pb, e, law, redundant):
     w = g_plus + e * g_minus if law == "newton" else g_plus
     ph, wh = p * wn / s, w / (wn * s)
     assert ph.min() >= -1e-10
-    assert wh.min() >= -1e-10
+    # Poisson's restitution phase is a second LCP whose decisions use the solver's TOL
+    # (1e-9): a post-impact velocity of -TOL/2 is within tolerance (found by hypothesis,
+    # seed=0, n=2, k=2, e=8.6e-10: w = -4.6e-10)
+    assert wh.min() >= (-1e-10 if law == "newton" else -2 * TOL)
     if law == "newton":
         assert np.abs(ph * wh).max() <= 1e-10
     elif np.linalg.matrix_rank(np.vstack([N, B])) == k + pb:
