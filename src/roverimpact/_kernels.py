@@ -19,7 +19,10 @@ The orthogonal projector onto ``range(W) = range(L^{-1} A^T)`` is the whitened f
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from ._checks import (
     STATUS_ASYMMETRIC_M,
@@ -82,10 +85,138 @@ def _factor(Mi, L, invd):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, fastmath=_FAST)
+def partition_factored(L, invd, Ab, vb, rtol, want_vc, W, H, hn, u, y, z, cn, vc_row, res):
+    """Steps 2-6 for one item whose ``M = L L^T`` is factored; returns a status code.
+
+    ``res`` receives ``T, T_c, T_a, rank``; ``vc_row`` receives ``v_c`` if ``want_vc``.
+    ``W, H`` (m, n), ``hn, cn`` (m,), ``u, y, z`` (n,) are scratch.
+    """  # pragma: no cover - compiled
+    n = L.shape[0]
+    m = Ab.shape[0]
+    kmax = min(n, m)
+    for i in range(n):
+        if not np.isfinite(vb[i]):
+            return STATUS_NONFINITE_V
+    for j in range(m):
+        for i in range(n):
+            if not np.isfinite(Ab[j, i]):
+                return STATUS_NONFINITE_A
+    # u = L^T v, T = 1/2 |u|^2
+    for i in range(n):
+        u[i] = 0.0
+    for j in range(n):
+        Lj = L[j]
+        vj = vb[j]
+        for i in range(j + 1):
+            u[i] += Lj[i] * vj
+    tt = 0.0
+    for i in range(n):
+        y[i] = u[i]
+        tt += u[i] * u[i]
+    res[0] = 0.5 * tt
+    # W = L^{-1} A^T, one forward substitution per row of A
+    cmax = 0.0
+    for j in range(m):
+        nrm = 0.0
+        Wj = W[j]
+        for i in range(n):
+            s = Ab[j, i]
+            Li = L[i]
+            for k in range(i):
+                s -= Li[k] * Wj[k]
+            s *= invd[i]
+            Wj[i] = s
+            nrm += s * s
+        cn[j] = np.sqrt(nrm)
+        if cn[j] > cmax:
+            cmax = cn[j]
+    for j in range(m):
+        if cmax == 0.0 or cn[j] <= rtol * cmax:
+            for i in range(n):
+                W[j, i] = 0.0
+        else:
+            inv = 1.0 / cn[j]
+            for i in range(n):
+                W[j, i] *= inv
+    # Householder QR with column pivoting
+    r = 0
+    for k in range(kmax):
+        best = -1.0
+        p = k
+        for j in range(k, m):
+            s = 0.0
+            for i in range(k, n):
+                s += W[j, i] * W[j, i]
+            if s > best:
+                best = s
+                p = j
+        norm = np.sqrt(best)
+        if norm <= rtol:
+            break
+        if p != k:
+            for i in range(n):
+                t = W[k, i]
+                W[k, i] = W[p, i]
+                W[p, i] = t
+        x0 = W[k, k]
+        alpha = -norm if x0 >= 0.0 else norm
+        h2 = 0.0
+        for i in range(k, n):
+            H[k, i] = W[k, i]
+        H[k, k] = x0 - alpha
+        for i in range(k, n):
+            h2 += H[k, i] * H[k, i]
+        hn[k] = h2
+        if h2 > 0.0:
+            for j in range(k + 1, m):
+                s = 0.0
+                for i in range(k, n):
+                    s += H[k, i] * W[j, i]
+                f = 2.0 * s / h2
+                for i in range(k, n):
+                    W[j, i] -= f * H[k, i]
+            s = 0.0
+            for i in range(k, n):
+                s += H[k, i] * y[i]
+            f = 2.0 * s / h2
+            for i in range(k, n):
+                y[i] -= f * H[k, i]
+        r += 1
+    tc = 0.0
+    for k in range(r):
+        tc += y[k] * y[k]
+    ta = 0.0
+    for k in range(r, n):
+        ta += y[k] * y[k]
+    res[1] = 0.5 * tc
+    res[2] = 0.5 * ta
+    res[3] = r
+    if want_vc:
+        for i in range(n):
+            z[i] = y[i] if i < r else 0.0
+        for k in range(r - 1, -1, -1):
+            h2 = hn[k]
+            if h2 > 0.0:
+                s = 0.0
+                for i in range(k, n):
+                    s += H[k, i] * z[i]
+                f = 2.0 * s / h2
+                for i in range(k, n):
+                    z[i] -= f * H[k, i]
+        # back substitution L^T v_c = z
+        for i in range(n - 1, -1, -1):
+            s = z[i]
+            for j in range(i + 1, n):
+                s -= L[j, i] * vc_row[j]
+            vc_row[i] = s * invd[i]
+    return STATUS_OK
+
+
+@njit(cache=True, nogil=True, fastmath=_FAST)
 def partition_kernel(
     M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status
 ):  # pragma: no cover - compiled
-    """Partition every item ``b``: ``M[iM[b]]``, ``A[iA[b]]``, ``v[iv[b]]``."""
+    """Partition every item ``b``: ``M[iM[b]]``, ``A[iA[b]]``, ``v[iv[b]]``, one at a time."""
     nb = iM.shape[0]
     n = M.shape[1]
     m = A.shape[1]
@@ -98,7 +229,8 @@ def partition_kernel(
     y = np.empty(n)
     z = np.empty(n)
     cn = np.empty(m)
-    kmax = min(n, m)
+    res = np.empty(4)
+    dummy = np.empty(n)
     last = -1
     last_code = STATUS_OK
     for b in range(nb):
@@ -109,128 +241,80 @@ def partition_kernel(
         if last_code != STATUS_OK:
             status[b] = last_code
             continue
-        Ab = A[iA[b]]
-        vb = v[iv[b]]
-        bad = False
-        for i in range(n):
-            if not np.isfinite(vb[i]):
-                bad = True
-        if bad:
-            status[b] = STATUS_NONFINITE_V
-            continue
-        for j in range(m):
-            for i in range(n):
-                if not np.isfinite(Ab[j, i]):
-                    bad = True
-        if bad:
-            status[b] = STATUS_NONFINITE_A
-            continue
-        # u = L^T v, T = 1/2 |u|^2
-        for i in range(n):
-            u[i] = 0.0
-        for j in range(n):
-            Lj = L[j]
-            vj = vb[j]
-            for i in range(j + 1):
-                u[i] += Lj[i] * vj
-        tt = 0.0
-        for i in range(n):
-            y[i] = u[i]
-            tt += u[i] * u[i]
-        T[b] = 0.5 * tt
-        # W = L^{-1} A^T, one forward substitution per row of A
-        cmax = 0.0
-        for j in range(m):
-            nrm = 0.0
-            Wj = W[j]
-            for i in range(n):
-                s = Ab[j, i]
-                Li = L[i]
-                for k in range(i):
-                    s -= Li[k] * Wj[k]
-                s *= invd[i]
-                Wj[i] = s
-                nrm += s * s
-            cn[j] = np.sqrt(nrm)
-            if cn[j] > cmax:
-                cmax = cn[j]
-        for j in range(m):
-            if cmax == 0.0 or cn[j] <= rtol * cmax:
-                for i in range(n):
-                    W[j, i] = 0.0
-            else:
-                inv = 1.0 / cn[j]
-                for i in range(n):
-                    W[j, i] *= inv
-        # Householder QR with column pivoting
-        r = 0
-        for k in range(kmax):
-            best = -1.0
-            p = k
-            for j in range(k, m):
-                s = 0.0
-                for i in range(k, n):
-                    s += W[j, i] * W[j, i]
-                if s > best:
-                    best = s
-                    p = j
-            norm = np.sqrt(best)
-            if norm <= rtol:
-                break
-            if p != k:
-                for i in range(n):
-                    t = W[k, i]
-                    W[k, i] = W[p, i]
-                    W[p, i] = t
-            x0 = W[k, k]
-            alpha = -norm if x0 >= 0.0 else norm
-            h2 = 0.0
-            for i in range(k, n):
-                H[k, i] = W[k, i]
-            H[k, k] = x0 - alpha
-            for i in range(k, n):
-                h2 += H[k, i] * H[k, i]
-            hn[k] = h2
-            if h2 > 0.0:
-                for j in range(k + 1, m):
-                    s = 0.0
-                    for i in range(k, n):
-                        s += H[k, i] * W[j, i]
-                    f = 2.0 * s / h2
-                    for i in range(k, n):
-                        W[j, i] -= f * H[k, i]
-                s = 0.0
-                for i in range(k, n):
-                    s += H[k, i] * y[i]
-                f = 2.0 * s / h2
-                for i in range(k, n):
-                    y[i] -= f * H[k, i]
-            r += 1
-        rank[b] = r
-        tc = 0.0
-        for k in range(r):
-            tc += y[k] * y[k]
-        ta = 0.0
-        for k in range(r, n):
-            ta += y[k] * y[k]
-        Tc[b] = 0.5 * tc
-        Ta[b] = 0.5 * ta
-        if want_vc:
-            for i in range(n):
-                z[i] = y[i] if i < r else 0.0
-            for k in range(r - 1, -1, -1):
-                h2 = hn[k]
-                if h2 > 0.0:
-                    s = 0.0
-                    for i in range(k, n):
-                        s += H[k, i] * z[i]
-                    f = 2.0 * s / h2
-                    for i in range(k, n):
-                        z[i] -= f * H[k, i]
-            # back substitution L^T v_c = z
-            for i in range(n - 1, -1, -1):
-                s = z[i]
-                for j in range(i + 1, n):
-                    s -= L[j, i] * vc[b, j]
-                vc[b, i] = s * invd[i]
-        status[b] = STATUS_OK
+        vc_row = vc[b] if want_vc else dummy
+        code = partition_factored(L, invd, A[iA[b]], v[iv[b]], rtol, want_vc, W, H, hn, u, y,
+                                  z, cn, vc_row, res)
+        status[b] = code
+        if code == STATUS_OK:
+            T[b] = res[0]
+            Tc[b] = res[1]
+            Ta[b] = res[2]
+            rank[b] = np.int64(res[3])
+
+
+@intrinsic
+def prefetch(typingctx, arr, offset):
+    """Hint the CPU to fetch element ``offset`` of C-contiguous ``arr`` (flat index) into
+    cache (``llvm.prefetch``, read, high locality); no effect on results."""
+    if not isinstance(arr, types.Array) or not isinstance(offset, types.Integer):
+        return None
+
+    def codegen(context, builder, signature, args):  # pragma: no cover - compiled
+        ary = context.make_array(signature.args[0])(context, builder, args[0])
+        off = context.cast(builder, args[1], signature.args[1], types.intp)
+        ptr = builder.bitcast(builder.gep(ary.data, [off]), ir.IntType(8).as_pointer())
+        i32 = ir.IntType(32)
+        name = "llvm.prefetch.p0" if str(ptr.type) == "ptr" else "llvm.prefetch.p0i8"
+        fnty = ir.FunctionType(ir.VoidType(), [ptr.type, i32, i32, i32])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, name)
+        builder.call(fn, [ptr, i32(0), i32(1), i32(1)])
+        return context.get_dummy_value()
+
+    return types.void(arr, offset), codegen
+
+
+# ----------------------------------------------------------------------------------------
+# Lane-parallel kernel (generated module _kernels_lanes.py), compiled on first use with
+# LLVM's SLP vectoriser switched on: numba leaves it off by default, and without it the
+# per-lane statements stay scalar.
+# ----------------------------------------------------------------------------------------
+
+def _lanes_signature():
+    """Inputs read-only (callers may pass read-only or broadcast views), outputs writable."""
+    f8, i8 = types.float64, types.int64
+
+    def ro(dt, nd):
+        return types.Array(dt, nd, "C", readonly=True)
+
+    def rw(dt, nd):
+        return types.Array(dt, nd, "C")
+
+    return types.void(ro(f8, 3), ro(f8, 3), ro(f8, 2), ro(i8, 1), ro(i8, 1), ro(i8, 1), f8,
+                      types.boolean, rw(f8, 1), rw(f8, 1), rw(f8, 1), rw(f8, 2), rw(i8, 1),
+                      rw(i8, 1))
+
+
+_lanes_dispatcher = None
+
+
+def lanes_kernel():
+    """The compiled lane-parallel partition kernel (same arguments as :func:`partition_kernel`).
+
+    Compiled once per process (or loaded from numba's on-disk cache) with SLP
+    vectorisation enabled for this function only; the previous setting is restored.
+    """
+    global _lanes_dispatcher
+    if _lanes_dispatcher is None:
+        from numba.core import config as numba_config
+
+        from . import _kernels_lanes
+
+        previous = getattr(numba_config, "SLP_VECTORIZE", 0)
+        numba_config.SLP_VECTORIZE = 1
+        try:
+            _lanes_dispatcher = njit(
+                _lanes_signature(), cache=True, nogil=True, fastmath=_FAST, error_model="numpy"
+            )(_kernels_lanes.partition_lanes)
+        finally:
+            numba_config.SLP_VECTORIZE = previous
+    return _lanes_dispatcher

@@ -26,10 +26,14 @@ import numpy as np
 
 from . import _checks
 from ._checks import InputError, as_array, broadcast_batch, fmt_index
-from ._kernels import partition_kernel
+from ._kernels import lanes_kernel, partition_kernel
 
 #: Default relative tolerance of the rank decision (see :func:`partition`).
 RTOL = 1e-9
+
+#: Batches with at least this many items use the lane-parallel kernel (8 items per SIMD
+#: block); smaller ones the one-item-at-a-time kernel.
+LANES_MIN_BATCH = 16
 
 __all__ = ["RTOL", "Partition", "effective_mass", "partition", "projector"]
 
@@ -160,9 +164,12 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     -----
     With ``M = L L^T`` and ``u = L^T v``, :math:`T_c = \tfrac12 |\Pi u|^2` where
     :math:`\Pi` is the orthogonal projector onto the range of :math:`W = L^{-1}A^T`.
-    :math:`\Pi` is built from a Householder QR of :math:`W` with column pivoting, so
-    dependent rows of :math:`A` are dropped by a rank-revealing factorisation instead of
-    inverting a singular :math:`A M^{-1} A^T`.
+    :math:`\Pi` is built from an orthonormal basis of :math:`W`'s columns, so dependent
+    rows of :math:`A` are dropped by a rank-revealing factorisation instead of inverting a
+    singular :math:`A M^{-1} A^T`. Batches of at least ``LANES_MIN_BATCH`` items run 8 at a
+    time in SIMD lanes (Gram-Schmidt twice in row order); an item with nearly dependent
+    rows (a kept residual below 1e-4) is recomputed with a Householder QR with column
+    pivoting, which smaller batches use throughout. Both give the same result to rounding.
 
     Examples
     --------
@@ -189,8 +196,9 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     rank = np.empty(nb, dtype=np.int64)
     status = np.zeros(nb, dtype=np.int64)
     vc = np.empty((nb, n)) if want_velocities else np.empty((0, n))
-    partition_kernel(Mf, Af, vf, iM, iA, iv, float(rtol), want_velocities, T, Tc, Ta, vc, rank,
-                     status)
+    kernel = lanes_kernel() if nb >= LANES_MIN_BATCH else partition_kernel
+    kernel(Mf, Af, vf, iM, iA, iv, float(rtol), bool(want_velocities), T, Tc, Ta, vc, rank,
+           status)
     if status.any():
         _raise_status(status, M, A, v, iM, iA, iv, batch)
     if want_velocities:
