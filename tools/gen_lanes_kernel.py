@@ -68,8 +68,6 @@ _EPS = np.finfo(np.float64).eps
 #: pivoted Householder QR of the one-item kernel: rounding errors of order eps / residual
 #: must stay far below ``rtol`` for the rank decisions of the later rows to be reliable
 WELL_CONDITIONED = 1e-4
-#: prefetch the inputs of the block this many blocks ahead
-PF_AHEAD = 2
 '''
 
 TEMPLATE = '''
@@ -106,18 +104,7 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
     res_one = np.zeros(4)
     dummy = np.zeros(n)
     last_m = -1
-    nn = n * n
     for base in range(0, nb, LANES):
-        # prefetch the next block's M, A, v while this block computes
-        for w in range(LANES):
-            b = base + PF_AHEAD * LANES + w
-            if b < nb:
-                for o in range(0, nn, 8):
-                    prefetch(M, iM[b] * nn + o)
-                for o in range(0, m * n, 8):
-                    prefetch(A, iA[b] * (m * n) + o)
-                for o in range(0, n, 8):
-                    prefetch(v, iv[b] * n + o)
         # -- M: reuse the factor if every lane shares the M of the previous block
         im0 = iM[base]
         same = True
@@ -126,6 +113,9 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
         if not (same and im0 == last_m):
             for w in range(LANES):
                 Mi = M[iM[min(base + w, nb - 1)]]
+                # the same lane of the next block: prefetched a row at a time below (a
+                # burst of prefetches at the start of a block is mostly dropped)
+                m_next = iM[min(base + LANES + w, nb - 1)]
                 md = 0.0
                 for i in range(n):
                     d = abs(Mi[i, i])
@@ -134,6 +124,8 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 ok = True
                 fin = True
                 for i in range(n):
+                    for o in range(0, n, 8):
+                        prefetch(M, (m_next * n + i) * n + o)
                     for k in range(i):
                         ok &= abs(Mi[i, k] - Mi[k, i]) <= tol
                     fin &= np.isfinite(Mi[i, i])
@@ -192,6 +184,11 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
             b = min(base + w, nb - 1)
             Ab = A[iA[b]]
             vb = v[iv[b]]
+            b_next = min(b + LANES, nb - 1)
+            for o in range(0, m * n, 8):
+                prefetch(A, iA[b_next] * (m * n) + o)
+            for o in range(0, n, 8):
+                prefetch(v, iv[b_next] * n + o)
             ok = True
             for r in range(m):
                 ur = np.uint64(r)
@@ -206,7 +203,10 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 ok &= np.isfinite(x)
                 V[np.uint64(i), w] = x
             vfin[w] = 1.0 if ok else 0.0
-        # -- W = L^-1 A^T, column j of L at a time
+        # -- W = L^-1 A^T, column j of L at a time, and the squared norms of its columns
+        for r in range(m):
+            ur = np.uint64(r)
+            @LANES RN[ur, {w}] = 0.0
         for j in range(n):
             uj = np.uint64(j)
             @LANES d{w} = invd[uj, {w}]
@@ -214,34 +214,36 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 ur = np.uint64(r)
                 @LANES f{w} = X[ur, uj, {w}] * d{w}
                 @LANES X[ur, uj, {w}] = f{w}
+                @LANES c{w} = RN[ur, {w}]
+                @LANES RN[ur, {w}] = c{w} + f{w} * f{w}
                 for k in range(j + 1, n):
                     uk = np.uint64(k)
                     @LANES e{w} = L[uk, uj, {w}]
                     @LANES x{w} = X[ur, uk, {w}]
                     @LANES X[ur, uk, {w}] = x{w} - f{w} * e{w}
-        # -- u = L^T v and T = 1/2 |u|^2
+        # -- u = L^T v (a row of L at a time) and T = 1/2 |u|^2
+        for k in range(n):
+            uk = np.uint64(k)
+            @LANES U[uk, {w}] = 0.0
+        for i in range(n):
+            ui = np.uint64(i)
+            @LANES s{w} = V[ui, {w}]
+            for k in range(i + 1):
+                uk = np.uint64(k)
+                @LANES l{w} = L[ui, uk, {w}]
+                @LANES x{w} = U[uk, {w}]
+                @LANES U[uk, {w}] = x{w} + l{w} * s{w}
         @LANES t{w} = 0.0
         for k in range(n):
             uk = np.uint64(k)
-            @LANES s{w} = 0.0
-            for i in range(k, n):
-                ui = np.uint64(i)
-                @LANES l{w} = L[ui, uk, {w}]
-                @LANES x{w} = V[ui, {w}]
-                @LANES s{w} += l{w} * x{w}
-            @LANES U[uk, {w}] = s{w}
-            @LANES t{w} += s{w} * s{w}
+            @LANES x{w} = U[uk, {w}]
+            @LANES t{w} += x{w} * x{w}
         @LANES out[0, {w}] = 0.5 * t{w}
         # -- normalise the columns of W; drop those below rtol times the largest
         @LANES cm{w} = 0.0
         for r in range(m):
             ur = np.uint64(r)
-            @LANES s{w} = 0.0
-            for i in range(n):
-                ui = np.uint64(i)
-                @LANES x{w} = X[ur, ui, {w}]
-                @LANES s{w} += x{w} * x{w}
-            @LANES s{w} = np.sqrt(s{w})
+            @LANES s{w} = np.sqrt(RN[ur, {w}])
             @LANES RN[ur, {w}] = s{w}
             @LANES cm{w} = max(cm{w}, s{w})
         for r in range(m):
@@ -259,25 +261,34 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
         @LANES dm{w} = 1.0
         for r in range(m):
             ur = np.uint64(r)
-            for sweep in range(2):
-                for kk in range(r):
-                    ukk = np.uint64(kk)
-                    @LANES s{w} = 0.0
-                    for i in range(n):
-                        ui = np.uint64(i)
-                        @LANES a{w} = X[ukk, ui, {w}]
-                        @LANES x{w} = X[ur, ui, {w}]
-                        @LANES s{w} += a{w} * x{w}
-                    for i in range(n):
-                        ui = np.uint64(i)
-                        @LANES a{w} = X[ukk, ui, {w}]
-                        @LANES x{w} = X[ur, ui, {w}]
-                        @LANES X[ur, ui, {w}] = x{w} - s{w} * a{w}
+            # s = q_0 . x (or |x|^2 for the first row)
             @LANES s{w} = 0.0
             for i in range(n):
                 ui = np.uint64(i)
+                @LANES a{w} = X[0, ui, {w}]
                 @LANES x{w} = X[ur, ui, {w}]
-                @LANES s{w} += x{w} * x{w}
+                @LANES s{w} += a{w} * x{w}
+            # two sweeps of x -= (q_kk . x) q_kk, each update fused with the next dot
+            # product (q_kk+1, then q_0 of the second sweep, then x itself: |x|^2)
+            for sweep in range(2):
+                for kk in range(r):
+                    ukk = np.uint64(kk)
+                    if kk + 1 < r:
+                        unx = np.uint64(kk + 1)
+                    elif sweep == 0:
+                        unx = np.uint64(0)
+                    else:
+                        unx = ur
+                    @LANES t{w} = 0.0
+                    for i in range(n):
+                        ui = np.uint64(i)
+                        @LANES a{w} = X[ukk, ui, {w}]
+                        @LANES x{w} = X[ur, ui, {w}]
+                        @LANES x{w} = x{w} - s{w} * a{w}
+                        @LANES X[ur, ui, {w}] = x{w}
+                        @LANES a{w} = X[unx, ui, {w}]
+                        @LANES t{w} += a{w} * x{w}
+                    @LANES s{w} = t{w}
             @LANES nr{w} = np.sqrt(s{w})
             @LANES g{w} = np.float64(nr{w} > rtol)
             @LANES rk{w} += g{w}

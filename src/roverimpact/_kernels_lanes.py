@@ -42,8 +42,6 @@ _EPS = np.finfo(np.float64).eps
 #: pivoted Householder QR of the one-item kernel: rounding errors of order eps / residual
 #: must stay far below ``rtol`` for the rank decisions of the later rows to be reliable
 WELL_CONDITIONED = 1e-4
-#: prefetch the inputs of the block this many blocks ahead
-PF_AHEAD = 2
 
 
 def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
@@ -79,18 +77,7 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
     res_one = np.zeros(4)
     dummy = np.zeros(n)
     last_m = -1
-    nn = n * n
     for base in range(0, nb, LANES):
-        # prefetch the next block's M, A, v while this block computes
-        for w in range(LANES):
-            b = base + PF_AHEAD * LANES + w
-            if b < nb:
-                for o in range(0, nn, 8):
-                    prefetch(M, iM[b] * nn + o)
-                for o in range(0, m * n, 8):
-                    prefetch(A, iA[b] * (m * n) + o)
-                for o in range(0, n, 8):
-                    prefetch(v, iv[b] * n + o)
         # -- M: reuse the factor if every lane shares the M of the previous block
         im0 = iM[base]
         same = True
@@ -99,6 +86,9 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
         if not (same and im0 == last_m):
             for w in range(LANES):
                 Mi = M[iM[min(base + w, nb - 1)]]
+                # the same lane of the next block: prefetched a row at a time below (a
+                # burst of prefetches at the start of a block is mostly dropped)
+                m_next = iM[min(base + LANES + w, nb - 1)]
                 md = 0.0
                 for i in range(n):
                     d = abs(Mi[i, i])
@@ -107,6 +97,8 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 ok = True
                 fin = True
                 for i in range(n):
+                    for o in range(0, n, 8):
+                        prefetch(M, (m_next * n + i) * n + o)
                     for k in range(i):
                         ok &= abs(Mi[i, k] - Mi[k, i]) <= tol
                     fin &= np.isfinite(Mi[i, i])
@@ -333,6 +325,11 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
             b = min(base + w, nb - 1)
             Ab = A[iA[b]]
             vb = v[iv[b]]
+            b_next = min(b + LANES, nb - 1)
+            for o in range(0, m * n, 8):
+                prefetch(A, iA[b_next] * (m * n) + o)
+            for o in range(0, n, 8):
+                prefetch(v, iv[b_next] * n + o)
             ok = True
             for r in range(m):
                 ur = np.uint64(r)
@@ -347,7 +344,17 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 ok &= np.isfinite(x)
                 V[np.uint64(i), w] = x
             vfin[w] = 1.0 if ok else 0.0
-        # -- W = L^-1 A^T, column j of L at a time
+        # -- W = L^-1 A^T, column j of L at a time, and the squared norms of its columns
+        for r in range(m):
+            ur = np.uint64(r)
+            RN[ur, 0] = 0.0
+            RN[ur, 1] = 0.0
+            RN[ur, 2] = 0.0
+            RN[ur, 3] = 0.0
+            RN[ur, 4] = 0.0
+            RN[ur, 5] = 0.0
+            RN[ur, 6] = 0.0
+            RN[ur, 7] = 0.0
         for j in range(n):
             uj = np.uint64(j)
             d0 = invd[uj, 0]
@@ -376,6 +383,22 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 X[ur, uj, 5] = f5
                 X[ur, uj, 6] = f6
                 X[ur, uj, 7] = f7
+                c0 = RN[ur, 0]
+                c1 = RN[ur, 1]
+                c2 = RN[ur, 2]
+                c3 = RN[ur, 3]
+                c4 = RN[ur, 4]
+                c5 = RN[ur, 5]
+                c6 = RN[ur, 6]
+                c7 = RN[ur, 7]
+                RN[ur, 0] = c0 + f0 * f0
+                RN[ur, 1] = c1 + f1 * f1
+                RN[ur, 2] = c2 + f2 * f2
+                RN[ur, 3] = c3 + f3 * f3
+                RN[ur, 4] = c4 + f4 * f4
+                RN[ur, 5] = c5 + f5 * f5
+                RN[ur, 6] = c6 + f6 * f6
+                RN[ur, 7] = c7 + f7 * f7
                 for k in range(j + 1, n):
                     uk = np.uint64(k)
                     e0 = L[uk, uj, 0]
@@ -402,7 +425,53 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                     X[ur, uk, 5] = x5 - f5 * e5
                     X[ur, uk, 6] = x6 - f6 * e6
                     X[ur, uk, 7] = x7 - f7 * e7
-        # -- u = L^T v and T = 1/2 |u|^2
+        # -- u = L^T v (a row of L at a time) and T = 1/2 |u|^2
+        for k in range(n):
+            uk = np.uint64(k)
+            U[uk, 0] = 0.0
+            U[uk, 1] = 0.0
+            U[uk, 2] = 0.0
+            U[uk, 3] = 0.0
+            U[uk, 4] = 0.0
+            U[uk, 5] = 0.0
+            U[uk, 6] = 0.0
+            U[uk, 7] = 0.0
+        for i in range(n):
+            ui = np.uint64(i)
+            s0 = V[ui, 0]
+            s1 = V[ui, 1]
+            s2 = V[ui, 2]
+            s3 = V[ui, 3]
+            s4 = V[ui, 4]
+            s5 = V[ui, 5]
+            s6 = V[ui, 6]
+            s7 = V[ui, 7]
+            for k in range(i + 1):
+                uk = np.uint64(k)
+                l0 = L[ui, uk, 0]
+                l1 = L[ui, uk, 1]
+                l2 = L[ui, uk, 2]
+                l3 = L[ui, uk, 3]
+                l4 = L[ui, uk, 4]
+                l5 = L[ui, uk, 5]
+                l6 = L[ui, uk, 6]
+                l7 = L[ui, uk, 7]
+                x0 = U[uk, 0]
+                x1 = U[uk, 1]
+                x2 = U[uk, 2]
+                x3 = U[uk, 3]
+                x4 = U[uk, 4]
+                x5 = U[uk, 5]
+                x6 = U[uk, 6]
+                x7 = U[uk, 7]
+                U[uk, 0] = x0 + l0 * s0
+                U[uk, 1] = x1 + l1 * s1
+                U[uk, 2] = x2 + l2 * s2
+                U[uk, 3] = x3 + l3 * s3
+                U[uk, 4] = x4 + l4 * s4
+                U[uk, 5] = x5 + l5 * s5
+                U[uk, 6] = x6 + l6 * s6
+                U[uk, 7] = x7 + l7 * s7
         t0 = 0.0
         t1 = 0.0
         t2 = 0.0
@@ -413,56 +482,22 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
         t7 = 0.0
         for k in range(n):
             uk = np.uint64(k)
-            s0 = 0.0
-            s1 = 0.0
-            s2 = 0.0
-            s3 = 0.0
-            s4 = 0.0
-            s5 = 0.0
-            s6 = 0.0
-            s7 = 0.0
-            for i in range(k, n):
-                ui = np.uint64(i)
-                l0 = L[ui, uk, 0]
-                l1 = L[ui, uk, 1]
-                l2 = L[ui, uk, 2]
-                l3 = L[ui, uk, 3]
-                l4 = L[ui, uk, 4]
-                l5 = L[ui, uk, 5]
-                l6 = L[ui, uk, 6]
-                l7 = L[ui, uk, 7]
-                x0 = V[ui, 0]
-                x1 = V[ui, 1]
-                x2 = V[ui, 2]
-                x3 = V[ui, 3]
-                x4 = V[ui, 4]
-                x5 = V[ui, 5]
-                x6 = V[ui, 6]
-                x7 = V[ui, 7]
-                s0 += l0 * x0
-                s1 += l1 * x1
-                s2 += l2 * x2
-                s3 += l3 * x3
-                s4 += l4 * x4
-                s5 += l5 * x5
-                s6 += l6 * x6
-                s7 += l7 * x7
-            U[uk, 0] = s0
-            U[uk, 1] = s1
-            U[uk, 2] = s2
-            U[uk, 3] = s3
-            U[uk, 4] = s4
-            U[uk, 5] = s5
-            U[uk, 6] = s6
-            U[uk, 7] = s7
-            t0 += s0 * s0
-            t1 += s1 * s1
-            t2 += s2 * s2
-            t3 += s3 * s3
-            t4 += s4 * s4
-            t5 += s5 * s5
-            t6 += s6 * s6
-            t7 += s7 * s7
+            x0 = U[uk, 0]
+            x1 = U[uk, 1]
+            x2 = U[uk, 2]
+            x3 = U[uk, 3]
+            x4 = U[uk, 4]
+            x5 = U[uk, 5]
+            x6 = U[uk, 6]
+            x7 = U[uk, 7]
+            t0 += x0 * x0
+            t1 += x1 * x1
+            t2 += x2 * x2
+            t3 += x3 * x3
+            t4 += x4 * x4
+            t5 += x5 * x5
+            t6 += x6 * x6
+            t7 += x7 * x7
         out[0, 0] = 0.5 * t0
         out[0, 1] = 0.5 * t1
         out[0, 2] = 0.5 * t2
@@ -482,40 +517,14 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
         cm7 = 0.0
         for r in range(m):
             ur = np.uint64(r)
-            s0 = 0.0
-            s1 = 0.0
-            s2 = 0.0
-            s3 = 0.0
-            s4 = 0.0
-            s5 = 0.0
-            s6 = 0.0
-            s7 = 0.0
-            for i in range(n):
-                ui = np.uint64(i)
-                x0 = X[ur, ui, 0]
-                x1 = X[ur, ui, 1]
-                x2 = X[ur, ui, 2]
-                x3 = X[ur, ui, 3]
-                x4 = X[ur, ui, 4]
-                x5 = X[ur, ui, 5]
-                x6 = X[ur, ui, 6]
-                x7 = X[ur, ui, 7]
-                s0 += x0 * x0
-                s1 += x1 * x1
-                s2 += x2 * x2
-                s3 += x3 * x3
-                s4 += x4 * x4
-                s5 += x5 * x5
-                s6 += x6 * x6
-                s7 += x7 * x7
-            s0 = np.sqrt(s0)
-            s1 = np.sqrt(s1)
-            s2 = np.sqrt(s2)
-            s3 = np.sqrt(s3)
-            s4 = np.sqrt(s4)
-            s5 = np.sqrt(s5)
-            s6 = np.sqrt(s6)
-            s7 = np.sqrt(s7)
+            s0 = np.sqrt(RN[ur, 0])
+            s1 = np.sqrt(RN[ur, 1])
+            s2 = np.sqrt(RN[ur, 2])
+            s3 = np.sqrt(RN[ur, 3])
+            s4 = np.sqrt(RN[ur, 4])
+            s5 = np.sqrt(RN[ur, 5])
+            s6 = np.sqrt(RN[ur, 6])
+            s7 = np.sqrt(RN[ur, 7])
             RN[ur, 0] = s0
             RN[ur, 1] = s1
             RN[ur, 2] = s2
@@ -603,69 +612,7 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
         dm7 = 1.0
         for r in range(m):
             ur = np.uint64(r)
-            for sweep in range(2):
-                for kk in range(r):
-                    ukk = np.uint64(kk)
-                    s0 = 0.0
-                    s1 = 0.0
-                    s2 = 0.0
-                    s3 = 0.0
-                    s4 = 0.0
-                    s5 = 0.0
-                    s6 = 0.0
-                    s7 = 0.0
-                    for i in range(n):
-                        ui = np.uint64(i)
-                        a0 = X[ukk, ui, 0]
-                        a1 = X[ukk, ui, 1]
-                        a2 = X[ukk, ui, 2]
-                        a3 = X[ukk, ui, 3]
-                        a4 = X[ukk, ui, 4]
-                        a5 = X[ukk, ui, 5]
-                        a6 = X[ukk, ui, 6]
-                        a7 = X[ukk, ui, 7]
-                        x0 = X[ur, ui, 0]
-                        x1 = X[ur, ui, 1]
-                        x2 = X[ur, ui, 2]
-                        x3 = X[ur, ui, 3]
-                        x4 = X[ur, ui, 4]
-                        x5 = X[ur, ui, 5]
-                        x6 = X[ur, ui, 6]
-                        x7 = X[ur, ui, 7]
-                        s0 += a0 * x0
-                        s1 += a1 * x1
-                        s2 += a2 * x2
-                        s3 += a3 * x3
-                        s4 += a4 * x4
-                        s5 += a5 * x5
-                        s6 += a6 * x6
-                        s7 += a7 * x7
-                    for i in range(n):
-                        ui = np.uint64(i)
-                        a0 = X[ukk, ui, 0]
-                        a1 = X[ukk, ui, 1]
-                        a2 = X[ukk, ui, 2]
-                        a3 = X[ukk, ui, 3]
-                        a4 = X[ukk, ui, 4]
-                        a5 = X[ukk, ui, 5]
-                        a6 = X[ukk, ui, 6]
-                        a7 = X[ukk, ui, 7]
-                        x0 = X[ur, ui, 0]
-                        x1 = X[ur, ui, 1]
-                        x2 = X[ur, ui, 2]
-                        x3 = X[ur, ui, 3]
-                        x4 = X[ur, ui, 4]
-                        x5 = X[ur, ui, 5]
-                        x6 = X[ur, ui, 6]
-                        x7 = X[ur, ui, 7]
-                        X[ur, ui, 0] = x0 - s0 * a0
-                        X[ur, ui, 1] = x1 - s1 * a1
-                        X[ur, ui, 2] = x2 - s2 * a2
-                        X[ur, ui, 3] = x3 - s3 * a3
-                        X[ur, ui, 4] = x4 - s4 * a4
-                        X[ur, ui, 5] = x5 - s5 * a5
-                        X[ur, ui, 6] = x6 - s6 * a6
-                        X[ur, ui, 7] = x7 - s7 * a7
+            # s = q_0 . x (or |x|^2 for the first row)
             s0 = 0.0
             s1 = 0.0
             s2 = 0.0
@@ -676,6 +623,14 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
             s7 = 0.0
             for i in range(n):
                 ui = np.uint64(i)
+                a0 = X[0, ui, 0]
+                a1 = X[0, ui, 1]
+                a2 = X[0, ui, 2]
+                a3 = X[0, ui, 3]
+                a4 = X[0, ui, 4]
+                a5 = X[0, ui, 5]
+                a6 = X[0, ui, 6]
+                a7 = X[0, ui, 7]
                 x0 = X[ur, ui, 0]
                 x1 = X[ur, ui, 1]
                 x2 = X[ur, ui, 2]
@@ -684,14 +639,91 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 x5 = X[ur, ui, 5]
                 x6 = X[ur, ui, 6]
                 x7 = X[ur, ui, 7]
-                s0 += x0 * x0
-                s1 += x1 * x1
-                s2 += x2 * x2
-                s3 += x3 * x3
-                s4 += x4 * x4
-                s5 += x5 * x5
-                s6 += x6 * x6
-                s7 += x7 * x7
+                s0 += a0 * x0
+                s1 += a1 * x1
+                s2 += a2 * x2
+                s3 += a3 * x3
+                s4 += a4 * x4
+                s5 += a5 * x5
+                s6 += a6 * x6
+                s7 += a7 * x7
+            # two sweeps of x -= (q_kk . x) q_kk, each update fused with the next dot
+            # product (q_kk+1, then q_0 of the second sweep, then x itself: |x|^2)
+            for sweep in range(2):
+                for kk in range(r):
+                    ukk = np.uint64(kk)
+                    if kk + 1 < r:
+                        unx = np.uint64(kk + 1)
+                    elif sweep == 0:
+                        unx = np.uint64(0)
+                    else:
+                        unx = ur
+                    t0 = 0.0
+                    t1 = 0.0
+                    t2 = 0.0
+                    t3 = 0.0
+                    t4 = 0.0
+                    t5 = 0.0
+                    t6 = 0.0
+                    t7 = 0.0
+                    for i in range(n):
+                        ui = np.uint64(i)
+                        a0 = X[ukk, ui, 0]
+                        a1 = X[ukk, ui, 1]
+                        a2 = X[ukk, ui, 2]
+                        a3 = X[ukk, ui, 3]
+                        a4 = X[ukk, ui, 4]
+                        a5 = X[ukk, ui, 5]
+                        a6 = X[ukk, ui, 6]
+                        a7 = X[ukk, ui, 7]
+                        x0 = X[ur, ui, 0]
+                        x1 = X[ur, ui, 1]
+                        x2 = X[ur, ui, 2]
+                        x3 = X[ur, ui, 3]
+                        x4 = X[ur, ui, 4]
+                        x5 = X[ur, ui, 5]
+                        x6 = X[ur, ui, 6]
+                        x7 = X[ur, ui, 7]
+                        x0 = x0 - s0 * a0
+                        x1 = x1 - s1 * a1
+                        x2 = x2 - s2 * a2
+                        x3 = x3 - s3 * a3
+                        x4 = x4 - s4 * a4
+                        x5 = x5 - s5 * a5
+                        x6 = x6 - s6 * a6
+                        x7 = x7 - s7 * a7
+                        X[ur, ui, 0] = x0
+                        X[ur, ui, 1] = x1
+                        X[ur, ui, 2] = x2
+                        X[ur, ui, 3] = x3
+                        X[ur, ui, 4] = x4
+                        X[ur, ui, 5] = x5
+                        X[ur, ui, 6] = x6
+                        X[ur, ui, 7] = x7
+                        a0 = X[unx, ui, 0]
+                        a1 = X[unx, ui, 1]
+                        a2 = X[unx, ui, 2]
+                        a3 = X[unx, ui, 3]
+                        a4 = X[unx, ui, 4]
+                        a5 = X[unx, ui, 5]
+                        a6 = X[unx, ui, 6]
+                        a7 = X[unx, ui, 7]
+                        t0 += a0 * x0
+                        t1 += a1 * x1
+                        t2 += a2 * x2
+                        t3 += a3 * x3
+                        t4 += a4 * x4
+                        t5 += a5 * x5
+                        t6 += a6 * x6
+                        t7 += a7 * x7
+                    s0 = t0
+                    s1 = t1
+                    s2 = t2
+                    s3 = t3
+                    s4 = t4
+                    s5 = t5
+                    s6 = t6
+                    s7 = t7
             nr0 = np.sqrt(s0)
             nr1 = np.sqrt(s1)
             nr2 = np.sqrt(s2)
