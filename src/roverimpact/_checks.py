@@ -52,8 +52,11 @@ def check_finite(arr: np.ndarray, name: str, core_ndim: int) -> None:
 
 def broadcast_batch(**shapes: tuple[int, ...]) -> tuple[int, ...]:
     """Broadcast batch shapes, with an error naming the inputs when they do not fit."""
+    values = tuple(shapes.values())
+    if all(s == values[0] for s in values):  # the common case, without numpy's machinery
+        return values[0]
     try:
-        return np.broadcast_shapes(*shapes.values())
+        return np.broadcast_shapes(*values)
     except ValueError:
         desc = ", ".join(f"{k} batch shape {v}" for k, v in shapes.items())
         raise InputError(f"batch shapes do not broadcast: {desc}") from None

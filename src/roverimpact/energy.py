@@ -20,6 +20,7 @@ mass matrix of any engine.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -95,11 +96,17 @@ def _prepare(M, A, v=None):
 
 
 def _size(shape: tuple[int, ...]) -> int:
-    return int(np.prod(shape, dtype=np.int64))
+    return math.prod(shape)
+
+
+_ZERO_INDEX = np.zeros(1, dtype=np.int64)
+_ZERO_INDEX.flags.writeable = False
 
 
 def _flat_index(shape: tuple[int, ...], batch: tuple[int, ...]) -> np.ndarray:
     """Flat index into an input of batch ``shape`` for every item of the broadcast ``batch``."""
+    if shape == batch:  # no broadcasting (includes the unbatched case)
+        return _ZERO_INDEX if batch == () else np.arange(_size(batch), dtype=np.int64)
     idx = np.arange(_size(shape), dtype=np.int64).reshape(shape)
     return np.ascontiguousarray(np.broadcast_to(idx, batch).reshape(-1))
 
@@ -118,8 +125,7 @@ def _raise_status(status, M, A, v, iM, iA, iv, batch):
 
 
 def _scalarize(x: np.ndarray, batch: tuple[int, ...]):
-    x = x.reshape(batch)
-    return x[()] if batch == () else x
+    return x.reshape(-1)[0] if batch == () else x.reshape(batch)
 
 
 def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> Partition:
@@ -180,7 +186,7 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     >>> round(float(p.T), 12), round(float(p.T_c), 12), round(float(p.T_a), 12), int(p.rank)
     (25.0, 9.0, 16.0, 1)
     """
-    if not (np.isfinite(rtol) and 0.0 < rtol < 1.0):
+    if not (math.isfinite(rtol) and 0.0 < rtol < 1.0):
         raise InputError(f"rtol must be in (0, 1), got {rtol}")
     M, A, v, batch, n, m = _prepare(M, A, v)
     Mf = np.ascontiguousarray(M.reshape(_size(M.shape[:-2]), n, n))
@@ -190,20 +196,18 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     iA = _flat_index(A.shape[:-2], batch)
     iv = _flat_index(v.shape[:-1], batch)
     nb = iM.shape[0]
-    T = np.empty(nb)
-    Tc = np.empty(nb)
-    Ta = np.empty(nb)
+    T, Tc, Ta = np.empty((3, nb))
     rank = np.empty(nb, dtype=np.int64)
     status = np.zeros(nb, dtype=np.int64)
     vc = np.empty((nb, n)) if want_velocities else np.empty((0, n))
     kernel = lanes_kernel() if nb >= LANES_MIN_BATCH else partition_kernel
     kernel(Mf, Af, vf, iM, iA, iv, float(rtol), bool(want_velocities), T, Tc, Ta, vc, rank,
            status)
-    if status.any():
+    if (status[0] if nb == 1 else status.any()):
         _raise_status(status, M, A, v, iM, iA, iv, batch)
     if want_velocities:
         v_c = vc.reshape(*batch, n)
-        v_a = np.broadcast_to(v, (*batch, n)) - v_c
+        v_a = (v if v.shape == v_c.shape else np.broadcast_to(v, v_c.shape)) - v_c
     else:
         v_c = v_a = None
     return Partition(
