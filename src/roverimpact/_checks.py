@@ -7,6 +7,8 @@ input, the problem and, for batched input, the batch index.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .exceptions import InputError
@@ -39,6 +41,10 @@ def fmt_index(index: tuple[int, ...]) -> str:
 
 def check_finite(arr: np.ndarray, name: str, core_ndim: int) -> None:
     """Raise if ``arr`` holds NaN or inf, naming the first offending batch item."""
+    # fast path: a NaN or inf makes the sum non-finite (an overflowing sum of finite
+    # values only sends us to the exact check below)
+    if arr.size == 0 or math.isfinite(np.add.reduce(arr, axis=None)):
+        return
     bad = ~np.isfinite(arr)
     if bad.any():
         batch_shape = arr.shape[: arr.ndim - core_ndim]

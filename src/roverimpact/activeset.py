@@ -60,6 +60,7 @@ matters.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -157,9 +158,9 @@ def _rows(x, name, n):
 def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, want_vplus):
     if law not in _LAWS:
         raise InputError(f"law must be one of {_LAWS}, got {law!r}")
-    if not (np.isfinite(tol) and 0.0 < tol <= 1e-3):
+    if not (math.isfinite(tol) and 0.0 < tol <= 1e-3):
         raise InputError(f"tol must be in (0, 1e-3], got {tol}")
-    if not (np.isfinite(rtol) and 0.0 < rtol < 1.0):
+    if not (math.isfinite(rtol) and 0.0 < rtol < 1.0):
         raise InputError(f"rtol must be in (0, 1), got {rtol}")
     M = as_array(M, "M", min_ndim=2)
     if M.shape[-1] != M.shape[-2] or M.shape[-1] == 0:
@@ -174,17 +175,24 @@ def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, w
     if k == 0:
         raise InputError("unilateral has no rows: give at least the obstacle contact row")
     B = np.zeros((0, n)) if bilateral is None else _rows(bilateral, "bilateral", n)
-    e = as_array(restitution, "restitution")
-    _checks.check_finite(e, "restitution", 0)
-    if np.any((e < 0) | (e > 1)):
-        raise InputError(
-            f"restitution must lie in [0, 1], got values in [{e.min():g}, {e.max():g}]"
-        )
-    if e.ndim == 0:
-        e = np.full(k, float(e))
-    if e.shape[-1] not in (1, k):
-        raise InputError(f"restitution must be a scalar or have k = {k} values, got {e.shape}")
-    e = np.broadcast_to(e, (*e.shape[:-1], k))
+    if isinstance(restitution, (int, float)) and math.isfinite(restitution):
+        if not 0.0 <= restitution <= 1.0:
+            raise InputError(f"restitution must lie in [0, 1], got values in "
+                             f"[{restitution:g}, {restitution:g}]")
+        e = np.full(k, float(restitution))
+    else:
+        e = as_array(restitution, "restitution")
+        _checks.check_finite(e, "restitution", 0)
+        if np.any((e < 0) | (e > 1)):
+            raise InputError(
+                f"restitution must lie in [0, 1], got values in [{e.min():g}, {e.max():g}]"
+            )
+        if e.ndim == 0:
+            e = np.full(k, float(e))
+        if e.shape[-1] not in (1, k):
+            raise InputError(
+                f"restitution must be a scalar or have k = {k} values, got {e.shape}")
+        e = np.broadcast_to(e, (*e.shape[:-1], k))
     batch = broadcast_batch(M=M.shape[:-2], v=v.shape[:-1], unilateral=N.shape[:-2],
                             bilateral=B.shape[:-2], restitution=e.shape[:-1])
     pb = B.shape[-2]
@@ -196,7 +204,7 @@ def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, w
     nb = iM.shape[0]
     Mf = np.ascontiguousarray(M.reshape(-1, n, n))
     Nf = np.ascontiguousarray(N.reshape(-1, k, n))
-    Bf = np.ascontiguousarray(B.reshape(int(np.prod(B.shape[:-2])), pb, n))
+    Bf = np.ascontiguousarray(B.reshape(math.prod(B.shape[:-2]), pb, n))
     vf = np.ascontiguousarray(v.reshape(-1, n))
     Ef = np.ascontiguousarray(e.reshape(-1, k))
     out = {
