@@ -166,3 +166,44 @@ def test_cli(tmp_path, capsys):
     assert main(["optimize", str(f)]) == 2
     err = capsys.readouterr().err
     assert "scenario" in err and "Traceback" not in err
+
+
+def test_rocker_bogie_reconfiguration_end_to_end():
+    """The shipped 3-D example: optimum feasible, objective and peak force recomputed.
+
+    Independent references: the worst-case T_c^- of both settings is recomputed one beta
+    at a time with ``energy_of`` (no batched sweep); the clearance of the rocker-bogie is
+    the height of the bogie pivots, ``wheel_radius + bogie_pivot_height`` (wheels on flat
+    ground, the lowest non-wheel point), which neither variable changes; the simulated
+    peak force is lower at the optimum.
+    """
+    from pathlib import Path
+
+    from roverimpact.models import rocker_bogie
+    from roverimpact.scenario import energy_of, scenario_from_dict
+    from roverimpact.studies.optimize import load_optimization, optimize_setting
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "reconfigure_rocker_bogie.toml"
+    res = optimize_setting(load_optimization(path))
+    best, nominal = res.best, res.nominal
+    bounds = {"chassis_com_above_pivot": (0.0, 0.2), "rocker_pivot_height": (0.15, 0.3)}
+    for name, (lo, hi) in bounds.items():
+        assert lo - 1e-12 <= best.values[name] <= hi + 1e-12
+    p = rocker_bogie(**best.values).params
+    assert best.clearance == pytest.approx(p["wheel_radius"] + p["bogie_pivot_height"],
+                                           abs=1e-9)
+    assert best.margin >= 0.05 - 1e-6 and best.clearance >= 0.03 - 1e-6
+    betas = np.linspace(20.0, 90.0, 6)
+
+    def worst(values):
+        out = []
+        for b in betas:
+            s = {"model": {"name": "rocker_bogie", "params": values}, "velocity": {"u": 0.2},
+                 "obstacle": {"wheel": "left_front", "beta_deg": float(b)}}
+            out.append(float(energy_of(scenario_from_dict(s)).T_c_minus))
+        return max(out)
+
+    assert best.objective == pytest.approx(worst(best.values), rel=1e-9)
+    assert nominal.objective == pytest.approx(worst(nominal.values), rel=1e-9)
+    assert best.objective < 0.8 * nominal.objective
+    assert res.F_sim_best < res.F_sim_nominal
