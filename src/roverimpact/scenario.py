@@ -629,6 +629,43 @@ def _energy(M, A, v, obstacle_row: int) -> ImpactEnergy:
                         m_eff_free=sc(m_eff_free), v_n=sc(v_n), rank=p.rank)
 
 
+def _energy_sweep(M, A, v, obstacle_row: int, group) -> ImpactEnergy:
+    """:func:`_energy` for a stack ``A`` (k, m, n) with one ``M`` and ``v``.
+
+    Items with the same ``group`` id share every row except the obstacle row (zero rows are
+    dropped), so the orthonormal basis of the other whitened rows is computed once per
+    group, and only the obstacle row is whitened per item. This gives the same ``m_eff``
+    as :func:`_energy` (one SVD per item) at a fraction of the cost.
+    """
+    from scipy.linalg import solve_triangular
+
+    p = partition(M, A, v, want_velocities=False)
+    rows = A[:, obstacle_row, :]
+    v_n = -(rows @ v)
+    L = np.linalg.cholesky(M)
+    w_o = solve_triangular(L, rows.T, lower=True, check_finite=False)  # (n, k)
+    g_free = np.sum(w_o * w_o, axis=0)
+    g = np.empty_like(g_free)
+    group = np.asarray(group)
+    for gid in np.unique(group):
+        sel = np.flatnonzero(group == gid)
+        others = np.delete(A[sel[0]], obstacle_row, axis=0)
+        others = others[np.any(others != 0.0, axis=1)]
+        wo = w_o[:, sel]
+        if others.shape[0]:
+            W = solve_triangular(L, others.T, lower=True, check_finite=False)
+            U, sv, _ = np.linalg.svd(W, full_matrices=False)
+            U = U[:, sv > 1e-9 * max(sv[0], 1e-300)]
+            wo = wo - U @ (U.T @ wo)
+        g[sel] = np.sum(wo * wo, axis=0)
+    with np.errstate(divide="ignore"):
+        tiny = g <= 1e-12 * np.maximum(g_free, 1e-300)
+        m_eff = np.where(tiny, np.inf, 1.0 / np.where(tiny, 1.0, g))
+        m_eff_free = 1.0 / g_free
+    return ImpactEnergy(T=p.T, T_c_minus=p.T_c, T_a=p.T_a, m_eff=m_eff,
+                        m_eff_free=m_eff_free, v_n=v_n, rank=p.rank)
+
+
 def energy_of(scenario: Scenario | ImpactSetup) -> ImpactEnergy:
     """Effective kinetic energy T_c^-, T, T_a, m_eff and v_n of a scenario.
 
@@ -705,8 +742,10 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
         A = np.broadcast_to(A_all, (len(beta), *A_all.shape)).copy()
         A[:, obs, :] = rows
         keep = holding_rows(setup.candidate_labels, setup.M, A, setup.v, obstacle_row=obs)
-        return _energy(setup.M, A * keep[..., None], setup.v, obs)  # zero rows are dropped
+        group = np.unique(keep, axis=0, return_inverse=True)[1].reshape(-1)
+        # zero rows are dropped
+        return _energy_sweep(setup.M, A * keep[..., None], setup.v, obs, group)
     A = np.broadcast_to(setup.A, (len(beta), *setup.A.shape)).copy()
     A[:, setup.obstacle_row, :] = rows
-    return _energy(setup.M, A, setup.v, setup.obstacle_row)
+    return _energy_sweep(setup.M, A, setup.v, setup.obstacle_row, np.zeros(len(beta), int))
 

@@ -193,6 +193,8 @@ class ConstraintSet:
     labels: list[str] = field(init=False)
     _fids: list = field(init=False, repr=False)
     _data: object = field(init=False, repr=False)
+    _plan: object = field(init=False, repr=False, default=None)
+    _lower: object = field(init=False, repr=False, default=None)
 
     def __post_init__(self):
         model = self.mbm.model
@@ -246,12 +248,25 @@ class ConstraintSet:
             return np.zeros((0, model.nv))
         return np.vstack(out)
 
+    def fast_rows(self, q) -> np.ndarray:
+        """The same ``A`` as :meth:`rows`, assembled in one compiled pass
+        (:mod:`roverimpact.models._assemble`; after :meth:`kinematics` at ``q``)."""
+        if self._plan is None:
+            from ._assemble import RowPlan
+
+            self._plan = RowPlan(self)
+        return self._plan.rows(q)
+
     def evaluate(self, q) -> tuple[np.ndarray, np.ndarray]:
         """``(M (nv, nv), A (m, nv))`` at configuration ``q`` (nq,)."""
         q = np.asarray(q, dtype=float)
-        M = mass_matrix(self.mbm.model, self._data, q)
+        model, data = self.mbm.model, self._data
+        M = pin.crba(model, data, q)  # upper triangle
+        if self._lower is None:
+            self._lower = np.tril_indices(model.nv, -1)
+        M[self._lower] = M.T[self._lower]
         self.kinematics(q)
-        return M, self.rows(q)
+        return M, self.fast_rows(q)
 
 
 def _frame_id(model, name: str) -> int:
