@@ -1,0 +1,199 @@
+"""MJCF robots through Pinocchio's parser: closed-form mass matrix, agreement with the same
+robot written as URDF, a T_c^- scenario on an MJCF arm, and clean errors on bad files.
+
+Two-link planar arm, hinges about y, links along x (link 1 from the origin to the elbow at
+``l1``; centres of mass at ``c1``, ``c2`` along each link; central inertias ``I1``, ``I2``
+about y). With the point velocities of the two centres of mass, the kinetic energy gives
+the textbook double-pendulum mass matrix:
+
+    M11 = I1 + m1 c1^2 + I2 + m2 (l1^2 + c2^2 + 2 l1 c2 cos q2)
+    M12 = I2 + m2 (c2^2 + l1 c2 cos q2)
+    M22 = I2 + m2 c2^2
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from roverimpact.exceptions import ModelError
+from roverimpact.models import load_robot
+
+m1, m2, l1, c1, c2 = 1.5, 0.7, 0.5, 0.2, 0.15
+I1, I2 = 0.02, 0.005
+
+MJCF = f"""<mujoco model="arm2">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="link1" pos="0 0 0">
+      <joint name="j1" type="hinge" axis="0 1 0"/>
+      <inertial pos="{c1} 0 0" mass="{m1}" diaginertia="0.01 {I1} 0.03"/>
+      <body name="link2" pos="{l1} 0 0">
+        <joint name="j2" type="hinge" axis="0 1 0"/>
+        <inertial pos="{c2} 0 0" mass="{m2}" diaginertia="0.004 {I2} 0.006"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+URDF = f"""<robot name="arm2">
+  <link name="world"/>
+  <link name="link1">
+    <inertial><origin xyz="{c1} 0 0"/><mass value="{m1}"/>
+      <inertia ixx="0.01" iyy="{I1}" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <link name="link2">
+    <inertial><origin xyz="{c2} 0 0"/><mass value="{m2}"/>
+      <inertia ixx="0.004" iyy="{I2}" izz="0.006" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="j1" type="continuous"><parent link="world"/><child link="link1"/>
+    <origin xyz="0 0 0"/><axis xyz="0 1 0"/></joint>
+  <joint name="j2" type="continuous"><parent link="link1"/><child link="link2"/>
+    <origin xyz="{l1} 0 0"/><axis xyz="0 1 0"/></joint>
+</robot>
+"""
+
+
+def _closed_form(q2):
+    M11 = I1 + m1 * c1**2 + I2 + m2 * (l1**2 + c2**2 + 2 * l1 * c2 * np.cos(q2))
+    M12 = I2 + m2 * (c2**2 + l1 * c2 * np.cos(q2))
+    M22 = I2 + m2 * c2**2
+    return np.array([[M11, M12], [M12, M22]])
+
+
+def _mass(robot, q):
+    import pinocchio as pin
+
+    M = pin.crba(robot.model, robot.model.createData(), np.asarray(q, float))
+    return np.triu(M) + np.triu(M, 1).T
+
+
+@pytest.fixture
+def files(tmp_path):
+    (tmp_path / "arm.xml").write_text(MJCF)
+    (tmp_path / "arm.urdf").write_text(URDF)
+    return tmp_path
+
+
+def test_mjcf_mass_matrix_closed_form_and_urdf(files):
+    mj = load_robot(files / "arm.xml")
+    ur = load_robot(files / "arm.urdf")
+    assert mj.model.nv == ur.model.nv == 2
+    # hinges are continuous joints in URDF (cos/sin in q): compare at joint angles
+    for q1, q2 in [(0.0, 0.0), (0.3, -1.1), (-2.0, 2.5)]:
+        M = _mass(mj, [q1, q2])
+        np.testing.assert_allclose(M, _closed_form(q2), rtol=1e-12)
+        qu = np.array([np.cos(q1), np.sin(q1), np.cos(q2), np.sin(q2)])
+        np.testing.assert_allclose(_mass(ur, qu), M, rtol=1e-12)
+
+
+def test_mjcf_arm_scenario_effective_mass(files):
+    """Tip of link 2 moving along a normal: m_eff from the scenario equals 1/(a M^-1 a^T)
+    with the tip Jacobian of the closed form (planar arm, x-z plane)."""
+    from roverimpact.scenario import energy_of, scenario_from_dict
+
+    q1, q2, l2 = 0.4, 0.9, 0.3
+    sc = scenario_from_dict({
+        "model": {"file": str(files / "arm.xml")},
+        "configuration": {"joints": {"j1": q1, "j2": q2}},
+        "velocity": {"joints": {"j1": 1.0, "j2": -0.5}},
+        "contacts": {"ground_wheels": []},
+        "obstacle": {"frame": "link2", "point": [l2, 0.0, 0.0], "normal": [-1.0, 0.0, 0.0]},
+    })
+    e = energy_of(sc)
+    # rotation about +y by angle t maps x to (cos t, 0, -sin t)
+    s1, s12 = q1, q1 + q2
+    tip_q1 = np.array([-l1 * np.sin(s1) - l2 * np.sin(s12), -l1 * np.cos(s1) - l2 * np.cos(s12)])
+    tip_q2 = np.array([-l2 * np.sin(s12), -l2 * np.cos(s12)])
+    J = np.column_stack([tip_q1, tip_q2])  # rows: x, z velocity of the tip
+    a = np.array([-1.0, 0.0]) @ J
+    M = _closed_form(q2)
+    assert float(e.m_eff_free) == pytest.approx(1.0 / (a @ np.linalg.solve(M, a)), rel=1e-10)
+    v = np.array([1.0, -0.5])
+    assert float(e.T) == pytest.approx(0.5 * v @ M @ v, rel=1e-12)
+
+
+@pytest.mark.parametrize("text, match", [
+    ("<mujoco><worldbody><body><joint type='hinge'", "cannot build|malformed|parse"),
+    ("<mujoco model='x'><worldbody/></mujoco>", "cannot build"),
+    ("<mujoco model='x'><worldbody><body name='b'><inertial pos='0 0 0' mass='1' "
+     "diaginertia='1 1 1'/></body></worldbody></mujoco>", "no degree of freedom"),
+    ("not xml at all", "cannot build|malformed|parse|not"),
+])
+def test_bad_mjcf_files(tmp_path, text, match):
+    f = tmp_path / "bad.xml"
+    f.write_text(text)
+    with pytest.raises(ModelError, match=match):
+        load_robot(f)
+
+
+def test_bad_mjcf_from_the_cli(tmp_path, capsys):
+    from roverimpact.cli import main
+
+    (tmp_path / "bad.xml").write_text("<mujoco><worldbody><body><joint")
+    (tmp_path / "s.toml").write_text(
+        '[model]\nfile = "bad.xml"\n[obstacle]\nframe = "link1"\nnormal = [1.0, 0.0, 0.0]\n')
+    assert main(["energy", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "bad.xml" in err and "Traceback" not in err
+
+
+def test_mass_matrix_agrees_with_mujoco(files):
+    """Second engine: MuJoCo's M(q) (mj_fullM) equals Pinocchio's for the same MJCF file."""
+    mujoco = pytest.importorskip("mujoco")
+    mj_model = mujoco.MjModel.from_xml_path(str(files / "arm.xml"))
+    mj_data = mujoco.MjData(mj_model)
+    robot = load_robot(files / "arm.xml")
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        q = rng.uniform(-np.pi, np.pi, 2)
+        mj_data.qpos[:] = q
+        mujoco.mj_forward(mj_model, mj_data)
+        M_mj = np.zeros((2, 2))
+        if hasattr(mj_data, "qM"):  # MuJoCo 3: mj_fullM(m, dst, qM)
+            mujoco.mj_fullM(mj_model, M_mj, mj_data.qM)
+        else:  # MuJoCo 4: mj_fullM(m, d, dst)
+            mujoco.mj_fullM(mj_model, mj_data, M_mj)
+        np.testing.assert_allclose(_mass(robot, q), M_mj, rtol=1e-10, atol=1e-14)
+
+
+def _mj_full_M(mujoco, m, d):
+    M = np.zeros((m.nv, m.nv))
+    if hasattr(d, "qM"):
+        mujoco.mj_fullM(m, M, d.qM)
+    else:
+        mujoco.mj_fullM(m, d, M)
+    return M
+
+
+def test_exported_rover_urdf_in_mujoco_same_mass_matrix(tmp_path):
+    """Second engine on the built-in 3-D rover: its URDF export compiled by MuJoCo (fixed
+    base, MuJoCo's own URDF importer and CRBA) gives Pinocchio's joint-space M at random q.
+    (The planar rover's export has massless x/z slider links, which MuJoCo rejects.)"""
+    import pinocchio as pin
+
+    from roverimpact.models import export_urdf, rocker_bogie
+
+    mujoco = pytest.importorskip("mujoco")
+    mbm = rocker_bogie()
+    f = export_urdf(mbm, tmp_path / "rover.urdf")
+    robot = load_robot(f, floating_base=False)
+    m = mujoco.MjModel.from_xml_path(str(f))
+    d = mujoco.MjData(m)
+    names = [m.joint(i).name for i in range(m.njnt)]
+    joints = [robot.model.joints[robot.model.getJointId(nm)] for nm in names]
+    assert m.nv == robot.model.nv == len(names)
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        q = rng.uniform(-0.6, 0.6, m.nq)
+        qp = pin.neutral(robot.model)
+        for i, j in enumerate(joints):
+            a = q[m.jnt_qposadr[i]]
+            qp[j.idx_q:j.idx_q + j.nq] = [a] if j.nq == 1 else [np.cos(a), np.sin(a)]
+        d.qpos[:] = q
+        mujoco.mj_forward(m, d)
+        perm = [j.idx_v for j in joints]
+        M = _mass(robot, qp)[np.ix_(perm, perm)]
+        np.testing.assert_allclose(M, _mj_full_M(mujoco, m, d), rtol=1e-10,
+                                   atol=1e-12 * np.abs(M).max())
