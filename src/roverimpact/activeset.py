@@ -60,6 +60,7 @@ matters.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -143,8 +144,12 @@ def _rows(x, name, n):
             f"{name} must have shape (..., rows, n) with n = {n} columns to match M, "
             f"got {R.shape}"
         )
-    _checks.check_finite(R, name, 2)
-    zero = ~np.any(R != 0.0, axis=-1)
+    # one reduction for both checks: the largest |entry| of a row is NaN/inf if the row
+    # holds one (then the exact scan names it) and 0 for an all-zero row
+    big = np.max(np.abs(R), axis=-1) if R.size else np.zeros(R.shape[:-1])
+    if not np.isfinite(big).all():
+        _checks.check_finite(R, name, 2)
+    zero = big == 0.0
     if zero.any():
         where = np.argwhere(zero)[0]
         idx = tuple(int(i) for i in where[:-1])
@@ -422,21 +427,35 @@ def holding_rows(labels, M, A, v, *, obstacle_row: int, restitution=0.0,
     (..., m) bool ndarray
         ``True`` for the rows to hold when computing T_c^-.
     """
-    labels = list(labels)
+    labels = tuple(labels)
     A = as_array(A, "A", min_ndim=2)
     if A.shape[-2] != len(labels):
         raise InputError(f"{len(labels)} labels for {A.shape[-2]} rows of A")
-    kinds = [_row_kind(lab) for lab in labels]
-    uni = [i for i, (kd, _) in enumerate(kinds) if kd == "unilateral" or i == obstacle_row]
-    bil = [i for i, (kd, _) in enumerate(kinds) if kd == "bilateral" and i not in uni]
+    uni, bil, tangent, source = _row_roles(labels, int(obstacle_row))
     keep = np.zeros((*A.shape[:-2], len(labels)), dtype=bool)
-    act = active_set(M, v, A[..., uni, :], A[..., bil, :] if bil else None,
+    act = active_set(M, v, A[..., uni, :], A[..., bil, :] if len(bil) else None,
                      restitution=restitution, tol=tol)
     keep[..., uni] = act
     keep[..., bil] = True
-    wheel_row = {kinds[i][1]: i for i in uni if kinds[i][1] is not None}
-    for i, (kd, wheel) in enumerate(kinds):
-        if kd == "tangent" and wheel in wheel_row:
-            keep[..., i] = keep[..., wheel_row[wheel]]
+    keep[..., tangent] = keep[..., source]  # no-slip rows follow their wheel's normal row
     keep[..., obstacle_row] = True
     return keep
+
+
+@functools.lru_cache(maxsize=256)
+def _row_roles(labels: tuple[str, ...], obstacle_row: int):
+    """Index arrays for :func:`holding_rows`: unilateral rows, bilateral rows, the no-slip
+    rows whose wheel has a unilateral normal row, and those normal rows."""
+    kinds = [_row_kind(lab) for lab in labels]
+    uni = [i for i, (kd, _) in enumerate(kinds) if kd == "unilateral" or i == obstacle_row]
+    bil = [i for i, (kd, _) in enumerate(kinds) if kd == "bilateral" and i not in uni]
+    wheel_row = {kinds[i][1]: i for i in uni if kinds[i][1] is not None}
+    tangent = [i for i, (kd, w) in enumerate(kinds) if kd == "tangent" and w in wheel_row]
+    source = [wheel_row[kinds[i][1]] for i in tangent]
+
+    def arr(x):
+        a = np.array(x, dtype=np.int64)
+        a.flags.writeable = False
+        return a
+
+    return arr(uni), arr(bil), arr(tangent), arr(source)
