@@ -14,6 +14,11 @@ One pass per configuration, no Python in the loop:
 
 The orthogonal projector onto ``range(W) = range(L^{-1} A^T)`` is the whitened form of
 ``P_c = M^{-1} A^T (A M^{-1} A^T)^+ A``; no inverse of a singular matrix is ever formed.
+
+:func:`partition_kernel` processes one item at a time. :func:`lanes_kernel` returns the
+lane-parallel kernel (generated module ``_kernels_lanes``), which processes 8 items at
+once in SIMD lanes and hands nearly dependent rows back to :func:`partition_factored`.
+:func:`prefetch` is a cache hint used by that kernel.
 """
 
 from __future__ import annotations
@@ -85,12 +90,14 @@ def _factor(Mi, L, invd):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, fastmath=_FAST)
-def partition_factored(L, invd, Ab, vb, rtol, want_vc, W, H, hn, u, y, z, cn, vc_row, res):
+def partition_factored(
+    L, invd, Ab, vb, rtol, want_vc, W, H, hn, u, y, z, cn, vc_row, res
+):  # pragma: no cover - compiled
     """Steps 2-6 for one item whose ``M = L L^T`` is factored; returns a status code.
 
     ``res`` receives ``T, T_c, T_a, rank``; ``vc_row`` receives ``v_c`` if ``want_vc``.
     ``W, H`` (m, n), ``hn, cn`` (m,), ``u, y, z`` (n,) are scratch.
-    """  # pragma: no cover - compiled
+    """
     n = L.shape[0]
     m = Ab.shape[0]
     kmax = min(n, m)
