@@ -183,3 +183,17 @@ def test_partition_uses_lanes_above_threshold_and_agrees(rng):
         assert big.T_c[b] == pytest.approx(one.T_c, rel=1e-10, abs=1e-14 * one.T)
         assert big.rank[b] == one.rank
         np.testing.assert_allclose(big.v_c[b], one.v_c, rtol=1e-8, atol=1e-12)
+
+
+def test_read_only_and_broadcast_inputs(rng):
+    """Read-only arrays and zero-stride broadcast views go through the lane kernel."""
+    nb, n, m = 33, 6, 2
+    M, A, v = _batch(rng, nb, n, m, ["full"])
+    ref = ri.partition(M, A, v)
+    for arr in (M, A, v):
+        arr.flags.writeable = False
+    got = ri.partition(M, A, v)
+    np.testing.assert_allclose(got.T_c, ref.T_c, rtol=1e-14)
+    shared = ri.partition(np.broadcast_to(M[0], (nb, n, n)), A, v, want_velocities=False)
+    one = ri.partition(M[0], A, v, want_velocities=False)
+    np.testing.assert_allclose(shared.T_c, one.T_c, rtol=1e-13)
