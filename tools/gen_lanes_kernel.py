@@ -18,6 +18,7 @@ the lane number. The generated file is committed (the package needs no build ste
 from __future__ import annotations
 
 import argparse
+import hashlib
 import sys
 from pathlib import Path
 
@@ -394,7 +395,14 @@ def expand(template: str, lanes: int) -> str:
 
 
 def generate(lanes: int = LANES) -> str:
-    return HEADER.format(lanes=lanes) + "\n" + expand(TEMPLATE, lanes)
+    # numba's on-disk cache checks only the file a function is defined in; the kernel
+    # calls _kernels.py (_factor, partition_factored, prefetch), so its hash is part of
+    # the generated file: changing _kernels.py makes tests/test_kernels_lanes.py ask for a
+    # regeneration, which invalidates the cached compiled kernel
+    source = (TARGET.parent / "_kernels.py").read_text(encoding="utf-8")  # universal newlines
+    deps = hashlib.sha256(source.encode()).hexdigest()[:16]
+    return (HEADER.format(lanes=lanes) + f"\n# _kernels.py sha256: {deps}\n"
+            + expand(TEMPLATE, lanes))
 
 
 def main(argv=None) -> int:
