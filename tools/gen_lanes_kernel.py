@@ -352,9 +352,10 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
             if out[4, w] < WELL_CONDITIONED:
                 # a kept direction with a small residual: recompute this item with the
                 # rank-revealing Householder QR (column pivoting) of the one-item kernel
-                Mi = M[iM[b]]
-                if _factor(Mi, L_one, invd_one) != STATUS_OK:
-                    raise AssertionError("lane factor disagrees with the one-item factor")
+                code = _factor(M[iM[b]], L_one, invd_one)
+                if code != STATUS_OK:  # a pivot at the threshold, rounded the other way
+                    status[b] = code
+                    continue
                 vc_row = vc[b] if want_vc else dummy
                 status[b] = partition_factored(
                     L_one, invd_one, A[iA[b]], v[iv[b]], rtol, want_vc, W_one, H_one, hn_one,
