@@ -367,6 +367,8 @@ def impact_kernel(
     WN = np.empty((n, k))
     Wt = np.empty((n, k))
     Q = np.empty((n, pb + k))
+    WB = np.empty((pb, n))  # whitened bilateral rows
+    nB = np.empty(pb)
     nN = np.empty(k)
     sc = np.empty(k)
     dep = np.zeros(k, dtype=np.bool_)
@@ -410,31 +412,25 @@ def impact_kernel(
         # whitened bilateral rows -> orthonormal basis Q[:, :r]
         r = 0
         bmax = 0.0
-        for j in range(pb):
+        for j in range(pb):  # forward substitution, each row once
+            Wj = WB[j]
             nrm = 0.0
             for i in range(n):
                 s = Bb[j, i]
                 for c in range(i):
-                    s -= L[i, c] * x[c]
-                s /= L[i, i]
-                x[i] = s
+                    s -= L[i, c] * Wj[c]
+                s *= invd[i]
+                Wj[i] = s
                 nrm += s * s
             nrm = np.sqrt(nrm)
+            nB[j] = nrm
             if nrm > bmax:
                 bmax = nrm
         for j in range(pb):
-            nrm = 0.0
-            for i in range(n):
-                s = Bb[j, i]
-                for c in range(i):
-                    s -= L[i, c] * x[c]
-                s /= L[i, i]
-                x[i] = s
-                nrm += s * s
-            nrm = np.sqrt(nrm)
+            nrm = nB[j]
             if nrm > rtol * bmax and nrm > 0.0:
                 for i in range(n):
-                    x[i] /= nrm
+                    x[i] = WB[j, i] / nrm
                 r = _orth_append(Q, r, x, rtol)
         rB = r
         # u0 = (I - Q Q^T) u
@@ -454,7 +450,7 @@ def impact_kernel(
                 s = Nb[j, i]
                 for c in range(i):
                     s -= L[i, c] * WN[c, j]
-                s /= L[i, i]
+                s *= invd[i]
                 WN[i, j] = s
                 Wt[i, j] = s
                 nrm += s * s
