@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from roverimpact.exceptions import ModelError
 from roverimpact.models import rocker_bogie, rover2d
 from roverimpact.models.base import MultibodyModel
 from roverimpact.models.kinematics import (
@@ -116,3 +117,184 @@ def test_nonlinear_loop_closure_is_recomputed():
         q[j.idx_q] = a
         _, A = cs.evaluate(q)
         assert A[0, j.idx_v] == pytest.approx(np.cos(a), rel=1e-14)
+
+
+# ----------------------------------------------------------------------------------------
+# Batched evaluation over configurations, URDF robots, placements read in place
+# ----------------------------------------------------------------------------------------
+
+
+def _panda(floating_base=False):
+    from roverimpact.models import load_robot
+
+    return load_robot("example-robot-data:panda_description/urdf/panda.urdf",
+                      floating_base=floating_base)
+
+
+def _arm_constraints(mbm, rng):
+    """Two points on the hand and the elbow with random normals, and a locked joint."""
+    cons = []
+    for name, frame in (("tool", "panda_hand_tcp"), ("elbow", "panda_link4")):
+        n = rng.standard_normal(3)
+        cons.append(PointContact(name, frame, tuple(n / np.linalg.norm(n)),
+                                 point=tuple(0.05 * rng.standard_normal(3))))
+    cons.append(LockedJoint("panda_joint3"))
+    return cons
+
+
+def _reference(cs, mbm, q):
+    """M by CRBA on fresh data, A from the per-constraint rows (pin.getFrameJacobian)."""
+    cs.kinematics(q)
+    return mass_matrix(mbm.model, mbm.model.createData(), q), cs.rows(q)
+
+
+_CASES = {
+    "rover2d_rocker_mid": lambda rng: (lambda m: (m, _constraints(m, rng)))(
+        rover2d(suspension="rocker", middle_wheel=True)),
+    "rocker_bogie": lambda rng: (lambda m: (m, _constraints(m, rng)))(rocker_bogie()),
+    "panda_urdf": lambda rng: (lambda m: (m, _arm_constraints(m, rng)))(_panda()),
+    "panda_urdf_floating": lambda rng: (lambda m: (m, _arm_constraints(m, rng)))(
+        _panda(floating_base=True)),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_CASES))
+def test_batched_evaluate_equals_reference_rows(case):
+    """evaluate(Q) with Q (2, 3, nq) gives, item by item, the CRBA mass matrix and the
+    per-constraint reference rows, to 1e-12 relative; and the single-q path agrees."""
+    rng = np.random.default_rng(11)
+    mbm, cons = _CASES[case](rng)
+    cs = ConstraintSet(mbm, cons)
+    Q = np.array([_random_q(mbm.model, rng, 0.6) for _ in range(6)]).reshape(2, 3, -1)
+    M, A = cs.evaluate(Q)
+    nv, m = mbm.model.nv, len(cs.labels)
+    assert M.shape == (2, 3, nv, nv) and A.shape == (2, 3, m, nv)
+    for idx in np.ndindex(2, 3):
+        M_ref, A_ref = _reference(cs, mbm, Q[idx])
+        scale = max(1.0, np.abs(A_ref).max())
+        np.testing.assert_allclose(A[idx], A_ref, rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(M[idx], M_ref, rtol=1e-13, atol=1e-13)
+        np.testing.assert_array_equal(M[idx], M[idx].T)
+        M1, A1 = cs.evaluate(Q[idx])
+        np.testing.assert_allclose(A1, A[idx], rtol=0, atol=1e-14 * scale)
+        np.testing.assert_array_equal(M1, M[idx])
+
+
+def test_point_row_of_urdf_arm_matches_finite_differences():
+    """Row a of a point fixed in a Panda link: a v = n . d/dt p(q + t v) (central differences
+    of the point position from forward kinematics alone)."""
+    rng = np.random.default_rng(5)
+    mbm = _panda(floating_base=True)
+    model = mbm.model
+    n = np.array([0.3, -0.2, 0.93])
+    n /= np.linalg.norm(n)
+    x = np.array([0.02, -0.01, 0.07])
+    cs = ConstraintSet(mbm, [PointContact("tool", "panda_link6", tuple(n), point=tuple(x))])
+    fid = model.getFrameId("panda_link6")
+    data = model.createData()
+
+    def point(qq):
+        pin.framesForwardKinematics(model, data, qq)
+        return data.oMf[fid].act(x)
+
+    Q = np.array([_random_q(model, rng, 0.8) for _ in range(4)])
+    _, A = cs.evaluate(Q)
+    h = 1e-6
+    for q, a in zip(Q, A[:, 0], strict=True):
+        v = rng.standard_normal(model.nv)
+        fd = (point(pin.integrate(model, q, h * v)) - point(pin.integrate(model, q, -h * v)))
+        assert a @ v == pytest.approx(n @ fd / (2 * h), rel=1e-7, abs=1e-9)
+
+
+def test_placements_fallback_equals_in_place_view():
+    """With the in-place view of data.oMf switched off (as on a Pinocchio build with another
+    memory layout), the frame-by-frame copy gives the same rows, single and batched."""
+    rng = np.random.default_rng(2)
+    mbm = rocker_bogie()
+    cs = ConstraintSet(mbm, _constraints(mbm, rng))
+    Q = np.array([_random_q(mbm.model, rng) for _ in range(5)])
+    M, A = cs.evaluate(Q)
+    plan = cs._row_plan()
+    assert plan._oMf is not None  # the installed Pinocchio stores the placements in place
+    plan._oMf = None
+    plan.f_row = np.arange(len(plan.frame_ids), dtype=np.int64)
+    plan._args = (plan.f_row, *plan._args[1:])
+    M2, A2 = cs.evaluate(Q)
+    np.testing.assert_array_equal(M2, M)
+    np.testing.assert_array_equal(A2, A)
+    for q, a in zip(Q, A, strict=True):
+        np.testing.assert_array_equal(cs.evaluate(q)[1], a)
+
+
+def test_copied_constraint_set_reads_its_own_data():
+    """A deep copy or pickle round trip rebuilds the plan on the copy's own Pinocchio data
+    (the in-place view must not keep reading the original's memory)."""
+    import copy
+    import pickle
+
+    rng = np.random.default_rng(4)
+    mbm = rocker_bogie()
+    cs = ConstraintSet(mbm, _constraints(mbm, rng))
+    q1, q2 = _random_q(mbm.model, rng), _random_q(mbm.model, rng)
+    _, A1 = cs.evaluate(q1)
+    for other in (copy.deepcopy(cs), pickle.loads(pickle.dumps(cs))):
+        _, A2 = other.evaluate(q2)
+        cs.evaluate(q1)  # moves the original's data after the copy evaluated
+        np.testing.assert_allclose(A2, _reference(other, mbm, q2)[1], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(other.evaluate(q1)[1], A1, rtol=0, atol=1e-14)
+
+
+def test_one_dof_pendulum_single_and_batched(tmp_path):
+    """nv = 1 (Pinocchio returns 1-D arrays): M = I_yy + m c^2, and the row of the bob
+    point (l, 0, 0) along x is d/dt (l cos q) = -l sin q (hinge about y, z up: x = l cos q,
+    z = -l sin q)."""
+    from roverimpact.models import load_robot
+
+    m, c, l, Iyy = 2.0, 0.3, 0.5, 0.04
+    f = tmp_path / "pend.urdf"
+    f.write_text(f"""<robot name="pend"><link name="base"/>
+  <link name="arm"><inertial><origin xyz="{c} 0 0"/><mass value="{m}"/>
+    <inertia ixx="0.01" iyy="{Iyy}" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>""")
+    mbm = load_robot(f)
+    cs = ConstraintSet(mbm, [PointContact("bob", "arm", (1.0, 0.0, 0.0), point=(l, 0.0, 0.0))])
+    Q = np.array([[0.0], [0.4], [-1.1]])
+    M, A = cs.evaluate(Q)
+    assert M.shape == (3, 1, 1) and A.shape == (3, 1, 1)
+    np.testing.assert_allclose(M[:, 0, 0], Iyy + m * c**2, rtol=1e-14)
+    np.testing.assert_allclose(A[:, 0, 0], -l * np.sin(Q[:, 0]), rtol=0, atol=1e-15)
+    M1, A1 = cs.evaluate(Q[1])
+    assert M1.shape == (1, 1) and A1.shape == (1, 1)
+    assert A1[0, 0] == pytest.approx(-l * np.sin(0.4), abs=1e-15)
+
+
+def test_nonlinear_loop_closure_batched():
+    """Batched evaluation recomputes a q-dependent loop closure for every item."""
+    base = rover2d(suspension="rocker")
+    model = base.model
+    j = model.joints[1]
+
+    def loop(q):
+        J = np.zeros((1, model.nv))
+        J[0, j.idx_v] = np.cos(q[j.idx_q])
+        return np.zeros(1), J
+
+    mbm = MultibodyModel(model=model, name="x", wheels=base.wheels, loop_closure=loop,
+                         loop_names=["custom"], params=base.params)
+    cs = ConstraintSet(mbm, [LoopClosure(("custom",)), GroundContact(base.wheels[0])])
+    Q = np.repeat(pin.neutral(model)[None], 3, axis=0)
+    Q[:, j.idx_q] = (0.1, 0.7, -0.3)
+    _, A = cs.evaluate(Q)
+    np.testing.assert_allclose(A[:, 0, j.idx_v], np.cos(Q[:, j.idx_q]), rtol=1e-14)
+    for q, a in zip(Q, A, strict=True):
+        np.testing.assert_allclose(a, _reference(cs, mbm, q)[1], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("bad", [np.zeros(3), np.zeros((2, 5)), 1.0])
+def test_wrong_configuration_shape_is_a_model_error(bad):
+    mbm = rocker_bogie()
+    cs = ConstraintSet(mbm, [LoopClosure(tuple(mbm.loop_names))])
+    with pytest.raises(ModelError, match=r"q must have shape \(\.\.\., 17\)"):
+        cs.evaluate(bad)

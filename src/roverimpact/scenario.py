@@ -337,10 +337,16 @@ class ImpactSetup:
         return _energy(self.M, self.A, self.v, self.obstacle_row)
 
     def evaluate(self, q=None) -> tuple[np.ndarray, np.ndarray]:
-        """Recompute ``(M, A)`` with the same active rows at ``q`` (default: this ``q``)."""
+        """Recompute ``(M, A)`` with the same active rows at ``q`` (default: this ``q``).
+
+        ``q`` may be a batch ``(..., nq)``: then ``M`` is ``(..., n, n)`` and ``A``
+        ``(..., m, n)``, computed in one pass (one Pinocchio call sequence per configuration,
+        one compiled call for all rows), ready for a batched
+        :func:`roverimpact.partition` (``partition(M, A, v)``).
+        """
         q = self.q if q is None else np.asarray(q, dtype=float)
         M, A_all = self._cs.evaluate(q)
-        return M, A_all[self._active]
+        return M, A_all[..., self._active, :]
 
     def obstacle_basis(self):
         """``(B (3, n), wheel)``: the obstacle row is n^T B (+ rim-point term for wheels)."""

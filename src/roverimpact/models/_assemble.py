@@ -31,20 +31,26 @@ _WHEEL, _POINT = 0, 1
 
 
 @njit(cache=True, nogil=True)
-def _assemble(J, R, o, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
               r_const, support, A):  # pragma: no cover - compiled
-    """Fill ``A`` (m, nv). ``R`` (F, 3, 3), ``o`` (F, 3): placements of the used frames."""
+    """Fill ``A`` (m, nv).
+
+    ``X`` (., 12): frame placements as Pinocchio stores an SE3, the rotation column-major
+    (``R[i, j] = X[g, i + 3 j]``) then the translation (``X[g, 9:12]``); used frame ``f``
+    is row ``g = f_row[f]``. ``support`` (F, nv) masks the columns of frame ``f``.
+    """
     nc = c_frame.shape[0]
     nv = J.shape[1]
     P = np.empty((nc, 3))
     T = np.empty((nc, 3))  # no-slip direction a x n / |a x n| (wheels)
     for c in range(nc):
-        f = c_frame[c]
+        g = f_row[c_frame[c]]
         n0, n1, n2 = c_normal[c, 0], c_normal[c, 1], c_normal[c, 2]
         if c_kind[c] == _WHEEL:
-            a0 = R[f, 0, 0] * c_vec[c, 0] + R[f, 0, 1] * c_vec[c, 1] + R[f, 0, 2] * c_vec[c, 2]
-            a1 = R[f, 1, 0] * c_vec[c, 0] + R[f, 1, 1] * c_vec[c, 1] + R[f, 1, 2] * c_vec[c, 2]
-            a2 = R[f, 2, 0] * c_vec[c, 0] + R[f, 2, 1] * c_vec[c, 1] + R[f, 2, 2] * c_vec[c, 2]
+            x0, x1, x2 = c_vec[c, 0], c_vec[c, 1], c_vec[c, 2]
+            a0 = X[g, 0] * x0 + X[g, 3] * x1 + X[g, 6] * x2
+            a1 = X[g, 1] * x0 + X[g, 4] * x1 + X[g, 7] * x2
+            a2 = X[g, 2] * x0 + X[g, 5] * x1 + X[g, 8] * x2
             na = n0 * a0 + n1 * a1 + n2 * a2
             d0, d1, d2 = n0 - na * a0, n1 - na * a1, n2 - na * a2
             nd = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
@@ -53,9 +59,9 @@ def _assemble(J, R, o, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_
             else:
                 d0, d1, d2 = d0 / nd, d1 / nd, d2 / nd
             r = c_radius[c]
-            P[c, 0] = o[f, 0] - r * d0
-            P[c, 1] = o[f, 1] - r * d1
-            P[c, 2] = o[f, 2] - r * d2
+            P[c, 0] = X[g, 9] - r * d0
+            P[c, 1] = X[g, 10] - r * d1
+            P[c, 2] = X[g, 11] - r * d2
             t0, t1, t2 = a1 * n2 - a2 * n1, a2 * n0 - a0 * n2, a0 * n1 - a1 * n0
             nt = np.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
             if nt > 0.0:
@@ -64,7 +70,7 @@ def _assemble(J, R, o, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_
         else:
             x0, x1, x2 = c_vec[c, 0], c_vec[c, 1], c_vec[c, 2]
             for i in range(3):
-                P[c, i] = o[f, i] + R[f, i, 0] * x0 + R[f, i, 1] * x1 + R[f, i, 2] * x2
+                P[c, i] = X[g, 9 + i] + X[g, i] * x0 + X[g, 3 + i] * x1 + X[g, 6 + i] * x2
             T[c, 0], T[c, 1], T[c, 2] = 0.0, 0.0, 0.0
     for row in range(A.shape[0]):
         kind = r_kind[row]
@@ -91,6 +97,35 @@ def _assemble(J, R, o, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_
                              + e0 * J[3, j] + e1 * J[4, j] + e2 * J[5, j])
             else:
                 A[row, j] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def _symmetrize(M):  # pragma: no cover - compiled
+    """Copy the upper triangle of ``M`` (what ``pin.crba`` fills) to the lower one."""
+    n = M.shape[0]
+    for i in range(1, n):
+        for j in range(i):
+            M[i, j] = M[j, i]
+
+
+@njit(cache=True, nogil=True)
+def _evaluate_one(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+                  r_const, support, M, A):  # pragma: no cover - compiled
+    _symmetrize(M)
+    _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+              r_const, support, A)
+
+
+@njit(cache=True, nogil=True)
+def _evaluate_many(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+                   r_const, support, M, A):  # pragma: no cover - compiled
+    """Items ``i`` of ``J`` (k, 6, nv), ``X`` (k, ., 12), ``M`` (k, nv, nv), ``A`` (k, m, nv);
+    ``r_const`` (1 or k, m, nv)."""
+    kc = r_const.shape[0]
+    for i in range(J.shape[0]):
+        _symmetrize(M[i])
+        _assemble(J[i], X[i], f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+                  r_const[min(i, kc - 1)], support, A[i])
 
 
 class RowPlan:
@@ -163,25 +198,126 @@ class RowPlan:
                     continue
                 jm = model.joints[s]
                 self.support[k, jm.idx_v:jm.idx_v + jm.nv] = True
-        self._R = np.zeros((max(nf, 1), 3, 3))
-        self._o = np.zeros((max(nf, 1), 3))
         self.m, self.nv = m, nv
         self._cs = cs
+        # frame placements: a read-only view of Pinocchio's own storage when its layout is
+        # the expected one (checked here), else a buffer refilled frame by frame per call
+        self._oMf = _placement_view(cs.data, model.nframes) if frames else None
+        if self._oMf is not None:
+            self.f_row = np.array(frames, dtype=np.int64)
+        else:
+            self.f_row = np.arange(max(nf, 1), dtype=np.int64)
+        self._X = np.zeros((max(nf, 1), 12))
+        self._args = (self.f_row, self.c_frame, self.c_kind, self.c_vec, self.c_normal,
+                      self.c_radius, self.r_contact, self.r_kind)
 
-    def rows(self, q) -> np.ndarray:
-        """A (m, nv) at ``q``; requires ``computeJointJacobians`` and frame placements."""
-        data = self._cs.data
-        R, o = self._R, self._o
+    def _placements(self, X=None) -> np.ndarray:
+        """Placements ``(., 12)`` of the frames (after ``updateFramePlacements``)."""
+        if self._oMf is not None:
+            if X is None:
+                return self._oMf
+            X[...] = self._oMf
+            return X
+        X = self._X if X is None else X
+        oMf = self._cs.data.oMf
         for k, fid in enumerate(self.frame_ids):
-            oMf = data.oMf[fid]
-            R[k] = oMf.rotation
-            o[k] = oMf.translation
+            H = oMf[fid].homogeneous
+            X[k, :9] = H[:3, :3].T.reshape(9)
+            X[k, 9:] = H[:3, 3]
+        return X
+
+    def evaluate(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """``(M (nv, nv), A (m, nv))`` at ``q`` (nq,) from one Pinocchio pass.
+
+        CRBA (upper triangle of ``M``), joint Jacobians ``data.J`` and frame placements,
+        then one compiled call that mirrors ``M`` and fills every row of ``A``.
+        """
+        model, data = self._cs.mbm.model, self._cs.data
+        M = pin.crba(model, data, q)
+        J = pin.computeJointJacobians(model, data, q)
+        if self.nv == 1:  # pinocchio hands (6, 1) and (1, 1) back as 1-D arrays
+            M, J = np.reshape(M, (1, 1)).copy(), np.reshape(J, (6, 1))
+        pin.updateFramePlacements(model, data)
+        X = self._placements()
         if not self._loop_constant:
             Jl = self._cs.mbm.loop_closure(q)[1]
             for k, i in enumerate(self.loop_rows):
                 self.r_const[i] = Jl[k]
         A = np.empty((self.m, self.nv))
-        _assemble(np.asarray(data.J), R, o, self.c_frame, self.c_kind, self.c_vec,
-                  self.c_normal, self.c_radius, self.r_contact, self.r_kind, self.r_const,
-                  self.support, A)
-        return A
+        _evaluate_one(J, X, *self._args, self.r_const, self.support, M, A)
+        return M, A
+
+    def evaluate_many(self, Q, chunk: int = 64) -> tuple[np.ndarray, np.ndarray]:
+        """``(M (k, nv, nv), A (k, m, nv))`` for configurations ``Q`` (k, nq).
+
+        One Pinocchio pass per configuration, its Jacobian and placements copied into
+        small stacked buffers; one compiled call per ``chunk`` items (the buffers stay in
+        cache).
+        """
+        model, data = self._cs.mbm.model, self._cs.data
+        k, nv, m = Q.shape[0], self.nv, self.m
+        Ms = np.empty((k, nv, nv))
+        A = np.empty((k, m, nv))
+        c = max(1, min(chunk, k))
+        Js = np.empty((c, 6, nv))
+        Xs = np.empty((c, *self._placements().shape))
+        if self._loop_constant:
+            rc = self.r_const[None]
+        else:
+            rc = np.broadcast_to(self.r_const, (k, m, nv)).copy()
+            for i in range(k):
+                rc[i, self.loop_rows] = self._cs.mbm.loop_closure(Q[i])[1]
+        crba, jac, place = pin.crba, pin.computeJointJacobians, pin.updateFramePlacements
+        # pinocchio hands (1, 1) and (6, 1) back as 1-D arrays: write through 1-D views then
+        Mo = Ms.reshape(k, 1) if nv == 1 else Ms
+        Jo = Js.reshape(c, 6) if nv == 1 else Js
+        view = self._oMf
+        for s in range(0, k, c):
+            e = min(s + c, k)
+            for i in range(s, e):
+                q = Q[i]
+                Mo[i] = crba(model, data, q)
+                Jo[i - s] = jac(model, data, q)
+                place(model, data)
+                if view is not None:
+                    Xs[i - s] = view
+                else:
+                    self._placements(Xs[i - s])
+            _evaluate_many(Js[:e - s], Xs[:e - s], *self._args,
+                           rc if rc.shape[0] == 1 else rc[s:e], self.support, Ms[s:e], A[s:e])
+        return Ms, A
+
+
+def _placement_view(data, nframes: int):
+    """``data.oMf`` as one read-only ``(nframes, 12)`` array, or None.
+
+    Pinocchio keeps the frame placements in one contiguous ``std::vector<SE3>``; each SE3 is
+    its rotation (3 x 3, column-major) followed by its translation, and ``.rotation`` /
+    ``.translation`` are views of that storage. When every frame is laid out that way (the
+    addresses are checked, not assumed), a strided view over the vector reads all
+    placements without a Python call per frame. The view refers to ``data``'s memory: the
+    owner keeps ``data`` alive and never resizes it.
+    """
+    try:
+        oMf = data.oMf
+        R0 = oMf[0].rotation
+        if R0.dtype != np.float64 or R0.strides != (8, 24):
+            return None
+        base = R0.__array_interface__["data"][0]
+        for i in range(nframes):
+            se = oMf[i]
+            R, p = se.rotation, se.translation
+            if (R.strides != (8, 24) or p.strides != (8,)
+                    or R.__array_interface__["data"][0] != base + 96 * i
+                    or p.__array_interface__["data"][0] != base + 96 * i + 72):
+                return None
+        X = np.lib.stride_tricks.as_strided(R0, shape=(nframes, 12), strides=(96, 8),
+                                            writeable=False)
+        for i in range(nframes):
+            se = oMf[i]
+            if not (np.array_equal(X[i, :9], se.rotation.T.reshape(9))
+                    and np.array_equal(X[i, 9:], se.translation)):
+                return None  # pragma: no cover - the addresses matched
+        return X
+    except Exception:  # pragma: no cover - a binding without these attributes
+        return None

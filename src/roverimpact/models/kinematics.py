@@ -194,7 +194,6 @@ class ConstraintSet:
     _fids: list = field(init=False, repr=False)
     _data: object = field(init=False, repr=False)
     _plan: object = field(init=False, repr=False, default=None)
-    _lower: object = field(init=False, repr=False, default=None)
 
     def __post_init__(self):
         model = self.mbm.model
@@ -224,6 +223,12 @@ class ConstraintSet:
     def data(self):
         return self._data
 
+    def __getstate__(self):
+        # the compiled row plan reads ``_data``'s memory in place: rebuild it after a copy
+        state = self.__dict__.copy()
+        state["_plan"] = None
+        return state
+
     def kinematics(self, q) -> None:
         """Forward kinematics, joint Jacobians and frame placements at ``q``."""
         model, data = self.mbm.model, self._data
@@ -248,25 +253,49 @@ class ConstraintSet:
             return np.zeros((0, model.nv))
         return np.vstack(out)
 
-    def fast_rows(self, q) -> np.ndarray:
-        """The same ``A`` as :meth:`rows`, assembled in one compiled pass
-        (:mod:`roverimpact.models._assemble`; after :meth:`kinematics` at ``q``)."""
+    def _row_plan(self):
         if self._plan is None:
             from ._assemble import RowPlan
 
             self._plan = RowPlan(self)
-        return self._plan.rows(q)
+        return self._plan
+
+    def fast_rows(self, q) -> np.ndarray:
+        """The same ``A`` as :meth:`rows` at ``q``, from the compiled path
+        (:mod:`roverimpact.models._assemble`; runs its own kinematics)."""
+        return self.evaluate(q)[1]
 
     def evaluate(self, q) -> tuple[np.ndarray, np.ndarray]:
-        """``(M (nv, nv), A (m, nv))`` at configuration ``q`` (nq,)."""
+        """``(M, A)`` at one configuration or a batch of them.
+
+        One Pinocchio pass per configuration (CRBA, joint Jacobians, frame placements);
+        every row of ``A`` is assembled in one compiled call
+        (:mod:`roverimpact.models._assemble`), for a batch in one call over all items.
+        The per-constraint :meth:`rows` is the readable reference for the same rows.
+
+        Parameters
+        ----------
+        q : (..., nq) array_like
+            Configuration(s).
+
+        Returns
+        -------
+        M : (..., nv, nv) ndarray
+            Joint-space mass matrix (Pinocchio CRBA, symmetric).
+        A : (..., m, nv) ndarray
+            Constraint rows in the order of :attr:`labels`.
+        """
         q = np.asarray(q, dtype=float)
-        model, data = self.mbm.model, self._data
-        M = pin.crba(model, data, q)  # upper triangle
-        if self._lower is None:
-            self._lower = np.tril_indices(model.nv, -1)
-        M[self._lower] = M.T[self._lower]
-        self.kinematics(q)
-        return M, self.fast_rows(q)
+        nq = self.mbm.model.nq
+        if q.ndim == 0 or q.shape[-1] != nq:
+            raise ModelError(f"q must have shape (..., {nq}) for model {self.mbm.name!r}, "
+                             f"got {q.shape}")
+        plan = self._plan if self._plan is not None else self._row_plan()
+        if q.ndim == 1:
+            return plan.evaluate(q)
+        batch = q.shape[:-1]
+        M, A = plan.evaluate_many(np.ascontiguousarray(q.reshape(-1, nq)))
+        return M.reshape(*batch, *M.shape[1:]), A.reshape(*batch, *A.shape[1:])
 
 
 def _frame_id(model, name: str) -> int:
