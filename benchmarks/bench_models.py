@@ -1,7 +1,10 @@
-"""Speed of the model layer: T_c^- of one built scenario end to end, and the beta sweep.
+"""Speed of the model layer: T_c^- of one built scenario end to end, the batched path over
+many configurations, and the beta sweep.
 
 End to end = Pinocchio kinematics at q -> M (CRBA) and the active rows of A (frame
 Jacobians) -> T_c^- (roverimpact.partition). The scenario is built once beforehand.
+Batched over q = ``setup.evaluate(Q)`` with Q (k, nq) -> ``partition(M, A, V)`` (k items),
+against the loop of single end-to-end calls over the same configurations.
 Run: python benchmarks/bench_models.py
 """
 
@@ -10,6 +13,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import pinocchio as pin
 
 from roverimpact import partition
 from roverimpact.scenario import Scenario, sweep_energy
@@ -53,6 +57,28 @@ def main():
         if "rocker" in name and "bogie" in name:
             print(f"{'':32s} issue #5 target for the 3-D rover: <= 50 us end to end -> "
                   f"{'met' if t_e2e <= 50e-6 else 'NOT met'}")
+        model = setup.model.model
+        rng = np.random.default_rng(0)
+        for k in (100, 1000):
+            Q = np.array([pin.integrate(model, q, 0.05 * rng.standard_normal(model.nv))
+                          for _ in range(k)])
+            V = np.broadcast_to(v, (k, model.nv))
+
+            def loop(Q=Q, setup=setup, v=v):
+                for qi in Q:
+                    M, A = setup.evaluate(qi)
+                    partition(M, A, v, want_velocities=False)
+
+            def batched(Q=Q, V=V, setup=setup):
+                M, A = setup.evaluate(Q)
+                return partition(M, A, V, want_velocities=False).T_c
+
+            t_loop = per_call(loop, 2) / k
+            t_b = per_call(batched, 3) / k
+            t_bk = per_call(lambda Q=Q, setup=setup: setup.evaluate(Q), 3) / k
+            print(f"{'':32s} batched over {k:5d} q: {1e6 * t_b:6.2f} us per q end to end "
+                  f"(evaluate {1e6 * t_bk:5.2f} us) vs loop {1e6 * t_loop:6.2f} us per q "
+                  f"-> {t_loop / t_b:4.1f}x")
         for k in (91, 1000):
             beta = np.linspace(0, np.pi / 2, k)
             t_sw = per_call(lambda beta=beta, setup=setup: sweep_energy(setup, beta), 20)
