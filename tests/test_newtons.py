@@ -22,15 +22,27 @@ from roverimpact.studies.stats import force_ratios
 
 
 # --------------------------------------------------------------- 1-DoF limits (exact)
+@pytest.fixture(params=["lsoda", "rk4", "rosenbrock"])
+def method(request, monkeypatch):
+    """The three integrators of the contact-space ODE: scipy's LSODA, the compiled
+    fixed-step Runge-Kutta and the compiled Rosenbrock pair (every item forced stiff)."""
+    if request.param == "rosenbrock":
+        import roverimpact.contact.reduced as red
+
+        monkeypatch.setattr(red, "STIFF_STEPS", 0)
+        return "rk4"
+    return request.param
+
+
 @pytest.mark.parametrize("law", [get_law("hunt-crossley", k=1e7, e=1.0),
                                  get_law("hunt-crossley", k=1e7, e=0.5),
                                  get_law("hertz", k=5e6),
                                  KelvinVoigt(k=2e5, c=150.0)])
-def test_one_row_without_load_is_the_closed_form(law):
+def test_one_row_without_load_is_the_closed_form(law, method):
     """One row, no applied force: the 1-DoF impact of m_eff = 1/G, whose peak force the
     closed forms give (independent derivations in contact/*.py)."""
     m, v = 12.0, 0.4
-    r = reduced_impact([[1.0 / m]], [0.0], [law], [v], [v], t_max=1.0)
+    r = reduced_impact([[1.0 / m]], [0.0], [law], [v], [v], t_max=1.0, method=method)
     assert r.ended
     assert r.peak_force == pytest.approx(float(predict(law, m, v).peak_force), rel=2e-4)
     if not law.can_pull:      # Kelvin-Voigt: the closed form ends at f = 0, the model
@@ -39,20 +51,20 @@ def test_one_row_without_load_is_the_closed_form(law):
         assert r.duration > float(predict(law, m, v).duration)
 
 
-def test_constant_preload_undamped_spring():
+def test_constant_preload_undamped_spring(method):
     """m x'' = F_g - k x, x(0) = 0, x'(0) = v: F_max = F_g + sqrt(F_g^2 + k m v^2)."""
     m, v, k, Fg = 8.0, 0.3, 2e5, 150.0
     r = reduced_impact([[1.0 / m]], [-Fg / m], [KelvinVoigt(k=k, c=0.0)], [v], [v],
-                       t_max=1.0)
+                       t_max=1.0, method=method)
     assert r.peak_force == pytest.approx(Fg + math.sqrt(Fg**2 + k * m * v * v), rel=1e-5)
 
 
-def test_constant_preload_damped_spring():
+def test_constant_preload_damped_spring(method):
     """m x'' + c x' + k x = F_g from (0, v): the underdamped solution in closed form,
     f = k x + c x' sampled finely (clamped at 0 after its maximum)."""
     m, v, k, c, Fg = 8.0, 0.3, 2e5, 300.0, 150.0
     r = reduced_impact([[1.0 / m]], [-Fg / m], [KelvinVoigt(k=k, c=c)], [v], [v],
-                       t_max=1.0)
+                       t_max=1.0, method=method)
     wn = math.sqrt(k / m)
     z = c / (2 * math.sqrt(k * m))
     wd = wn * math.sqrt(1 - z * z)
@@ -66,14 +78,14 @@ def test_constant_preload_damped_spring():
     assert r.peak_force == pytest.approx(float(np.max(k * x + c * xd)), rel=1e-5)
 
 
-def test_two_rows_linear_matches_matrix_exponential():
+def test_two_rows_linear_matches_matrix_exponential(method):
     """Obstacle row and a preloaded ground row, both linear springs (the ground stays
     loaded): the contact-space ODE is linear, solved by the matrix exponential."""
     G = np.array([[0.05, 0.01], [0.01, 0.08]])       # [1/kg], SPD
     b = np.array([-9.81 * 4.0, -9.81 * 0.1])         # gravity presses both
     kg, ko, v = 3e5, 2e5, 0.1
     laws = [KelvinVoigt(k=kg, c=0.0), KelvinVoigt(k=ko, c=0.0)]
-    r = reduced_impact(G, b, laws, [0.1, v], [0.0, v], t_max=0.5, impact=1)
+    r = reduced_impact(G, b, laws, [0.1, v], [0.0, v], t_max=0.5, impact=1, method=method)
     lam = static_loads(G[:1, :1], b[:1])
     K = np.diag([kg, ko])
     # state y = (delta, delta_dot); y' = [[0, I], [-G K, 0]] y + [0, -b]
