@@ -1,7 +1,7 @@
 r"""A compliant-contact simulation of one traverse impact: the reference for the indicator.
 
-The simulator of :mod:`roverimpact.simulate` drives a rover settled on the plane z = 0 into
-one obstacle plane of angle beta; it cannot start from a pose on a height field. What a
+The simulator of :mod:`roverimpact.simulate` drives a rover settled on the plane z = 0 (or
+on a height field, one contact per wheel) into one obstacle plane of angle beta. What a
 traverse impact needs is the rover in its terrain pose, each wheel on its own patch of
 ground, the hitting wheel against the terrain feature. :func:`simulate_station_impact`
 builds exactly that from the simulator's own parts (:class:`~roverimpact.simulate.system.
@@ -9,16 +9,24 @@ ContactSystem`: Pinocchio dynamics, compliant wheel/plane contacts, the loop clo
 enforced as a constraint) and integrates it through the impact:
 
 * every supporting wheel touches a plane: the terrain's tangent plane at its support
-  (normal = the terrain normal there), placed so that the wheel (a sphere of its radius,
-  the simulator's wheel) just touches it; only that wheel can touch it;
+  (normal = the terrain normal there), placed so that the wheel just touches it (without
+  gravity) or starts at its static indentation (with gravity, below); only that wheel can
+  touch it;
 * the hitting wheel touches a plane through the contact found ahead, with the contact
   normal found (the terrain feature, modelled by its tangent plane at the contact: the
   brief's fallback while the simulator cannot drive into a height field), placed so that
   the wheel just touches it; its own support plane stays;
 * the state is the pose and the driving velocity at the chosen speed: the supports at
   rest along their normals, the feature approached at v_n;
-* no gravity and no joint springs: the impact forces only (the rigid-impact model the
-  indicator comes from; with gravity the unsettled supports would load during the run).
+* gravity (default Earth's) with every support preloaded: its plane placed so that the
+  wheel starts at the indentation of its static load (the loads that hold the rover at
+  rest in the support directions: :func:`~roverimpact.contact.reduced.static_loads` of the
+  support rows, :func:`~roverimpact.traverse.refine.station_model`); no joint springs.
+  With ``gravity = 0`` the impact forces only (the rigid-impact model the indicator comes
+  from), the supports just touching.
+
+The initial preload is the one input the harness takes from the model it checks (the
+static loads); everything after is the simulator's integration of the multibody dynamics.
 
 **Wheel geometry.** The simulator's wheel is a sphere: its point facing a plane of normal
 ``n`` is ``c - r n``. The indicator's wheel is a thin disc (a rim), whose point facing the
@@ -45,8 +53,10 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import minimize_scalar
 
+from ..contact.reduced import static_indentation, static_loads
 from ..exceptions import SolverError
 from ..simulate.system import ContactSystem, Plane
+from .refine import EARTH, station_model
 
 __all__ = ["DiscContactSystem", "SimulationCheck", "StationImpact", "check_against_simulation",
            "simulate_station_impact"]
@@ -97,7 +107,8 @@ class StationImpact:
 
 def simulate_station_impact(mbm, q, v, support, support_normal, wheel: int, point, normal,
                             *, law, ground_law, supports=None, t_after: float = 0.05,
-                            rtol: float = 1e-8, atol: float = 1e-10) -> StationImpact:
+                            gravity=EARTH, v_ref: float = 0.1, rtol: float = 1e-8,
+                            atol: float = 1e-10) -> StationImpact:
     """Simulate the impact of ``wheel`` against the plane (``point``, ``normal``) from the
     state ``(q, v)`` with every wheel of ``supports`` (default all) on its own support
     plane (``support``, ``support_normal``: (n_wheels, 3)). Module docstring.
@@ -120,6 +131,11 @@ def simulate_station_impact(mbm, q, v, support, support_normal, wheel: int, poin
         Wheels that stand on a support plane.
     t_after : float
         Longest simulated time [s].
+    gravity : (3,)
+        [m/s^2]; with gravity each support starts at the indentation of its static load
+        (preloaded), without it just touching.
+    v_ref : float
+        The ``v_i`` of the supports' law [m/s].
     """
     import pinocchio as pin
 
@@ -138,9 +154,17 @@ def simulate_station_impact(mbm, q, v, support, support_normal, wheel: int, poin
         d = n - (n @ axes[w]) * axes[w]
         return d / np.linalg.norm(d)
 
+    gravity = np.asarray(gravity, float)
+    sup = np.flatnonzero(supports)
+    indent = np.zeros(nw)
+    if np.any(gravity != 0.0) and sup.size:
+        sm = station_model(mbm, q, v, support_normal, wheel, normal, supports=supports,
+                           gravity=gravity)
+        loads = static_loads(sm.G[0, :-1, :-1], (sm.b_g + sm.b_v)[0, :-1])
+        indent[sup] = static_indentation(ground_law, loads, v_ref)
     planes, dirs = [], []
-    pairs = [(f"support_{g}", support_normal[g], g, ground_law, 0.1)
-             for g in np.flatnonzero(supports)] + [("feature", normal, wheel, law, 1.0)]
+    pairs = [(f"support_{g}", support_normal[g], g, ground_law, v_ref)
+             for g in sup] + [("feature", normal, wheel, law, 1.0)]
     for name, n, w, lw, vi in pairs:
         n = np.asarray(n, float)
         n = n / np.linalg.norm(n)
@@ -149,10 +173,12 @@ def simulate_station_impact(mbm, q, v, support, support_normal, wheel: int, poin
         d = np.zeros((nw, 3))
         d[:] = [0.0, 0.0, 1.0]
         d[w] = rim_dir(n, w)
-        planes.append(Plane(name, n, centres[w] - radii[w] * d[w], lw, vi, wheels=mask))
+        depth = indent[w] if name != "feature" else 0.0
+        planes.append(Plane(name, n, centres[w] - radii[w] * d[w] + depth * n, lw, vi,
+                            wheels=mask))
         dirs.append(d)
     sysm = DiscContactSystem(model=model, wheel_frames=[w.frame for w in mbm.wheels],
-                             radii=radii, planes=planes, gravity=np.zeros(3),
+                             radii=radii, planes=planes, gravity=gravity,
                              loop_closure=mbm.loop_closure, rim_dirs=np.array(dirs))
     q0 = np.asarray(q, float)
     v0 = np.asarray(v, float)
@@ -207,41 +233,86 @@ class SimulationCheck:
     """Sampled impacts of a traverse, predicted and simulated (:func:`check_against_simulation`).
 
     Arrays (n,): ``T_c_minus`` [J], ``m_eff`` [kg], ``v_n`` [m/s] at the reference speed,
-    ``F_pred`` [N] (closed form of the law), ``F_sim`` [N] (simulated at the reference
-    speed), ``v_lim`` [m/s] (speed limit for ``F_allow``), ``F_sim_at_limit`` [N]
-    (simulated at ``v_lim``), ``beta_deg``; scalars ``u`` [m/s], ``F_allow`` [N],
-    ``spearman`` (T_c^- vs F_sim).
+    ``F_pred`` [N] (closed form of the law), ``F_model`` [N] (the model of
+    :mod:`roverimpact.traverse.refine`, weight and compliant supports), ``F_sim`` [N]
+    (simulated at the reference speed), ``v_lim`` [m/s] (the model's speed limit for
+    ``F_allow``; 0 where no speed keeps the impact under it), ``F_sim_at_limit`` [N]
+    (simulated at ``v_lim``; where ``v_lim`` = 0, at ``s_min`` times the reference speed:
+    it must exceed ``F_allow`` there), ``v_lim_closed`` [m/s] (the closed form's limit),
+    ``F_sim_at_closed`` [N] (simulated at it), ``beta_deg``; scalars ``u`` [m/s],
+    ``F_allow`` [N], ``spearman`` (T_c^- vs F_sim), ``spearman_model`` (F_model vs
+    F_sim), ``gravity`` [m/s^2], ``s_min``, ``v_cap`` [m/s] (the model's speed cap,
+    :func:`~roverimpact.traverse.refine.model_speed_cap`: a limit at the cap means none
+    below it).
     """
 
     T_c_minus: np.ndarray
     m_eff: np.ndarray
     v_n: np.ndarray
     F_pred: np.ndarray
+    F_model: np.ndarray
     F_sim: np.ndarray
     v_lim: np.ndarray
     F_sim_at_limit: np.ndarray
+    v_lim_closed: np.ndarray
+    F_sim_at_closed: np.ndarray
     beta_deg: np.ndarray
     u: float
     F_allow: float
     spearman: float
+    spearman_model: float
+    gravity: float
+    s_min: float
+    v_cap: float
+
+    @property
+    def no_speed(self) -> np.ndarray:
+        """Impacts over ``F_allow`` at any speed (``v_lim`` = 0)."""
+        return self.v_lim == 0.0
+
+    @property
+    def capped(self) -> np.ndarray:
+        """Impacts under ``F_allow`` up to the model's speed cap (``v_lim`` = ``v_cap``)."""
+        return self.v_lim >= self.v_cap * (1.0 - 1e-9)
 
     @property
     def ratio_at_limit(self) -> np.ndarray:
-        """Simulated peak force at the speed limit over the allowable force."""
+        """Simulated peak force at the speed limit over the allowable force (at ``s_min u``
+        where there is no speed limit)."""
         return self.F_sim_at_limit / self.F_allow
+
+    @property
+    def ratio_at_closed(self) -> np.ndarray:
+        """Simulated peak force at the closed form's speed limit over the allowable force."""
+        return self.F_sim_at_closed / self.F_allow
+
+    @property
+    def within(self) -> np.ndarray:
+        """The limit holds to 10 %: the simulated F_max at it within 10 % of ``F_allow``;
+        where no speed keeps the impact under ``F_allow``, the simulation at ``s_min u`` at
+        least 0.9 ``F_allow``; where the limit is the cap, at most 1.1 ``F_allow`` there."""
+        r = self.ratio_at_limit
+        return np.where(self.no_speed, r >= 0.9,
+                        np.where(self.capped, r <= 1.1, np.abs(r - 1.0) <= 0.1))
 
 
 def check_against_simulation(n: int = 50, *, seed: int = 0, u: float = 0.2,
                              law=None, ground_law=None, terrain_seed: int = 2,
-                             rock_abundance: float = 0.15) -> SimulationCheck:
+                             rock_abundance: float = 0.15, gravity: float = 9.81,
+                             s_min: float = 0.01) -> SimulationCheck:
     """Predicted risk against the compliant simulation at ``n`` seeded traverse impacts.
 
     The built-in rocker-bogie drives a 25 m sinuous path over a seeded synthetic terrain
     (30 m x 8 m at 5 cm, Golombek-Rapp ``rock_abundance``); of the impacts it meets at
     ``u`` (with ``v_n`` at least 1 % of ``u``: grazing contacts are left out), ``n`` are
     drawn (seeded, stratified over the ranks of T_c^-). Each is simulated
-    (:func:`simulate_station_impact`) at ``u`` and at its speed limit for
-    ``F_allow`` = the median predicted peak force of the sample. Laws: the feature
+    (:func:`simulate_station_impact`, ``gravity`` [m/s^2] along -z, the supports
+    preloaded) at ``u``, at the model's speed limit
+    (:func:`~roverimpact.traverse.refine.speed_limits`, capped at
+    :func:`~roverimpact.traverse.refine.model_speed_cap`; at ``s_min u`` where it is 0) for
+    ``F_allow`` = the median peak force the model
+    (:func:`~roverimpact.traverse.refine.peak_forces`) predicts at ``u``, and at the closed
+    form's limit for the same ``F_allow``. Laws: the feature
     Hunt-Crossley k = 1e7, e = 0.5; the supports the simulator's default ground law
     (Hunt-Crossley k = 1e7, e = 0.2) unless given.
     """
@@ -251,14 +322,17 @@ def check_against_simulation(n: int = 50, *, seed: int = 0, u: float = 0.2,
     from ..models import rocker_bogie
     from ..models.terrain_synth import synthetic_mars
     from ..scenario.schema import ContactLawSpec
-    from .compute import evaluate_stations
+    from .compute import evaluate_stations, rover_states
     from .limits import peak_force, speed_limit_force
+    from .refine import impact_models, model_speed_cap, peak_forces, speed_limits
 
     spec = law or ContactLawSpec(name="hunt-crossley", k=1e7, e=0.5)
     ground_law = ground_law or get_law("hunt-crossley", k=1e7, e=0.2)
+    g = np.array([0.0, 0.0, -float(gravity)])
     terrain = synthetic_mars((30.0, 8.0), 0.05, seed=terrain_seed,
                              rock_abundance=rock_abundance, origin=(0.0, -4.0))
     rb = rocker_bogie()
+    s_max = model_speed_cap(rb) / u
     x = np.arange(2.0, 27.0, 0.05)
     y = 0.5 * np.sin(x / 3.0)
     yaw = np.arctan(0.5 / 3.0 * np.cos(x / 3.0))
@@ -273,19 +347,33 @@ def check_against_simulation(n: int = 50, *, seed: int = 0, u: float = 0.2,
     pick = order[[rng.integers(a, b) for a, b in itertools.pairwise(edges)]]
     k, w = pick[:, 0], pick[:, 1]
     m, vn = r.impact.m_eff[k, w], r.impact.v_n[k, w]
-    F = peak_force(spec, m, vn)
-    F_allow = float(np.median(F))
-    v_lim = speed_limit_force(spec, m, vn, u, F_allow)
     lw = spec.to_law()
-    F_sim, F_lim = np.empty(n), np.empty(n)
+    states = rover_states(rb, r.pose.q[k])
+    models = impact_models(rb, states, r.v[k], r.pose.normal[k], np.arange(n), w,
+                           r.hit["normal"][k, w], supports=np.ones(len(rb.wheels), bool),
+                           gravity=g)
+    F = peak_force(spec, m, vn)
+    F_model = peak_forces(models, lw, ground_law).peak_force
+    F_allow = float(np.median(F_model))
+    v_closed = speed_limit_force(spec, m, vn, u, F_allow)
+    v_lim = speed_limits(models, lw, ground_law, u, F_allow, s0=v_closed / u, s_min=s_min,
+                         s_max=s_max)
+    F_sim, F_lim, F_cl = np.empty(n), np.empty(n), np.empty(n)
     for i in range(n):
         args = (r.pose.point[k[i]], r.pose.normal[k[i]], int(w[i]), r.hit["point"][k[i], w[i]],
                 r.hit["normal"][k[i], w[i]])
-        F_sim[i] = simulate_station_impact(rb, r.pose.q[k[i]], r.v[k[i]], *args, law=lw,
-                                           ground_law=ground_law).F_max
-        F_lim[i] = simulate_station_impact(rb, r.pose.q[k[i]], r.v[k[i]] * v_lim[i] / u,
-                                           *args, law=lw, ground_law=ground_law).F_max
-    return SimulationCheck(T_c_minus=T[k, w], m_eff=m, v_n=vn, F_pred=F, F_sim=F_sim,
-                           v_lim=v_lim, F_sim_at_limit=F_lim,
+
+        def sim(speed, i=i, args=args):
+            return simulate_station_impact(rb, r.pose.q[k[i]], r.v[k[i]] * speed / u, *args,
+                                           law=lw, ground_law=ground_law, gravity=g).F_max
+
+        F_sim[i] = sim(u)
+        F_lim[i] = sim(v_lim[i] if v_lim[i] > 0 else s_min * u)
+        F_cl[i] = sim(v_closed[i])
+    return SimulationCheck(T_c_minus=T[k, w], m_eff=m, v_n=vn, F_pred=F, F_model=F_model,
+                           F_sim=F_sim, v_lim=v_lim, F_sim_at_limit=F_lim,
+                           v_lim_closed=v_closed, F_sim_at_closed=F_cl,
                            beta_deg=np.degrees(r.hit["beta"][k, w]), u=u, F_allow=F_allow,
-                           spearman=float(spearmanr(T[k, w], F_sim)[0]))
+                           spearman=float(spearmanr(T[k, w], F_sim)[0]),
+                           spearman_model=float(spearmanr(F_model, F_sim)[0]),
+                           gravity=float(gravity), s_min=float(s_min), v_cap=s_max * u)
