@@ -5,9 +5,11 @@ Prints, on one core (CPU time of the process, and wall time with the load averag
 CI machine is shared):
 * the synthetic terrain (1 km x 20 m at 5 cm, k = 0.1, seed 1) and the rover build;
 * the whole 1 km traverse of the built-in rocker-bogie (``run_traverse``, serial, chunks of
-  500 stations): seconds, stations per second, failed poses, against the 60 s budget;
+  500 stations): seconds, stations per second, failed poses, against the 60 s budget,
+  and the same with ``limits.model = "closed-form"`` (what the weight model costs);
 * the share of each step on one 2 000-station stretch (poses, kinematics, driving
-  velocity, look-ahead contacts, impact energies with the automatic active set, limits);
+  velocity, look-ahead contacts, impact energies with the automatic active set, the
+  weight model's build, peak forces and speed limits);
 * 8 paths of 100 m (2 001 stations each) serially and on a local Dask cluster of 2
   workers (one thread each): time and speed-up (the cluster's start-up included, and
   reported alone).
@@ -16,6 +18,7 @@ CI machine is shared):
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 
@@ -72,9 +75,27 @@ def parts(cfg_dict: dict, n: int = 2000) -> None:
                               max_travel=0.1)
     t["look-ahead contacts"] = clock() - t0
     t0 = clock()
-    compute.impact_energies(mbm, states, v, pose.point[ok], pose.normal[ok], hit,
-                            chosen=chosen)
+    ib = compute.impact_energies(mbm, states, v, pose.point[ok], pose.normal[ok], hit,
+                                 chosen=chosen)
     t["impact energies (active set)"] = clock() - t0
+    from roverimpact.traverse.limits import speed_limit_force
+    from roverimpact.traverse.refine import impact_models, peak_forces, speed_limits
+
+    t0 = clock()
+    items = np.argwhere((ib.T_c_minus > 0) & np.isfinite(ib.m_eff))
+    kk, ww = items[:, 0], items[:, 1]
+    models = impact_models(mbm, states, v, pose.normal[ok], kk, ww, hit.normal[kk, ww],
+                           supports=chosen)
+    t["weight model: build"] = clock() - t0
+    law, ground = cfg.contact_law.to_law(), cfg.limits.ground_law.to_law()
+    t0 = clock()
+    peak_forces(models, law, ground)
+    t["weight model: F at u_ref"] = clock() - t0
+    t0 = clock()
+    s0 = speed_limit_force(cfg.contact_law, ib.m_eff[kk, ww], ib.v_n[kk, ww], 0.1,
+                           cfg.limits.F_allow) / 0.1
+    speed_limits(models, law, ground, 0.1, cfg.limits.F_allow, s0=s0, s_max=10.0)
+    t["weight model: speed limits"] = clock() - t0
     total = sum(t.values())
     print(f"steps on {n} stations ({6 * n} wheels), CPU time of one core:")
     for k, x in t.items():
@@ -98,6 +119,13 @@ def main(quick: bool = False, dask: bool = True) -> None:
           f"what other jobs take of the core); budget 60 s: "
           f"{'met' if cpu < 60 else 'NOT met'} in CPU time, {'met' if dt < 60 else 'NOT met'} "
           f"in wall time (load average {__import__('os').getloadavg()[0]:.1f})")
+    closed = json.loads(json.dumps(cfg))
+    closed["limits"]["model"] = "closed-form"
+    c0 = time.process_time()
+    run_traverse(closed)
+    cpu_c = time.process_time() - c0
+    print(f"  the same with limits.model = 'closed-form': {cpu_c:.1f} s CPU (the weight "
+          f"model adds {cpu - cpu_c:.1f} s)")
     print(f"  failed poses {int((res.poses['status'] != 'ok').sum())}, impacts "
           f"{int((res.wheels['T_c_minus'] > 0).sum())}, least speed limit "
           f"{res.poses['v_lim'].min():.3f} m/s, Gauss-Newton steps per station "

@@ -77,9 +77,12 @@ def test_traverse_writes_tables_figures_report(short, capfd):
     # the station's limit is the least of its wheels', capped by v_max
     lim = W.groupby("station")["v_lim"].min().clip(upper=0.3).to_numpy()
     assert P["v_lim"].to_numpy() == pytest.approx(lim, nan_ok=True)
-    assert (hit["F_lo"] <= hit["F_pred"] * (1 + 1e-12)).all()
-    assert (hit["F_pred"] <= hit["F_hi"] * (1 + 1e-12)).all()
-    assert (hit["v_lim_band"] <= hit["v_lim"] * (1 + 1e-12)).all()
+    # the weight model (the default): its force within its band over k, its limit the
+    # band's largest, at most the top speed
+    assert (hit["F_lo"] <= hit["F_model"] * (1 + 1e-6)).all()
+    assert (hit["F_model"] <= hit["F_hi"] * (1 + 1e-6)).all()
+    assert (hit["v_lim_band"] <= hit["v_lim"] * (1 + 1e-6)).all()
+    assert (hit["v_lim"] <= 0.3 * (1 + 1e-9)).all() and np.isfinite(hit["v_lim_closed"]).all()
     assert S["v_lim"].min() == pytest.approx(P["v_lim"].min())
     man = json.loads((out / "manifest.json").read_text())
     assert man["stations"] == len(P) and man["executor"] == "serial"
@@ -135,6 +138,9 @@ def test_schema_refusals():
     bad({"terrain.kind": "file"}, "terrain.file")
     bad({"contact_law.e": 1.5}, "e")
     bad({"drive.speed": "0.1 m/s"}, "plain number")
+    bad({"limits.gravity": "venus"}, "gravity preset")
+    bad({"limits.model": "exact"}, "weight")
+    bad({"limits.window": 0.0}, "window")
     raw = json.loads(json.dumps(base))
     del raw["contact_law"]
     del raw["band"]
@@ -154,6 +160,23 @@ def test_path_leaving_the_terrain_is_refused_before_work(tmp_path):
     with pytest.raises(ConfigError, match="leaves the terrain"):
         run_traverse(f, tmp_path / "o")
     assert not (tmp_path / "o").exists()
+
+
+def test_closed_form_model_is_the_rigid_1dof_limit(short):
+    """limits.model = "closed-form": the limits are the closed form's (the weight model's
+    column v_lim_closed of the default run), no F_model column."""
+    import tomllib
+
+    _, out = short
+    raw = tomllib.loads(SHORT)
+    raw["limits"]["model"] = "closed-form"
+    res = run_traverse(raw)
+    W0 = pd.read_parquet(out / "wheels.parquet")
+    assert "F_model" not in res.wheels and "v_lim_closed" not in res.wheels
+    assert res.wheels["v_lim"].to_numpy() == pytest.approx(W0["v_lim_closed"].to_numpy(),
+                                                           nan_ok=True)
+    assert res.wheels["F_pred"].to_numpy() == pytest.approx(W0["F_pred"].to_numpy(),
+                                                            nan_ok=True)
 
 
 def test_examples_parse():

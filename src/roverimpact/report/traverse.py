@@ -54,7 +54,10 @@ def load_traverse_results(folder: str | Path):
 
 
 def risk_column(wheels: pd.DataFrame) -> tuple[str, str]:
-    """The risk shown: ``F_pred`` (N) when a law was given, else ``T_c_minus`` (J)."""
+    """The risk shown: ``F_model`` (N, the weight model of ``limits.model = "weight"``),
+    else ``F_pred`` (N, the closed form) when a law was given, else ``T_c_minus`` (J)."""
+    if "F_model" in wheels:
+        return "F_model", "predicted peak force with the weight $F_{model}$ [N]"
     if "F_pred" in wheels:
         return "F_pred", r"predicted peak force $F_{pred}$ [N]"
     return "T_c_minus", r"effective kinetic energy $T_c^-$ [J]"
@@ -190,11 +193,14 @@ def plot_speed(poses: pd.DataFrame, segments: pd.DataFrame, wheels: pd.DataFrame
     risk = _station_risk(P, W, col)
     ax2.semilogy(s, np.where(risk > 0, risk, np.nan), ".", ms=2.5, color="tab:purple",
                  label=f"worst wheel at {v_ref:g} m/s")
-    if col == "F_pred" and "F_hi" in W:
+    if col in ("F_pred", "F_model") and "F_hi" in W:
         hi = _station_risk(P, W, "F_hi")
         lo = _station_risk(P, W, "F_lo")
         ax2.fill_between(s, np.where(lo > 0, lo, np.nan), np.where(hi > 0, hi, np.nan),
                          color="tab:purple", alpha=0.2, lw=0, label="band over k, e")
+    finite = risk[np.isfinite(risk) & (risk > 0)]
+    if finite.size:                # grazing contacts of a few micronewtons: not the story
+        ax2.set_ylim(bottom=max(float(finite.min()), 1e-3 * float(finite.max())) / 1.5)
     ax2.set_ylabel(label.replace(r" [", "\n["))
     ax2.set_xlabel("distance along the path s [m]")
     ax2.legend(loc="upper right", fontsize=8)
@@ -225,8 +231,9 @@ def summary(poses: pd.DataFrame, wheels: pd.DataFrame) -> pd.DataFrame:
         row = {"path": name, "length [m]": float(P["s"].max()), "stations": len(P),
                "failed poses": int((P["status"] != "ok").sum()), "impacts": len(hit),
                "max T_c^- [J]": float(hit["T_c_minus"].max()) if len(hit) else 0.0}
-        if "F_pred" in W:
-            row["max F_pred [N]"] = float(hit["F_pred"].max()) if len(hit) else 0.0
+        for c in ("F_pred", "F_model"):
+            if c in W:
+                row[f"max {c} [N]"] = float(hit[c].max()) if len(hit) else 0.0
         row["lowest limit [m/s]"] = float(v[i]) if i is not None else math.inf
         row["at s [m]"] = float(P["s"].iloc[i]) if i is not None else math.nan
         rows.append(row)
@@ -236,7 +243,8 @@ def summary(poses: pd.DataFrame, wheels: pd.DataFrame) -> pd.DataFrame:
 def statistics(poses: pd.DataFrame, wheels: pd.DataFrame, segments: pd.DataFrame, *,
                v_ref: float, F_allow: float | None = None) -> dict:
     """Figures of a traverse for a comparison table: stations, failed poses, impacts
-    (T_c^- > 0), percentiles of the predicted peak force, impacts above ``F_allow``, the
+    (T_c^- > 0), percentiles of the predicted peak force (:func:`risk_column`: the weight
+    model's where it was used, else the closed form's), impacts above ``F_allow``, the
     share of stations and of segments whose limit is below the reference speed, the lowest
     segment limit, stations where a wheel moves faster than twice the path speed."""
     hit = wheels[wheels["T_c_minus"].fillna(0) > 0]
@@ -248,8 +256,9 @@ def statistics(poses: pd.DataFrame, wheels: pd.DataFrame, segments: pd.DataFrame
            "segment_min": float(segments["v_lim"].min()),
            "fast_wheels": int((poses.get("wheel_speed_ratio", pd.Series(dtype=float)) > 2)
                               .sum())}
-    if "F_pred" in hit and len(hit):
-        F = hit["F_pred"].to_numpy(float)
+    col, _ = risk_column(wheels)
+    if col != "T_c_minus" and len(hit):
+        F = hit[col].to_numpy(float)
         F = F[np.isfinite(F)]
         out.update(F50=float(np.percentile(F, 50)), F90=float(np.percentile(F, 90)),
                    F99=float(np.percentile(F, 99)), F_max=float(F.max()))
@@ -288,11 +297,15 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
     col, _ = risk_column(wheels)
     worst = wheels[wheels[col].fillna(0) > 0].nlargest(N_WORST, col)
     keep = [c for c in ("path", "s", "wheel", "distance", "x_c", "y_c", "z_c", "beta_deg",
-                        "T_c_minus", "m_eff", "v_n", "F_pred", "F_lo", "F_hi", "v_lim",
-                        "v_lim_band", "held") if c in worst]
+                        "T_c_minus", "m_eff", "v_n", "F_pred", "F_model", "F_lo", "F_hi",
+                        "v_lim", "v_lim_closed", "v_lim_band", "held") if c in worst]
     worst = worst[keep].assign(rank=np.arange(1, len(worst) + 1))
-    limit = (f"T_c^- at most {config.limits.T_allow:g} J" if config.limits.T_allow is not None
-             else f"predicted peak force at most {config.limits.F_allow:g} N")
+    lim = config.limits
+    limit = (f"T_c^- at most {lim.T_allow:g} J" if lim.T_allow is not None
+             else f"predicted peak force at most {lim.F_allow:g} N ("
+             + (f"weight model: gravity {lim.g:g} m/s^2, supports {lim.ground_law.name} "
+                f"k = {lim.ground_law.k:g}" if lim.model == "weight"
+                else "closed form: no weight, rigid supports") + ")")
     law = config.contact_law
     law_text = (f"{law.name}, k = {law.k:g}" + (f", e = {law.e:g}" if law.e is not None else "")
                 if law else "none (T_c^- only)")

@@ -433,7 +433,9 @@ class StationResult:
     """Everything computed at a batch of stations (see :func:`evaluate_stations`):
     ``pose``, driving velocity ``v`` (k, nv), the contacts ahead ``hit`` (arrays (k, nw)),
     ``impact`` (:class:`ImpactBatch`), ``extra["wheel_speed"]`` (k, nw): the speed of each
-    wheel centre under the driving velocity [m/s]."""
+    wheel centre under the driving velocity [m/s]; ``extra["chosen"]`` the wheels on the
+    terrain; ``extra["states"]`` (:class:`RoverStates` of the posed stations) and
+    ``extra["ok_index"]`` (their indices) where any station was posed."""
 
     pose: TerrainPose
     v: np.ndarray
@@ -515,5 +517,8 @@ def evaluate_stations(mbm, terrain, x, y, yaw, *, u: float, max_travel: float,
         for key in ("T_c_minus", "v_n", "m_eff", "rank", "held"):
             getattr(imp, key)[idx] = getattr(ib, key)
     x_, y_, yaw_ = (np.atleast_1d(np.asarray(a, float)) for a in (x, y, yaw))
+    extra = {"x": x_, "y": y_, "yaw": yaw_, "wheel_speed": speed, "chosen": chosen}
+    if idx.size:
+        extra["states"], extra["ok_index"] = st, idx
     return StationResult(pose=pose, v=v, hit=hit_all, impact=imp, wheels=pose.wheels,
-                         extra={"x": x_, "y": y_, "yaw": yaw_, "wheel_speed": speed})
+                         extra=extra)

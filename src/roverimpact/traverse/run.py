@@ -8,7 +8,8 @@ process), gathers the per-station and per-wheel rows, derives the speed-limit se
 
 ``poses.parquet``   one row per station: pose, status, worst impact, speed limit;
 ``wheels.parquet``  one row per station and wheel: next contact, T_c^-, m_eff, v_n,
-                    F_pred and its band, speed limit, the rows held through the impact;
+                    F_pred (closed form), F_model (weight model) and the band, speed
+                    limit, the rows held through the impact;
 ``segments.parquet`` one row per segment of ``drive.segment`` metres;
 ``traverse.toml``, ``manifest.json`` (inputs, software versions, timings).
 
@@ -180,26 +181,35 @@ def _tables(cfg, mbm, path_name, st: Stations, i0: int, res):
     u = cfg.drive.speed
     has_impact = T > 0
     law = cfg.contact_law
-    F = peak_force(law, imp.m_eff, np.where(has_impact, imp.v_n, np.nan)) if law else None
-    F_lo = F_hi = v_band = None
-    if law is not None and cfg.band is not None:
-        grid = band_laws(law, cfg.band.k, cfg.band.e, cfg.band.n)
-        Fs = np.stack([peak_force(law, imp.m_eff, np.where(has_impact, imp.v_n, np.nan),
-                                  k=kk, e=ee) for kk, ee in grid])
+    vn = np.where(has_impact, imp.v_n, np.nan)
+    F = peak_force(law, imp.m_eff, vn) if law else None
+    F_lo = F_hi = v_band = F_model = v_closed = None
+    grid = band_laws(law, cfg.band.k, cfg.band.e, cfg.band.n) \
+        if law is not None and cfg.band is not None else []
+    weight = cfg.limits.F_allow is not None and cfg.limits.model == "weight"
+    if grid and not weight:
+        Fs = np.stack([peak_force(law, imp.m_eff, vn, k=kk, e=ee) for kk, ee in grid])
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore", RuntimeWarning)   # stations without impact
             F_lo, F_hi = np.nanmin(Fs, axis=0), np.nanmax(Fs, axis=0)
         if cfg.limits.F_allow is not None:
-            vb = np.stack([speed_limit_force(law, imp.m_eff,
-                                             np.where(has_impact, imp.v_n, np.nan), u,
-                                             cfg.limits.F_allow, k=kk, e=ee)
-                           for kk, ee in grid])
+            vb = np.stack([speed_limit_force(law, imp.m_eff, vn, u, cfg.limits.F_allow,
+                                             k=kk, e=ee) for kk, ee in grid])
             v_band = np.min(vb, axis=0)
     if cfg.limits.T_allow is not None:
         v_lim = speed_limit_energy(T, u, cfg.limits.T_allow)
     else:
-        v_lim = speed_limit_force(law, imp.m_eff, np.where(has_impact, imp.v_n, np.nan), u,
-                                  cfg.limits.F_allow)
+        v_lim = speed_limit_force(law, imp.m_eff, vn, u, cfg.limits.F_allow)
+    if weight:
+        v_closed = v_lim
+        laws = [law] + [law.model_copy(update={"k": kk, "e": ee}) for kk, ee in grid]
+        Fm, Vm = _weight_model(cfg, mbm, res, has_impact, v_closed, laws)
+        F_model, v_lim = Fm[0], Vm[0]
+        if grid:       # the nominal law with the grid (the model need not be monotone)
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
+                warnings.simplefilter("ignore", RuntimeWarning)   # stations without impact
+                F_lo, F_hi = np.nanmin(Fm, axis=0), np.nanmax(Fm, axis=0)
+            v_band = np.min(Vm, axis=0)
     ok = np.asarray(res.pose.status) == "ok"
     v_lim = np.where(ok[:, None], np.where(np.isnan(v_lim), np.inf, v_lim), np.nan)
     if v_band is not None:
@@ -221,9 +231,14 @@ def _tables(cfg, mbm, path_name, st: Stations, i0: int, res):
     }
     if F is not None:
         wheels["F_pred"] = F.ravel()
+    if F_model is not None:
+        wheels["F_model"] = F_model.ravel()
     if F_lo is not None:
         wheels["F_lo"], wheels["F_hi"] = F_lo.ravel(), F_hi.ravel()
     wheels["v_lim"] = v_lim.ravel()
+    if v_closed is not None:
+        wheels["v_lim_closed"] = np.where(ok[:, None], np.where(np.isnan(v_closed), np.inf,
+                                                               v_closed), np.nan).ravel()
     if v_band is not None:
         wheels["v_lim_band"] = v_band.ravel()
     wheels["held"] = imp.held.ravel().astype(str)
@@ -249,6 +264,9 @@ def _tables(cfg, mbm, path_name, st: Stations, i0: int, res):
     if F is not None:
         poses["F_pred_max"] = np.where(ok, np.nanmax(np.where(np.isnan(F), 0.0, F), axis=1),
                                        np.nan)
+    if F_model is not None:
+        poses["F_model_max"] = np.where(ok, np.nanmax(np.where(np.isnan(F_model), 0.0,
+                                                               F_model), axis=1), np.nan)
     if F_hi is not None:
         poses["F_hi_max"] = np.where(ok, np.nanmax(np.where(np.isnan(F_hi), 0.0, F_hi),
                                                    axis=1), np.nan)
@@ -257,6 +275,50 @@ def _tables(cfg, mbm, path_name, st: Stations, i0: int, res):
     if v_band is not None:
         poses["v_lim_band"] = np.minimum(v_band.min(axis=1), cap)
     return pd.DataFrame(poses), wdf
+
+
+def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
+    """The weight model (:mod:`roverimpact.traverse.refine`) of every impact for each law
+    spec of ``laws``: peak forces (L, k, nw) [N] at the reference speed and speed limits
+    (L, k, nw) [m/s] for ``limits.F_allow`` (NaN / inf without an impact). The limits are
+    capped at the top speed ``drive.v_max`` and at the model's own cap
+    (:func:`~roverimpact.traverse.refine.model_speed_cap`); a rigid lock (m_eff = inf)
+    keeps the closed form's limit 0."""
+    from .refine import impact_models, model_speed_cap, peak_forces, speed_limits
+
+    k, nw = has_impact.shape
+    L = len(laws)
+    F_model = np.full((L, k, nw), np.nan)
+    v_lim = np.broadcast_to(np.where(has_impact, v_closed, np.inf), (L, k, nw)).copy()
+    st = res.extra.get("states")
+    lim = cfg.limits
+    u = cfg.drive.speed
+    items = np.argwhere(has_impact & np.isfinite(res.impact.m_eff))
+    if st is None or items.size == 0:
+        return F_model, v_lim
+    ok_index = res.extra["ok_index"]
+    pos = np.full(k, -1)
+    pos[ok_index] = np.arange(ok_index.size)
+    kk, ww = items[:, 0], items[:, 1]
+    contacts = cfg.contacts.scenario_contacts()
+    models = impact_models(mbm, st, res.v[ok_index], res.pose.normal[ok_index], pos[kk], ww,
+                           res.hit["normal"][kk, ww], supports=res.extra["chosen"],
+                           locked=contacts.locked, gravity=[0.0, 0.0, -lim.g],
+                           loop_closure=contacts.loop_closure)
+    ground = lim.ground_law.to_law()
+    cap = min(cfg.drive.v_max or np.inf, model_speed_cap(mbm, lim.window))
+    s0 = v_closed[kk, ww] / u
+    for i, spec in enumerate(laws):
+        law = spec.to_law()
+        F_model[i, kk, ww] = peak_forces(models, law, ground, t_max=lim.window,
+                                         v_ref=lim.ground_law.v_ref).peak_force
+        v_lim[i, kk, ww] = speed_limits(models, law, ground, u, lim.F_allow, s0=s0,
+                                        s_max=cap / u, t_max=lim.window,
+                                        v_ref=lim.ground_law.v_ref)
+        if i == 0:                      # the nominal law's limits start the band's search
+            s0 = np.where(np.isfinite(v_lim[0, kk, ww]) & (v_lim[0, kk, ww] > 0),
+                          v_lim[0, kk, ww] / u, s0)
+    return F_model, v_lim
 
 
 def _pose_columns(mbm, q) -> dict:
@@ -315,8 +377,9 @@ def segments_table(cfg: TraverseConfig, poses: pd.DataFrame, wheels: pd.DataFram
                            beta_min_deg=float(ww["beta_deg"].min()),
                            beta_max_deg=float(ww["beta_deg"].max()),
                            s_worst=float(worst["s"]))
-                if "F_pred" in w:
-                    row["F_pred_max"] = float(w["F_pred"].max())
+                for c in ("F_pred", "F_model"):
+                    if c in w:
+                        row[f"{c}_max"] = float(w[c].max())
             else:
                 row.update(worst_wheel="", T_c_max=0.0, beta_min_deg=math.nan,
                            beta_max_deg=math.nan, s_worst=math.nan)

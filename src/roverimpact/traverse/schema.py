@@ -40,6 +40,11 @@ them). SI units; angles in degrees where a key ends in ``_deg``. Layout::
     [limits]                              # one of
     T_allow = 0.05                        # J: keep T_c^- below
     F_allow = 800.0                       # N: keep the predicted peak force below
+    # model = "weight"                    # F with the weight on compliant supports, or
+    #                                       "closed-form" (no weight, rigid supports)
+    # gravity = "earth"                   # "mars", "moon", "none" or m/s^2
+    # ground_law = { name = "hunt-crossley", k = 1.0e7, e = 0.2 }   # the supports
+    # window = 0.05                       # s, the peak is sought in
 
     [contact_law]                         # the obstacle's law (F_pred; needed by F_allow)
     name = "hunt-crossley"
@@ -72,7 +77,7 @@ from pydantic import Field, field_validator, model_validator
 
 from .._schema import StrictModel, validate
 from ..exceptions import ConfigError
-from ..scenario.schema import BandSpec, ContactLawSpec, LoopSpec, ModelSpec
+from ..scenario.schema import GRAVITY, BandSpec, ContactLawSpec, LoopSpec, ModelSpec, SimulationSpec
 
 __all__ = ["BandSpec", "DriveSpec", "LimitsSpec", "PathSpec", "RunSpec", "SuspensionSpec",
            "TerrainSpec", "TraverseConfig", "TraverseContactsSpec", "load_traverse",
@@ -198,10 +203,31 @@ class DriveSpec(StrictModel):
 
 class LimitsSpec(StrictModel):
     """``[limits]``: the allowable ``T_allow`` [J] (effective kinetic energy) or
-    ``F_allow`` [N] (closed-form peak force of ``[contact_law]``)."""
+    ``F_allow`` [N] (peak force of ``[contact_law]`` on the feature).
+
+    For ``F_allow``, ``model`` says how the peak force is predicted: ``"weight"`` (the
+    default) with the rover's weight on compliant, preloaded supports
+    (:mod:`roverimpact.traverse.refine`: ``gravity``, the supports' ``ground_law``, the
+    ``window`` [s] in which the peak is sought), or ``"closed-form"``: the 1-DoF closed form
+    of (m_eff, v_n), no weight and rigid supports (low where the weight share is of the
+    order of the impact force, docs/traverse.md)."""
 
     T_allow: float | None = Field(None, gt=0.0, allow_inf_nan=False)
     F_allow: float | None = Field(None, gt=0.0, allow_inf_nan=False)
+    model: Literal["weight", "closed-form"] = "weight"
+    gravity: str | float = "earth"
+    ground_law: ContactLawSpec = ContactLawSpec(e=0.2)
+    window: float = Field(0.05, gt=0.0, allow_inf_nan=False)
+
+    @field_validator("gravity")
+    @classmethod
+    def _gravity(cls, g):
+        return SimulationSpec._gravity(g)
+
+    @property
+    def g(self) -> float:
+        """Gravity magnitude [m/s^2]."""
+        return GRAVITY[self.gravity] if isinstance(self.gravity, str) else float(self.gravity)
 
     @model_validator(mode="after")
     def _one(self):
