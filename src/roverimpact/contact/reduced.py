@@ -167,8 +167,9 @@ STIFF_STEPS = 2000
 
 def _steps(G, b, k, n, a, c, loads, v, o, t_max):
     """Step of the compiled integrator per item: 0.2 / the largest rate of the rows
-    linearised at twice the largest force expected, at most 1/200 of the window and 1/50
-    of the impact row's closed-form time scale; where the damping rate alone would need
+    linearised at twice the largest force expected (0.5 / the largest damping rate there),
+    at most 1/200 of the window and 1/20 of the impact row's closed-form time scale
+    :math:`\delta_H / v_n`; where the damping rate alone would need
     more than :data:`STIFF_STEPS` steps, the item is stiff (Rosenbrock, from the step
     without the damping bound). Returns (dt, stiff, d_scale), d_scale the larger of the
     closed-form indentation and the static ones [m]."""
@@ -187,7 +188,7 @@ def _steps(G, b, k, n, a, c, loads, v, o, t_max):
         damp = np.max(g * (F[:, None] * np.abs(a) + c), axis=1)
         explicit = np.minimum.reduce([np.full(B, t_max / 200.0),
                                       np.where(omega > 0, 0.2 / omega, np.inf),
-                                      0.02 * d_H / v])
+                                      0.05 * d_H / v])
         dt = np.minimum(explicit, np.where(damp > 0, 0.5 / damp, np.inf))
         stiff = t_max / dt > STIFF_STEPS
         d0 = np.where(loads > 0.0, (loads / k) ** (1.0 / n), 0.0)
