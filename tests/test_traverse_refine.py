@@ -182,3 +182,21 @@ def test_one_impact_lsoda_agrees_with_reduced_impact(traverse):
     r = reduced_impact(G, b, [GROUND] * (m - 1) + [HC], [0.1] * (m - 1) + [rate[-1]], rate,
                        t_max=0.05, impact=m - 1)
     assert peak_forces(M[0], HC, GROUND, method="lsoda").peak_force[0] == r.peak_force
+
+
+def test_degenerate_and_receding_items_are_nan_not_errors(traverse):
+    """A feature normal along the wheel axis (no rim point faces it) and a receding
+    feature: NaN peak forces and limits (inf for the receding one), the others computed."""
+    rb, r, k, w, st, M = traverse
+    nrm = r.hit["normal"][k[:3], w[:3]].copy()
+    nrm[1] = st.axis[1, w[1]]
+    bad = impact_models(rb, st, r.v[k], r.pose.normal[k], np.arange(3), w[:3], nrm,
+                        supports=np.ones(6, bool))
+    assert list(bad.finite) == [True, False, True]
+    F = peak_forces(bad, HC, GROUND).peak_force
+    assert np.isnan(F[1]) and np.isfinite(F[[0, 2]]).all()
+    lim = speed_limits(bad, HC, GROUND, 0.1, 40.0)
+    assert np.isnan(lim[1]) and not np.isnan(lim[[0, 2]]).any()
+    back = ImpactModels(M.G[:2], M.b_g[:2], M.b_v[:2], M.rate0[:2] * [[1.0], [-1.0]])
+    F = peak_forces(back, HC, GROUND).peak_force
+    assert np.isfinite(F[0]) and np.isnan(F[1])

@@ -169,7 +169,7 @@ def _steps(G, b, k, n, a, c, loads, v, o, t_max):
     """Step of the compiled integrator per item: 0.2 / the largest rate of the rows
     linearised at twice the largest force expected (0.5 / the largest damping rate there),
     at most 1/200 of the window and 1/20 of the impact row's closed-form time scale
-    :math:`\delta_H / v_n`; where the damping rate alone would need
+    ``delta_H / v_n``; where the damping rate alone would need
     more than :data:`STIFF_STEPS` steps, the item is stiff (Rosenbrock, from the step
     without the damping bound). Returns (dt, stiff, d_scale), d_scale the larger of the
     closed-form indentation and the static ones [m]."""

@@ -143,7 +143,7 @@ def local_cluster(workers: int):
     The workers start without Dask's default ``MALLOC_TRIM_THRESHOLD_=65536``
     (:data:`WORKER_ENVIRON`): setting it turns off glibc's adaptive mmap threshold, and
     this package's many short-lived numpy arrays then cost page faults: a traverse path
-    took 1.43x the CPU time in a process with that setting
+    took 1.2-1.4x the CPU time in a process with that setting
     (``benchmarks/bench_traverse.py`` prints the comparison).
     """
     if workers < 1:

@@ -81,14 +81,21 @@ class ImpactModels:
     def v_n(self) -> np.ndarray:
         return self.rate0[:, -1]
 
+    @property
+    def finite(self) -> np.ndarray:
+        """Items whose model is finite (a contact normal along a wheel's axis has no rim
+        point facing it: NaN rows)."""
+        return (np.isfinite(self.G).all(axis=(1, 2)) & np.isfinite(self.b_g).all(axis=1)
+                & np.isfinite(self.b_v).all(axis=1) & np.isfinite(self.rate0).all(axis=1))
+
     def __getitem__(self, i) -> ImpactModels:
         i = np.atleast_1d(np.arange(len(self))[i])
         return ImpactModels(self.G[i], self.b_g[i], self.b_v[i], self.rate0[i])
 
 
-def _rim_rows(J, centre, axis, radius, n):
+def _rim_rows(J, axis, radius, n):
     """Rows n^T J_p of the rim points facing ``n``: J (..., 6, nv), axis, n (..., 3),
-    radius (...,) -> (..., nv)."""
+    radius (...,) -> (..., nv); NaN where ``n`` is along the axis (no rim point faces it)."""
     n = n / np.linalg.norm(n, axis=-1)[..., None]
     d = n - np.einsum("...j,...j->...", n, axis)[..., None] * axis
     d /= np.linalg.norm(d, axis=-1)[..., None]
@@ -156,11 +163,12 @@ def impact_models(mbm, states, v, support_normal, station, wheel, normal, *, sup
         tau_g[j] = -g
         tau_v[j] = -(pin.nonLinearEffects(model, data, q, vv) - g)
     st = station
-    rows_s = _rim_rows(states.J[st][:, sup], states.centre[st][:, sup],
-                       states.axis[st][:, sup], np.broadcast_to(radii[sup], (B, sup.size)),
-                       np.asarray(support_normal, float)[st][:, sup])       # (B, s, nv)
-    row_f = _rim_rows(states.J[st, wheel], states.centre[st, wheel], states.axis[st, wheel],
-                      radii[wheel], normal)                                  # (B, nv)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rows_s = _rim_rows(states.J[st][:, sup], states.axis[st][:, sup],
+                           np.broadcast_to(radii[sup], (B, sup.size)),
+                           np.asarray(support_normal, float)[st][:, sup])   # (B, s, nv)
+        row_f = _rim_rows(states.J[st, wheel], states.axis[st, wheel], radii[wheel],
+                          normal)                                            # (B, nv)
     A = np.concatenate([rows_s, row_f[:, None, :]], axis=1)                  # (B, m, nv)
     AN = np.einsum("bmv,bvw->bmw", A, N[inv])
     G = np.einsum("bmv,bnv->bmn", AN, A)
@@ -198,7 +206,7 @@ class ModelPeaks:
 def peak_forces(models: ImpactModels, law, ground_law, s=1.0, *, t_max: float = 0.05,
                 v_ref: float = 0.1, method: str = "rk4") -> ModelPeaks:
     """Peak force of every impact of ``models`` at ``s`` (scalar or (B,)) times the
-    reference speed: ``law`` on the feature, ``ground_law`` (``v_i = v_ref``) on the
+    reference speed (NaN without a finite model or an approach): ``law`` on the feature, ``ground_law`` (``v_i = v_ref``) on the
     supports, preloaded by their static loads; ``t_max`` the window [s]. ``method``:
     ``"rk4"`` (the compiled integrator, :mod:`roverimpact._kernels.reduced`, for the laws
     of :func:`~roverimpact.contact.reduced.law_form`) or ``"lsoda"`` (the reference,
@@ -209,6 +217,15 @@ def peak_forces(models: ImpactModels, law, ground_law, s=1.0, *, t_max: float = 
     if B == 0:
         return ModelPeaks(*(np.empty(0) for _ in range(3)), np.empty(0, bool))
     s = np.broadcast_to(np.asarray(s, float), (B,))
+    ok = models.finite & (models.v_n * s > 0)
+    if not ok.all():                       # NaN where there is no model or no approach
+        out = ModelPeaks(*(np.full(B, np.nan) for _ in range(3)), np.zeros(B, bool))
+        if ok.any():
+            sub = peak_forces(models[ok], law, ground_law, s[ok], t_max=t_max, v_ref=v_ref,
+                              method=method)
+            for f in ("peak_force", "time_of_peak", "duration", "ended"):
+                getattr(out, f)[ok] = getattr(sub, f)
+        return out
     G = models.G
     b = models.b_g + (s * s)[:, None] * models.b_v
     rate0 = s[:, None] * models.rate0
@@ -248,7 +265,8 @@ def speed_limits(models: ImpactModels, law, ground_law, u_ref: float, F_allow: f
 
     ``s0`` (B,): first guesses of the ratio to ``u_ref`` (the closed-form limits'). 0
     where the feature met at ``s_min u_ref`` already exceeds ``F_allow`` (its weight share
-    alone does); inf without an approach (``v_n <= 0``); ``s_max u_ref`` where the force
+    alone does); inf without an approach (``v_n <= 0``); NaN where the model is not finite
+    (:attr:`ImpactModels.finite`); ``s_max u_ref`` where the force
     stays under ``F_allow`` up to that speed (the caller's cap). Otherwise a crossing: from
     ``s0`` up while under ``F_allow`` or down while over it (steps of the closed form's
     slope, at least a factor 1.5) until bracketed, then regula falsi (Illinois) in
@@ -259,8 +277,8 @@ def speed_limits(models: ImpactModels, law, ground_law, u_ref: float, F_allow: f
     if not (F_allow > 0 and np.isfinite(F_allow)):
         raise InputError(f"F_allow must be a force > 0 N, got {F_allow}")
     B = len(models)
-    out = np.full(B, np.inf)
-    live = np.flatnonzero(models.v_n > 0)
+    out = np.where(models.finite, np.inf, np.nan)
+    live = np.flatnonzero((models.v_n > 0) & models.finite)
     if live.size == 0:
         return out
     n_law = float(getattr(law, "n", 1.0))
