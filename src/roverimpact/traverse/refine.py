@@ -206,8 +206,9 @@ class ModelPeaks:
 def peak_forces(models: ImpactModels, law, ground_law, s=1.0, *, t_max: float = 0.05,
                 v_ref: float = 0.1, method: str = "rk4") -> ModelPeaks:
     """Peak force of every impact of ``models`` at ``s`` (scalar or (B,)) times the
-    reference speed (NaN without a finite model or an approach): ``law`` on the feature, ``ground_law`` (``v_i = v_ref``) on the
-    supports, preloaded by their static loads; ``t_max`` the window [s]. ``method``:
+    reference speed (NaN without a finite model or an approach): ``law`` on the feature,
+    ``ground_law`` (``v_i = v_ref``) on the supports, preloaded by their static loads;
+    ``t_max`` the window [s]. ``method``:
     ``"rk4"`` (the compiled integrator, :mod:`roverimpact._kernels.reduced`, for the laws
     of :func:`~roverimpact.contact.reduced.law_form`) or ``"lsoda"`` (the reference,
     :func:`~roverimpact.contact.reduced.reduced_impact`, one impact at a time)."""
