@@ -106,6 +106,9 @@ def _write_inputs(d: Path) -> None:
                              .replace("seed = 7\n", ""),
         "trav_wheel.toml": TRAV.replace("[drive]", "[contacts]\nwheels = ['nose']\n[drive]"),
         "trav_unit.toml": TRAV.replace("speed = 0.1 ", 'speed = "0.1 m/s" '),
+        "trav_gravity.toml": TRAV.replace("[limits]\n", '[limits]\ngravity = "venus"\n'),
+        "trav_ground.toml": TRAV.replace("[limits]\n",
+                                         "[limits]\nground_law = { name = 'hertz', k = -1 }\n"),
     }
     for name, text in t.items():
         (d / name).write_text(text)
@@ -413,6 +416,10 @@ CASES = [
      "unknown wheel", None),
     ("traverse-unit", ["traverse", "{d}/trav_unit.toml", "-o", "{o}/t"], ["{o}/t"],
      "plain number", None),
+    ("traverse-gravity", ["traverse", "{d}/trav_gravity.toml", "-o", "{o}/t"], ["{o}/t"],
+     "gravity preset", None),
+    ("traverse-ground-law", ["traverse", "{d}/trav_ground.toml", "-o", "{o}/t"], ["{o}/t"],
+     "ground_law", None),
     ("traverse-unwritable", ["traverse", "{d}/trav_good.toml", "-o", "{ro}"], ["{ro}"],
      "not writable", None),
     ("traverse-scheduler", ["traverse", "{d}/trav_good.toml", "-o", "{o}/t", "--scheduler",
