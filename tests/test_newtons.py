@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.linalg import expm
 
 from roverimpact._io import read_toml
@@ -186,3 +188,41 @@ def test_force_ratios_exclude_and_count():
     assert r.n == 3 and r.n_excluded == 1
     assert r.min == pytest.approx(0.9) and r.max == pytest.approx(1.0)
     assert r.n_within == 2
+
+
+# ---------------------------------------------------- compiled integrators, any system
+@settings(max_examples=40, deadline=None)
+@given(m=st.integers(1, 5), data=st.data())
+def test_property_compiled_integrators_match_lsoda(m, data):
+    """Random SPD G (an inverse mass in contact space of 0.02-0.5 1/kg), preloads pressing
+    every ground row (weights of 5-50 kg), Hunt-Crossley, Hertz or Kelvin-Voigt rows, an
+    approach of 1e-4-1 m/s (the smallest make Hunt-Crossley's damping stiff): both
+    compiled integrators (RK4 and the Rosenbrock pair, every item forced stiff) give
+    LSODA's peak force (rtol 1e-8) to 1e-4 of the force plus 1e-6 N."""
+    import roverimpact.contact.reduced as red
+    from tests.strategies import spd_matrices
+
+    G = 0.05 * data.draw(spd_matrices(m, decades=1.0))
+    G *= 0.5 / max(np.max(np.diag(G)), 0.5)
+    weights = np.array(data.draw(st.lists(st.floats(5.0, 50.0), min_size=m, max_size=m)))
+    b = -G @ (9.81 * weights)             # each row pressed by a weight, through G
+    kind = data.draw(st.sampled_from(["hunt-crossley", "hertz", "kelvin-voigt"]))
+    law = (KelvinVoigt(k=2e5, c=200.0) if kind == "kelvin-voigt"
+           else get_law(kind, k=data.draw(st.floats(1e6, 1e8)),
+                        **({"e": data.draw(st.floats(0.2, 0.9))} if kind != "hertz" else {})))
+    ground = get_law("hunt-crossley", k=1e7, e=0.2)
+    v = 10.0 ** data.draw(st.floats(-4.0, 0.0))
+    laws = [ground] * (m - 1) + [law]
+    v_i = [0.1] * (m - 1) + [v]
+    rate0 = np.zeros(m)
+    rate0[-1] = v
+    ref = reduced_impact(G, b, laws, v_i, rate0, t_max=0.05)
+    fast = reduced_impact(G, b, laws, v_i, rate0, t_max=0.05, method="rk4")
+    old = red.STIFF_STEPS
+    try:
+        red.STIFF_STEPS = 0
+        stiff = reduced_impact(G, b, laws, v_i, rate0, t_max=0.05, method="rk4")
+    finally:
+        red.STIFF_STEPS = old
+    for r in (fast, stiff):
+        assert r.peak_force == pytest.approx(ref.peak_force, rel=1e-4, abs=1e-6)

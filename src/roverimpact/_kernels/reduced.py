@@ -32,8 +32,10 @@ from ._jit import Kernel, b1, f8, i8, ro, rw, types
 
 @njit(cache=True, nogil=True)
 def _forces(d, dd, k, n, a, c, out):
+    """Each row's force; a row at zero penetration and closing is in contact (the limit
+    from inside: c dd for a damper, so that the first step of an impact sees it)."""
     for i in range(d.shape[0]):
-        if d[i] > 0.0:
+        if d[i] > 0.0 or (d[i] == 0.0 and dd[i] > 0.0):
             if n[i] == 1.5:
                 p = d[i] * np.sqrt(d[i])
             elif n[i] == 1.0:
@@ -242,9 +244,13 @@ def _reduced_peak_stiff(G, b, k, n, a, c, delta0, rate0, o, t_max, h0, d_scale, 
             W[i, m + i] = -h * dcoef
         for j in range(m):
             dj = y[j]
-            if dj > 0.0 and f[j] > 0.0:
-                p = dj ** n[j]
-                D1 = k[j] * n[j] * dj ** (n[j] - 1.0) * (1.0 + a[j] * y[m + j])
+            if f[j] > 0.0:                  # in contact (d > 0, or d = 0 closing)
+                if dj > 0.0:
+                    p = dj ** n[j]
+                    D1 = k[j] * n[j] * dj ** (n[j] - 1.0) * (1.0 + a[j] * y[m + j])
+                else:
+                    p = 0.0
+                    D1 = k[j] * (1.0 + a[j] * y[m + j]) if n[j] == 1.0 else 0.0
                 D2 = k[j] * p * a[j] + c[j]
             else:
                 D1 = 0.0
