@@ -77,6 +77,24 @@ Vec3 = tuple[float, float, float]
 GRAVITY: dict[str, float] = {"earth": 9.81, "mars": 3.721, "moon": 1.62, "none": 0.0}
 
 
+def check_gravity(g: str | float) -> str | float:
+    """A ``gravity`` setting: a preset name of :data:`GRAVITY` (lower-cased) or a finite
+    magnitude >= 0 [m/s^2] (ValueError otherwise, for the schemas' validators)."""
+    if isinstance(g, str):
+        if g.lower() not in GRAVITY:
+            raise ValueError(f"unknown gravity preset {g!r}; use one of {sorted(GRAVITY)} "
+                             "or a number in m/s^2")
+        return g.lower()
+    if not (math.isfinite(g) and g >= 0.0):
+        raise ValueError(f"gravity must be a finite magnitude >= 0 m/s^2, got {g}")
+    return g
+
+
+def gravity_magnitude(g: str | float) -> float:
+    """The magnitude [m/s^2] of a checked ``gravity`` setting (:func:`check_gravity`)."""
+    return GRAVITY[g] if isinstance(g, str) else float(g)
+
+
 class WheelSpec(StrictModel):
     """A wheel of a robot file: ``[model.wheels.NAME]``.
 
@@ -434,14 +452,7 @@ class SimulationSpec(StrictModel):
     @field_validator("gravity")
     @classmethod
     def _gravity(cls, g):
-        if isinstance(g, str):
-            if g.lower() not in GRAVITY:
-                raise ValueError(f"unknown gravity preset {g!r}; use one of {sorted(GRAVITY)} "
-                                 "or a number in m/s^2")
-            return g.lower()
-        if not (math.isfinite(g) and g >= 0.0):
-            raise ValueError(f"gravity must be a finite magnitude >= 0 m/s^2, got {g}")
-        return g
+        return check_gravity(g)
 
     @field_validator("distance")
     @classmethod
@@ -454,7 +465,7 @@ class SimulationSpec(StrictModel):
     @property
     def g(self) -> float:
         """Gravity magnitude [m/s^2]."""
-        return GRAVITY[self.gravity] if isinstance(self.gravity, str) else float(self.gravity)
+        return gravity_magnitude(self.gravity)
 
 
 class PlaneSpec(StrictModel):

@@ -283,7 +283,8 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
     (L, k, nw) [m/s] for ``limits.F_allow`` (NaN / inf without an impact). The limits are
     capped at the top speed ``drive.v_max`` and at the model's own cap
     (:func:`~roverimpact.traverse.refine.model_speed_cap`); a rigid lock (m_eff = inf)
-    keeps the closed form's limit 0."""
+    keeps the closed form's limit 0, and so does an impact the model cannot take (a contact
+    normal along the wheel's axis: NaN ``F_model``)."""
     from .refine import impact_models, model_speed_cap, peak_forces, speed_limits
 
     k, nw = has_impact.shape
@@ -312,9 +313,10 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
         law = spec.to_law()
         F_model[i, kk, ww] = peak_forces(models, law, ground, t_max=lim.window,
                                          v_ref=lim.ground_law.v_ref).peak_force
-        v_lim[i, kk, ww] = speed_limits(models, law, ground, u, lim.F_allow, s0=s0,
-                                        s_max=cap / u, t_max=lim.window,
-                                        v_ref=lim.ground_law.v_ref)
+        vl = speed_limits(models, law, ground, u, lim.F_allow, s0=s0, s_max=cap / u,
+                          t_max=lim.window, v_ref=lim.ground_law.v_ref)
+        # no model (a contact normal along the wheel's axis): the closed form's limit
+        v_lim[i, kk, ww] = np.where(np.isnan(vl), v_closed[kk, ww], vl)
         if i == 0:                      # the nominal law's limits start the band's search
             s0 = np.where(np.isfinite(v_lim[0, kk, ww]) & (v_lim[0, kk, ww] > 0),
                           v_lim[0, kk, ww] / u, s0)

@@ -77,7 +77,14 @@ from pydantic import Field, field_validator, model_validator
 
 from .._schema import StrictModel, validate
 from ..exceptions import ConfigError
-from ..scenario.schema import GRAVITY, BandSpec, ContactLawSpec, LoopSpec, ModelSpec, SimulationSpec
+from ..scenario.schema import (
+    BandSpec,
+    ContactLawSpec,
+    LoopSpec,
+    ModelSpec,
+    check_gravity,
+    gravity_magnitude,
+)
 
 __all__ = ["BandSpec", "DriveSpec", "LimitsSpec", "PathSpec", "RunSpec", "SuspensionSpec",
            "TerrainSpec", "TraverseConfig", "TraverseContactsSpec", "load_traverse",
@@ -222,12 +229,12 @@ class LimitsSpec(StrictModel):
     @field_validator("gravity")
     @classmethod
     def _gravity(cls, g):
-        return SimulationSpec._gravity(g)
+        return check_gravity(g)
 
     @property
     def g(self) -> float:
         """Gravity magnitude [m/s^2]."""
-        return GRAVITY[self.gravity] if isinstance(self.gravity, str) else float(self.gravity)
+        return gravity_magnitude(self.gravity)
 
     @model_validator(mode="after")
     def _one(self):
