@@ -269,9 +269,10 @@ def reduced_impact(G, b, laws, v_i, rate0, *, t_max: float, impact: int = -1,
         Start the other rows at their static load (:func:`static_loads`); False: all
         gaps start at 0 (the other contacts just touching).
     method : "lsoda" or "rk4"
-        scipy's LSODA (``rtol``; the reference), or the compiled fixed-step Runge-Kutta of
-        :mod:`roverimpact._kernels.reduced` (about a hundred times faster; laws of
-        :func:`law_form`, LSODA for any other).
+        scipy's LSODA (``rtol``; the reference), or the compiled integrator of
+        :mod:`roverimpact._kernels.reduced` (:func:`reduced_impact_batch`: fixed-step
+        Runge-Kutta, a Rosenbrock pair where the damping is stiff; 20-100 times faster;
+        laws of :func:`law_form`, LSODA for any other).
 
     Returns
     -------
