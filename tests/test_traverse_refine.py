@@ -200,3 +200,17 @@ def test_degenerate_and_receding_items_are_nan_not_errors(traverse):
     back = ImpactModels(M.G[:2], M.b_g[:2], M.b_v[:2], M.rate0[:2] * [[1.0], [-1.0]])
     F = peak_forces(back, HC, GROUND).peak_force
     assert np.isfinite(F[0]) and np.isnan(F[1])
+
+
+def test_weight_share_grows_with_gravity(traverse):
+    """The same impacts without gravity, on Mars and on Earth: the model's peak forces
+    grow with g (the weight share)."""
+    rb, r, k, w, st, _ = traverse
+    F = {}
+    for name, g in (("none", 0.0), ("mars", 3.721), ("earth", 9.81)):
+        M = impact_models(rb, st, r.v[k], r.pose.normal[k], np.arange(k.size), w,
+                          r.hit["normal"][k, w], supports=np.ones(6, bool),
+                          gravity=[0.0, 0.0, -g])
+        F[name] = peak_forces(M, HC, GROUND).peak_force
+    assert np.median(F["none"]) < np.median(F["mars"]) < np.median(F["earth"])
+    assert (F["earth"] >= F["none"] * (1 - 1e-6)).mean() > 0.9
