@@ -25,14 +25,9 @@ from roverimpact.studies.stats import force_ratios
 
 # --------------------------------------------------------------- 1-DoF limits (exact)
 @pytest.fixture(params=["lsoda", "rk4", "rosenbrock"])
-def method(request, monkeypatch):
+def method(request):
     """The three integrators of the contact-space ODE: scipy's LSODA, the compiled
-    fixed-step Runge-Kutta and the compiled Rosenbrock pair (every item forced stiff)."""
-    if request.param == "rosenbrock":
-        import roverimpact.contact.reduced as red
-
-        monkeypatch.setattr(red, "STIFF_STEPS", 0)
-        return "rk4"
+    fixed-step Runge-Kutta and the compiled Rosenbrock pair."""
     return request.param
 
 
@@ -197,9 +192,8 @@ def test_property_compiled_integrators_match_lsoda(m, data):
     """Random SPD G (an inverse mass in contact space of 0.02-0.5 1/kg), preloads pressing
     every ground row (weights of 5-50 kg), Hunt-Crossley, Hertz or Kelvin-Voigt rows, an
     approach of 1e-4-1 m/s (the smallest make Hunt-Crossley's damping stiff): both
-    compiled integrators (RK4 and the Rosenbrock pair, every item forced stiff) give
-    LSODA's peak force (rtol 1e-8) to 1e-4 of the force plus 1e-6 N."""
-    import roverimpact.contact.reduced as red
+    compiled integrators (RK4, the Rosenbrock pair, the choice per item) give LSODA's peak
+    force (rtol 1e-8) to 1e-4 of the force plus 1e-6 N."""
     from tests.strategies import spd_matrices
 
     G = 0.05 * data.draw(spd_matrices(m, decades=1.0))
@@ -217,12 +211,6 @@ def test_property_compiled_integrators_match_lsoda(m, data):
     rate0 = np.zeros(m)
     rate0[-1] = v
     ref = reduced_impact(G, b, laws, v_i, rate0, t_max=0.05)
-    fast = reduced_impact(G, b, laws, v_i, rate0, t_max=0.05, method="rk4")
-    old = red.STIFF_STEPS
-    try:
-        red.STIFF_STEPS = 0
-        stiff = reduced_impact(G, b, laws, v_i, rate0, t_max=0.05, method="rk4")
-    finally:
-        red.STIFF_STEPS = old
-    for r in (fast, stiff):
+    for r in (reduced_impact(G, b, laws, v_i, rate0, t_max=0.05, method=m_)
+              for m_ in ("rk4", "rosenbrock", "auto")):
         assert r.peak_force == pytest.approx(ref.peak_force, rel=1e-4, abs=1e-6)

@@ -121,8 +121,8 @@ def test_compiled_integrators_match_lsoda(traverse, s):
                              HC.z / rate[:, -1]])
         loads = np.zeros((len(pick), m))
         loads[:, :-1] = red.static_loads_batch(G[:, :-1, :-1], b[:, :-1])
-        _, stiff, _ = red._steps(G, b, k, n, a, np.zeros_like(k), loads, rate[:, -1], m - 1,
-                                 0.05)
+        L = np.stack([k, n, a, np.zeros_like(k), np.zeros_like(k)], axis=-1)
+        _, _, stiff, _ = red._steps(G, b, L, loads, rate[:, -1], m - 1, 0.05)
         assert stiff.any()
 
 

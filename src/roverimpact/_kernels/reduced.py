@@ -1,21 +1,28 @@
 r"""Compiled contact-space impact (:mod:`roverimpact.contact.reduced`) for laws of one form.
 
-:func:`reduced_peaks` integrates, for every item of a batch,
+:func:`rk4_peaks` and :func:`stiff_peaks` integrate, for every item of a batch,
 :math:`\ddot\delta = -(b + G f)` with every row's force
 
 .. math::
 
-    f_i = \max\bigl(0,\; k_i \delta_i^{n_i} (1 + a_i \dot\delta_i) + c_i \dot\delta_i\bigr)
-    \quad (\delta_i > 0), \qquad f_i = 0 \quad (\delta_i \le 0),
+    f_i = \max\bigl(0,\; k_i \delta_i^{n_i} (1 + a_i \dot\delta_i) + c_i \dot\delta_i
+    - f_{0,i}\bigr) \quad (\delta_i > 0), \qquad f_i = 0 \quad (\delta_i \le 0),
 
-which is Hertz (a = c = 0), the Hunt-Crossley family (a = z / v_i, c = 0) and Kelvin-Voigt
-(n = 1, a = 0, c its damping) exactly. Classical fixed-step Runge-Kutta of order 4 with a
-step from the stiffest row's time scale (the caller's ``dt``); where the Hunt-Crossley
-damping at a small approach speed would make that step tiny, the L-stable Rosenbrock pair
-of MATLAB's ode23s with step control. The peak of the impact row is located by a parabola
-through the largest sampled force and its neighbours, separation (the impact row's gap
-reopening) by linear interpolation. tests/test_newtons.py checks both integrators against
-closed forms (1-DoF laws, preloaded springs, the matrix exponential of two linear rows),
+which is Hertz (a = c = f_0 = 0), the Hunt-Crossley family (a = z / v_i), Kelvin-Voigt
+(n = 1, a = 0, c its damping) and a spring-damper with a rest offset (f_0 = k times the
+offset: MuJoCo's contacts as :mod:`roverimpact.simulate.newtons` models them) exactly. Each
+row's law is ``(k, n, a, c, f_0)``.
+
+:func:`rk4_peaks`: classical fixed-step Runge-Kutta of order 4 with a step from the
+stiffest row's time scale (the caller's ``dt``). :func:`stiff_peaks`, for items where the
+Hunt-Crossley damping at a small approach speed would make that step tiny: the L-stable
+Rosenbrock pair of MATLAB's ode23s with step control. Two kernels, each compiled on first
+use (the second takes about 3 s to compile; the studies never use it).
+
+The peak of the impact row is located by a parabola through the largest sampled force and
+its neighbours, separation (the impact row's gap reopening) by linear interpolation.
+tests/test_newtons.py checks both integrators against closed forms (1-DoF laws, preloaded
+springs, the matrix exponential of two linear rows) and LSODA on random systems,
 tests/test_traverse_refine.py against :func:`roverimpact.contact.reduced.reduced_impact`'s
 LSODA (rtol 1e-8) on rover impacts.
 
@@ -27,11 +34,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._jit import Kernel, b1, f8, i8, ro, rw, types
+from ._jit import Kernel, f8, i8, ro, rw, types
 
 
 @njit(cache=True, nogil=True)
-def _forces(d, dd, k, n, a, c, out):
+def _forces(d, dd, k, n, a, c, f0, out):
     """Each row's force; a row at zero penetration and closing is in contact (the limit
     from inside: c dd for a damper, so that the first step of an impact sees it)."""
     for i in range(d.shape[0]):
@@ -42,15 +49,15 @@ def _forces(d, dd, k, n, a, c, out):
                 p = d[i]
             else:
                 p = d[i] ** n[i]
-            f = k[i] * p * (1.0 + a[i] * dd[i]) + c[i] * dd[i]
+            f = k[i] * p * (1.0 + a[i] * dd[i]) + c[i] * dd[i] - f0[i]
             out[i] = f if f > 0.0 else 0.0
         else:
             out[i] = 0.0
 
 
 @njit(cache=True, nogil=True)
-def _deriv(G, b, k, n, a, c, d, dd, f, acc):
-    _forces(d, dd, k, n, a, c, f)
+def _deriv(G, b, k, n, a, c, f0, d, dd, f, acc):
+    _forces(d, dd, k, n, a, c, f0, f)
     m = d.shape[0]
     for i in range(m):
         s = b[i]
@@ -60,7 +67,7 @@ def _deriv(G, b, k, n, a, c, d, dd, f, acc):
 
 
 @njit(cache=True, nogil=True)
-def _reduced_peak(G, b, k, n, a, c, delta0, rate0, o, t_max, dt, out):
+def _reduced_peak(G, b, k, n, a, c, f0, delta0, rate0, o, t_max, dt, out):
     """One item: out = (peak, t_peak, duration, ended)."""
     m = b.shape[0]
     d = delta0.copy()
@@ -84,28 +91,28 @@ def _reduced_peak(G, b, k, n, a, c, delta0, rate0, o, t_max, dt, out):
         # RK4
         for i in range(m):
             k1d[i] = dd[i]
-        _deriv(G, b, k, n, a, c, d, dd, f, k1v)
+        _deriv(G, b, k, n, a, c, f0, d, dd, f, k1v)
         for i in range(m):
             tmpd[i] = d[i] + 0.5 * h * k1d[i]
             tmpv[i] = dd[i] + 0.5 * h * k1v[i]
             k2d[i] = tmpv[i]
-        _deriv(G, b, k, n, a, c, tmpd, tmpv, f, k2v)
+        _deriv(G, b, k, n, a, c, f0, tmpd, tmpv, f, k2v)
         for i in range(m):
             tmpd[i] = d[i] + 0.5 * h * k2d[i]
             tmpv[i] = dd[i] + 0.5 * h * k2v[i]
             k3d[i] = tmpv[i]
-        _deriv(G, b, k, n, a, c, tmpd, tmpv, f, k3v)
+        _deriv(G, b, k, n, a, c, f0, tmpd, tmpv, f, k3v)
         for i in range(m):
             tmpd[i] = d[i] + h * k3d[i]
             tmpv[i] = dd[i] + h * k3v[i]
             k4d[i] = tmpv[i]
-        _deriv(G, b, k, n, a, c, tmpd, tmpv, f, k4v)
+        _deriv(G, b, k, n, a, c, f0, tmpd, tmpv, f, k4v)
         d_old = d[o]
         for i in range(m):
             d[i] += h / 6.0 * (k1d[i] + 2.0 * k2d[i] + 2.0 * k3d[i] + k4d[i])
             dd[i] += h / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
         t = (step + 1) * h
-        _forces(d, dd, k, n, a, c, f)
+        _forces(d, dd, k, n, a, c, f0, f)
         fo = f[o]
         if fo > best:
             best = fo
@@ -133,9 +140,9 @@ def _reduced_peak(G, b, k, n, a, c, delta0, rate0, o, t_max, dt, out):
 
 
 @njit(cache=True, nogil=True)
-def _rhs(G, b, k, n, a, c, y, m, f, out):
+def _rhs(G, b, k, n, a, c, f0, y, m, f, out):
     """out = (dd, -(b + G f(d, dd))) for y = (d, dd)."""
-    _forces(y[:m], y[m:], k, n, a, c, f)
+    _forces(y[:m], y[m:], k, n, a, c, f0, f)
     for i in range(m):
         out[i] = y[m + i]
         s = b[i]
@@ -195,7 +202,8 @@ def _solve(W, piv, x):
 
 
 @njit(cache=True, nogil=True)
-def _reduced_peak_stiff(G, b, k, n, a, c, delta0, rate0, o, t_max, h0, d_scale, tol, out):
+def _reduced_peak_stiff(G, b, k, n, a, c, f0, delta0, rate0, o, t_max, h0, d_scale, tol,
+                        out):
     """One item by the L-stable Rosenbrock pair of Shampine and Reichelt (MATLAB's ode23s,
     order 2 with an order-3 error estimate; the step keeps the estimate under ``tol`` times
     ``d_scale`` [m] on the gaps and ``tol`` times the largest initial rate on the rates),
@@ -222,7 +230,7 @@ def _reduced_peak_stiff(G, b, k, n, a, c, delta0, rate0, o, t_max, h0, d_scale, 
     ynew = np.empty(N)
     W = np.empty((N, N))
     piv = np.zeros(N, np.int64)
-    _rhs(G, b, k, n, a, c, y, m, f, F0)
+    _rhs(G, b, k, n, a, c, f0, y, m, f, F0)
     t = 0.0
     h = h0
     h_max = t_max / 50.0
@@ -245,13 +253,14 @@ def _reduced_peak_stiff(G, b, k, n, a, c, delta0, rate0, o, t_max, h0, d_scale, 
         for j in range(m):
             dj = y[j]
             if f[j] > 0.0:                  # in contact (d > 0, or d = 0 closing)
+                kj, nj, aj = k[j], n[j], a[j]
                 if dj > 0.0:
-                    p = dj ** n[j]
-                    D1 = k[j] * n[j] * dj ** (n[j] - 1.0) * (1.0 + a[j] * y[m + j])
+                    p = dj ** nj
+                    D1 = kj * nj * dj ** (nj - 1.0) * (1.0 + aj * y[m + j])
                 else:
                     p = 0.0
-                    D1 = k[j] * (1.0 + a[j] * y[m + j]) if n[j] == 1.0 else 0.0
-                D2 = k[j] * p * a[j] + c[j]
+                    D1 = kj * (1.0 + aj * y[m + j]) if nj == 1.0 else 0.0
+                D2 = kj * p * aj + c[j]
             else:
                 D1 = 0.0
                 D2 = 0.0
@@ -264,14 +273,14 @@ def _reduced_peak_stiff(G, b, k, n, a, c, delta0, rate0, o, t_max, h0, d_scale, 
         _solve(W, piv, k1)
         for i in range(N):
             yt[i] = y[i] + 0.5 * h * k1[i]
-        _rhs(G, b, k, n, a, c, yt, m, f, F1)
+        _rhs(G, b, k, n, a, c, f0, yt, m, f, F1)
         for i in range(N):
             k2[i] = F1[i] - k1[i]
         _solve(W, piv, k2)
         for i in range(N):
             k2[i] += k1[i]
             ynew[i] = y[i] + h * k2[i]
-        _rhs(G, b, k, n, a, c, ynew, m, f, F2)
+        _rhs(G, b, k, n, a, c, f0, ynew, m, f, F2)
         for i in range(N):
             k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i])
         _solve(W, piv, k3)
@@ -283,14 +292,14 @@ def _reduced_peak_stiff(G, b, k, n, a, c, delta0, rate0, o, t_max, h0, d_scale, 
         err /= tol
         if err > 1.0 and h > 1e-14 * t_max:
             h *= max(0.2, 0.8 * err ** (-1.0 / 3.0))
-            _rhs(G, b, k, n, a, c, y, m, f, F0)
+            _rhs(G, b, k, n, a, c, f0, y, m, f, F0)
             continue
         d_old = y[o]
         t += h
         for i in range(N):
             y[i] = ynew[i]
             F0[i] = F2[i]
-        _forces(y[:m], y[m:], k, n, a, c, f)
+        _forces(y[:m], y[m:], k, n, a, c, f0, f)
         fo = f[o]
         if fo > best:
             best = fo
@@ -321,24 +330,34 @@ def _reduced_peak_stiff(G, b, k, n, a, c, delta0, rate0, o, t_max, h0, d_scale, 
     out[3] = 1.0 if ended else 0.0
 
 
-def _reduced_peaks(G, b, k, n, a, c, delta0, rate0, o, t_max, dt, stiff, d_scale, tol,
-                   out):
+def _rk4_peaks(G, b, k, n, a, c, f0, delta0, rate0, o, t_max, dt, out):
     """Every item of the batch (leading axis B): out[i] = (peak, t_peak, duration,
-    ended) of the impact row ``o``: fixed-step Runge-Kutta of step ``dt[i]``, or, where
-    ``stiff[i]``, the Rosenbrock pair from the step ``dt[i]`` (``d_scale[i]``, ``tol``)."""
+    ended) of the impact row ``o`` by fixed-step Runge-Kutta of step ``dt[i]``; the rows'
+    laws ``(k, n, a, c, f0)`` as arrays (B, m) each (read-only: the compiler then knows
+    they do not alias the state, which halves the time)."""
     for i in range(G.shape[0]):
-        if stiff[i]:
-            _reduced_peak_stiff(G[i], b[i], k[i], n[i], a[i], c[i], delta0[i], rate0[i], o,
-                                t_max, dt[i], d_scale[i], tol, out[i])
-        else:
-            _reduced_peak(G[i], b[i], k[i], n[i], a[i], c[i], delta0[i], rate0[i], o, t_max,
-                          dt[i], out[i])
+        _reduced_peak(G[i], b[i], k[i], n[i], a[i], c[i], f0[i], delta0[i], rate0[i], o,
+                      t_max, dt[i], out[i])
 
 
-reduced_peaks = Kernel(
-    _reduced_peaks,
-    types.void(ro(f8, 3), ro(f8, 2), ro(f8, 2), ro(f8, 2), ro(f8, 2), ro(f8, 2), ro(f8, 2),
-               ro(f8, 2), i8, f8, ro(f8, 1), ro(b1, 1), ro(f8, 1), f8, rw(f8, 2)),
+def _stiff_peaks(G, b, k, n, a, c, f0, delta0, rate0, o, t_max, dt, d_scale, tol, out):
+    """As :func:`_rk4_peaks` by the Rosenbrock pair from the step ``dt[i]`` (gap scale
+    ``d_scale[i]`` [m], tolerance ``tol``)."""
+    for i in range(G.shape[0]):
+        _reduced_peak_stiff(G[i], b[i], k[i], n[i], a[i], c[i], f0[i], delta0[i], rate0[i],
+                            o, t_max, dt[i], d_scale[i], tol, out[i])
+
+
+_LAW = (ro(f8, 2),) * 5
+rk4_peaks = Kernel(
+    _rk4_peaks,
+    types.void(ro(f8, 3), ro(f8, 2), *_LAW, ro(f8, 2), ro(f8, 2), i8, f8, ro(f8, 1),
+               rw(f8, 2)),
+)
+stiff_peaks = Kernel(
+    _stiff_peaks,
+    types.void(ro(f8, 3), ro(f8, 2), *_LAW, ro(f8, 2), ro(f8, 2), i8, f8, ro(f8, 1),
+               ro(f8, 1), f8, rw(f8, 2)),
 )
 
-__all__ = ["reduced_peaks"]
+__all__ = ["rk4_peaks", "stiff_peaks"]

@@ -118,21 +118,24 @@ def static_indentation(law, f0, v_i: float = 1.0) -> np.ndarray:
     return out
 
 
-def law_form(law, v_i: float) -> tuple[float, float, float, float] | None:
-    r"""``(k, n, a, c)`` with ``law.force(delta, delta_dot, v_i)`` =
-    :math:`k\delta^n(1 + a\dot\delta) + c\dot\delta` for :math:`\delta > 0` (the form of
-    the compiled integrator, :mod:`roverimpact._kernels.reduced`): Hertz, the Hunt-Crossley
-    family, Kelvin-Voigt; None for any other law."""
+def law_form(law, v_i: float) -> tuple[float, float, float, float, float] | None:
+    r"""``(k, n, a, c, f0)`` with ``law.force(delta, delta_dot, v_i)`` =
+    :math:`k\delta^n(1 + a\dot\delta) + c\dot\delta - f_0` for :math:`\delta > 0` (the
+    form of the compiled integrators, :mod:`roverimpact._kernels.reduced`): Hertz, the
+    Hunt-Crossley family, Kelvin-Voigt, and any object with a ``reduced_form(v_i)`` method
+    returning it; None for any other law."""
     from .hertz import Hertz
     from .hunt_crossley import HuntCrossleyFamily
 
     if isinstance(law, HuntCrossleyFamily):
-        return float(law.k), float(law.n), float(law.z) / float(v_i), 0.0
+        return float(law.k), float(law.n), float(law.z) / float(v_i), 0.0, 0.0
     if isinstance(law, Hertz):
-        return float(law.k), float(law.n), 0.0, 0.0
+        return float(law.k), float(law.n), 0.0, 0.0, 0.0
+    if callable(getattr(law, "reduced_form", None)):
+        return tuple(float(x) for x in law.reduced_form(v_i))
     sd = law.spring_damper() if isinstance(law, ContactLaw) else None
     if sd is not None:
-        return float(sd[0]), 1.0, 0.0, float(sd[1])
+        return float(sd[0]), 1.0, 0.0, float(sd[1]), 0.0
     return None
 
 
@@ -165,15 +168,17 @@ STIFF_TOL = 1e-6
 STIFF_STEPS = 2000
 
 
-def _steps(G, b, k, n, a, c, loads, v, o, t_max):
+def _steps(G, b, L, loads, v, o, t_max):
     """Step of the compiled integrator per item: 0.2 / the largest rate of the rows
     linearised at twice the largest force expected (0.5 / the largest damping rate there),
     at most 1/200 of the window and 1/20 of the impact row's closed-form time scale
     ``delta_H / v_n``; where the damping rate alone would need
-    more than :data:`STIFF_STEPS` steps, the item is stiff (Rosenbrock, from the step
-    without the damping bound). Returns (dt, stiff, d_scale), d_scale the larger of the
-    closed-form indentation and the static ones [m]."""
+    more than :data:`STIFF_STEPS` steps, the item is stiff. Returns (dt, explicit, stiff,
+    d_scale): the Runge-Kutta step, the step without the damping bound (the Rosenbrock
+    pair's first), the stiff flags, and the larger of the closed-form indentation and the
+    static ones [m] (the Rosenbrock pair's scale)."""
     B = G.shape[0]
+    k, n, a, c, f0 = (L[..., i] for i in range(5))
     g = np.maximum(np.diagonal(G, axis1=1, axis2=2), 0.0)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         fin = g[:, o] > 0
@@ -191,37 +196,43 @@ def _steps(G, b, k, n, a, c, loads, v, o, t_max):
                                       0.05 * d_H / v])
         dt = np.minimum(explicit, np.where(damp > 0, 0.5 / damp, np.inf))
         stiff = t_max / dt > STIFF_STEPS
-        d0 = np.where(loads > 0.0, (loads / k) ** (1.0 / n), 0.0)
+        d0 = np.where(loads > 0.0, (np.maximum(loads + f0, 0.0) / k) ** (1.0 / n), 0.0)
         d_scale = np.maximum(d_H, np.max(d0, axis=1))
-    return (np.ascontiguousarray(np.where(stiff, explicit, dt)), np.ascontiguousarray(stiff),
-            np.ascontiguousarray(d_scale))
+    return (np.ascontiguousarray(dt), np.ascontiguousarray(explicit),
+            np.ascontiguousarray(stiff), np.ascontiguousarray(d_scale))
 
 
-def reduced_impact_batch(G, b, k, n, a, c, rate0, *, t_max: float, impact: int = -1,
-                         preload: bool = True) -> ReducedImpact:
-    r""":func:`reduced_impact` of every item of a batch by the compiled integrator
+def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
+                         preload: bool = True, integrator: str = "auto") -> ReducedImpact:
+    r""":func:`reduced_impact` of every item of a batch by the compiled integrators
     (:mod:`roverimpact._kernels.reduced`): rows of the form of :func:`law_form`.
 
     Parameters
     ----------
     G : (B, m, m) array_like
     b, rate0 : (B, m) array_like
-    k, n, a, c : (B, m) array_like
-        Each row's law: :math:`f = k\delta^n(1 + a\dot\delta) + c\dot\delta`.
+    L : (B, m, 5) array_like
+        Each row's law ``(k, n, a, c, f0)``:
+        :math:`f = k\delta^n(1 + a\dot\delta) + c\dot\delta - f_0` (:func:`law_form`).
     t_max, impact, preload
         As :func:`reduced_impact` (``impact`` the same row of every item).
+    integrator : "auto", "rk4" or "rosenbrock"
+        The fixed-step Runge-Kutta for every item, the Rosenbrock pair for every item, or
+        per item (``"auto"``): the Rosenbrock pair where the damping would take the
+        Runge-Kutta more than :data:`STIFF_STEPS` steps. Each is a kernel of its own,
+        compiled on first use (the Rosenbrock pair about 3 s).
 
     Returns
     -------
     ReducedImpact
         With arrays (B,) (``loads`` (B, m)).
     """
-    from .._kernels.reduced import reduced_peaks
+    from .._kernels.reduced import rk4_peaks, stiff_peaks
 
     G = np.ascontiguousarray(G, dtype=float)
-    b, rate0, k, n, a, c = (np.ascontiguousarray(np.broadcast_to(np.asarray(x, float),
-                                                                 G.shape[:2]))
-                            for x in (b, rate0, k, n, a, c))
+    b, rate0 = (np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), G.shape[:2]))
+                for x in (b, rate0))
+    L = np.ascontiguousarray(np.broadcast_to(np.asarray(L, float), (*G.shape[:2], 5)))
     B, m = b.shape
     o = impact % m
     if np.any(~(rate0[:, o] > 0.0)):
@@ -230,12 +241,29 @@ def reduced_impact_batch(G, b, k, n, a, c, rate0, *, t_max: float, impact: int =
     loads = np.zeros((B, m))
     if preload and others:
         loads[:, others] = static_loads_batch(G[:, others][:, :, others], b[:, others])
+    k, n, f0 = L[..., 0], L[..., 1], L[..., 4]
     with np.errstate(divide="ignore"):
-        delta0 = np.where(loads > 0.0, (loads / k) ** (1.0 / n), 0.0)
-    dt, stiff, d_scale = _steps(G, b, k, n, a, c, loads, rate0[:, o], o, t_max)
+        delta0 = np.where(loads > 0.0, (np.maximum(loads + f0, 0.0) / k) ** (1.0 / n), 0.0)
+    if integrator not in ("auto", "rk4", "rosenbrock"):
+        raise InputError(f"integrator must be 'auto', 'rk4' or 'rosenbrock', got "
+                         f"{integrator!r}")
+    dt, explicit, stiff, d_scale = _steps(G, b, L, loads, rate0[:, o], o, t_max)
+    if integrator != "auto":
+        stiff = np.full(B, integrator == "rosenbrock")
+    dt = np.where(stiff, explicit, dt)
     out = np.empty((B, 4))
-    reduced_peaks(G, b, k, n, a, c, delta0, rate0, int(o), float(t_max), dt, stiff, d_scale,
-                  STIFF_TOL, out)
+    for kernel, sel in ((rk4_peaks, ~stiff), (stiff_peaks, stiff)):
+        idx = np.flatnonzero(sel)
+        if idx.size == 0:
+            continue
+        part = np.empty((idx.size, 4))
+        law = tuple(np.ascontiguousarray(L[idx, :, j]) for j in range(5))
+        args = (G[idx], b[idx], *law, delta0[idx], rate0[idx], int(o), float(t_max),
+                dt[idx])
+        if kernel is stiff_peaks:
+            args += (d_scale[idx], STIFF_TOL)
+        kernel(*args, part)
+        out[idx] = part
     return ReducedImpact(peak_force=out[:, 0], time_of_peak=out[:, 1], duration=out[:, 2],
                          ended=out[:, 3] > 0.5, loads=loads)
 
@@ -268,11 +296,11 @@ def reduced_impact(G, b, laws, v_i, rate0, *, t_max: float, impact: int = -1,
     preload : bool
         Start the other rows at their static load (:func:`static_loads`); False: all
         gaps start at 0 (the other contacts just touching).
-    method : "lsoda" or "rk4"
-        scipy's LSODA (``rtol``; the reference), or the compiled integrator of
-        :mod:`roverimpact._kernels.reduced` (:func:`reduced_impact_batch`: fixed-step
-        Runge-Kutta, a Rosenbrock pair where the damping is stiff; 20-100 times faster;
-        laws of :func:`law_form`, LSODA for any other).
+    method : "lsoda", "auto", "rk4" or "rosenbrock"
+        scipy's LSODA (``rtol``; the reference), or a compiled integrator of
+        :mod:`roverimpact._kernels.reduced` (:func:`reduced_impact_batch`'s
+        ``integrator``: 20-100 times faster; laws of :func:`law_form`, LSODA for any
+        other).
 
     Returns
     -------
@@ -290,15 +318,16 @@ def reduced_impact(G, b, laws, v_i, rate0, *, t_max: float, impact: int = -1,
     o = impact % m
     if not (d_rate[o] > 0.0):
         raise InputError(f"the impact row needs an approach speed > 0, got {d_rate[o]}")
-    if method not in ("lsoda", "rk4"):
-        raise InputError(f"method must be 'lsoda' or 'rk4', got {method!r}")
+    if method not in ("lsoda", "auto", "rk4", "rosenbrock"):
+        raise InputError(f"method must be 'lsoda', 'auto', 'rk4' or 'rosenbrock', got "
+                         f"{method!r}")
     others = [i for i in range(m) if i != o]
-    if method == "rk4":
+    if method != "lsoda":
         forms = [law_form(law, vi) for law, vi in zip(laws, v_i, strict=True)]
         if all(f is not None for f in forms):
-            k, n, a, c = (np.array(x, float)[None] for x in zip(*forms, strict=True))
-            r = reduced_impact_batch(G[None], b[None], k, n, a, c, d_rate[None], t_max=t_max,
-                                     impact=o, preload=preload)
+            r = reduced_impact_batch(G[None], b[None], np.array(forms, float)[None],
+                                     d_rate[None], t_max=t_max, impact=o, preload=preload,
+                                     integrator=method)
             return ReducedImpact(peak_force=float(r.peak_force[0]),
                                  time_of_peak=float(r.time_of_peak[0]),
                                  duration=float(r.duration[0]), ended=bool(r.ended[0]),

@@ -72,14 +72,17 @@ class ReducedSystem:
         return float(self.rate0[-1])
 
     def impact(self, law) -> ReducedImpact | None:
-        """Peak force etc. with ``law`` on the obstacle (None without an approach)."""
+        """Peak force etc. with ``law`` on the obstacle (None without an approach), by the
+        compiled fixed-step Runge-Kutta (its step bounded by the damping too: exact for a
+        stiff case, only slower; a study's few impacts do not pay for compiling the
+        Rosenbrock pair, :func:`~roverimpact.contact.reduced.reduced_impact_batch`)."""
         if not (self.v_n > 0.0):
             return None
         m = len(self.labels)
         laws = [self.ground_law] * (m - 1) + [law]
         v_i = [self.v_ref] * (m - 1) + [self.v_n]
         return reduced_impact(self.G, self.b, laws, v_i, self.rate0, t_max=self.t_max,
-                              impact=m - 1)
+                              impact=m - 1, method="rk4")
 
     def impact_mujoco(self, law, m_c: float) -> ReducedImpact | None:
         """The same model with the spring-dampers the MuJoCo engine puts in place of
@@ -110,7 +113,7 @@ class ReducedSystem:
         laws = [*ground, _Linear(oc.k, oc.c, oc.offset)]
         v_i = [self.v_ref] * (m - 1) + [self.v_n]
         return reduced_impact(self.G, self.b, laws, v_i, self.rate0, t_max=self.t_max,
-                              impact=m - 1)
+                              impact=m - 1, method="rk4")
 
 
 @dataclass(frozen=True)
@@ -125,6 +128,11 @@ class _Linear:
     def force(self, delta, delta_dot, v_i=1.0):
         return np.maximum(self.k * (np.asarray(delta, float) - self.offset)
                           + self.c * np.asarray(delta_dot, float), 0.0)
+
+    def reduced_form(self, v_i=1.0):
+        """``(k, n, a, c, f0)`` of the compiled integrators
+        (:func:`roverimpact.contact.reduced.law_form`)."""
+        return self.k, 1.0, 0.0, self.c, self.k * self.offset
 
 
 def reduced_system(sc: Scenario, setup=None) -> ReducedSystem | None:

@@ -204,16 +204,16 @@ class ModelPeaks:
 
 
 def peak_forces(models: ImpactModels, law, ground_law, s=1.0, *, t_max: float = 0.05,
-                v_ref: float = 0.1, method: str = "rk4") -> ModelPeaks:
+                v_ref: float = 0.1, method: str = "auto") -> ModelPeaks:
     """Peak force of every impact of ``models`` at ``s`` (scalar or (B,)) times the
     reference speed (NaN without a finite model or an approach): ``law`` on the feature,
     ``ground_law`` (``v_i = v_ref``) on the supports, preloaded by their static loads;
     ``t_max`` the window [s]. ``method``:
-    ``"rk4"`` (the compiled integrator, :mod:`roverimpact._kernels.reduced`, for the laws
+    ``"auto"`` (the compiled integrators, :mod:`roverimpact._kernels.reduced`, for the laws
     of :func:`~roverimpact.contact.reduced.law_form`) or ``"lsoda"`` (the reference,
     :func:`~roverimpact.contact.reduced.reduced_impact`, one impact at a time)."""
-    if method not in ("rk4", "lsoda"):
-        raise InputError(f"method must be 'rk4' or 'lsoda', got {method!r}")
+    if method not in ("auto", "lsoda"):
+        raise InputError(f"method must be 'auto' or 'lsoda', got {method!r}")
     B = len(models)
     if B == 0:
         return ModelPeaks(*(np.empty(0) for _ in range(3)), np.empty(0, bool))
@@ -233,7 +233,7 @@ def peak_forces(models: ImpactModels, law, ground_law, s=1.0, *, t_max: float = 
     m = G.shape[1]
     out = np.empty((B, 4))
     fg = law_form(ground_law, v_ref)
-    fo = [law_form(law, v) for v in rate0[:, -1]] if method == "rk4" else [None]
+    fo = [law_form(law, v) for v in rate0[:, -1]] if method == "auto" else [None]
     if method == "lsoda" or fg is None or fo[0] is None:
         laws = [ground_law] * (m - 1) + [law]
         for i in range(B):
@@ -241,13 +241,10 @@ def peak_forces(models: ImpactModels, law, ground_law, s=1.0, *, t_max: float = 
                                rate0[i], t_max=t_max, impact=m - 1)
             out[i] = r.peak_force, r.time_of_peak, r.duration, float(r.ended)
         return ModelPeaks(out[:, 0], out[:, 1], out[:, 2], out[:, 3] > 0.5)
-    k = np.empty((B, m))
-    n = np.empty((B, m))
-    a = np.empty((B, m))
-    c = np.empty((B, m))
-    k[:, :-1], n[:, :-1], a[:, :-1], c[:, :-1] = fg
-    k[:, -1], n[:, -1], a[:, -1], c[:, -1] = np.array(fo).T
-    r = reduced_impact_batch(G, b, k, n, a, c, rate0, t_max=t_max, impact=m - 1)
+    L = np.empty((B, m, 5))
+    L[:, :-1] = fg
+    L[:, -1] = fo
+    r = reduced_impact_batch(G, b, L, rate0, t_max=t_max, impact=m - 1, integrator="auto")
     return ModelPeaks(r.peak_force, r.time_of_peak, r.duration, r.ended)
 
 
@@ -260,7 +257,7 @@ def model_speed_cap(mbm, t_max: float = 0.05) -> float:
 def speed_limits(models: ImpactModels, law, ground_law, u_ref: float, F_allow: float, *,
                  s0=None, s_min: float = 1e-2, s_max: float = np.inf, t_max: float = 0.05,
                  v_ref: float = 0.1, rtol: float = 2e-3, max_iter: int = 60,
-                 method: str = "rk4") -> np.ndarray:
+                 method: str = "auto") -> np.ndarray:
     """The speed [m/s] of every impact at which its model peak force (:func:`peak_forces`)
     reaches ``F_allow`` [N] (module docstring), batched.
 
