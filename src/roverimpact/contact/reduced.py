@@ -40,7 +40,7 @@ from scipy.integrate import solve_ivp
 from ..exceptions import InputError, SolverError
 from .base import ContactLaw, check_law
 
-__all__ = ["ReducedImpact", "law_form", "reduced_impact", "reduced_impact_batch",
+__all__ = ["ReducedImpact", "held_inverse", "law_form", "reduced_impact", "reduced_impact_batch",
            "static_indentation", "static_loads", "static_loads_batch"]
 
 
@@ -116,6 +116,17 @@ def static_indentation(law, f0, v_i: float = 1.0) -> np.ndarray:
             lo, hi = (mid, hi) if float(law.force(mid, 0.0, v_i)) < f else (lo, mid)
         out[i] = 0.5 * (lo + hi)
     return out
+
+
+def held_inverse(M, C=None) -> np.ndarray:
+    r""":math:`N = M^{-1} - M^{-1}C^T (C M^{-1} C^T)^{+} C M^{-1}`: the inverse mass of the
+    system with the bilateral rows ``C`` (loop closures, locked joints) held rigidly
+    (module docstring); :math:`M^{-1}` without rows (``C`` None or empty)."""
+    Minv = np.linalg.inv(np.asarray(M, float))
+    if C is None or np.size(C) == 0:
+        return Minv
+    C = np.atleast_2d(np.asarray(C, float))
+    return Minv - Minv @ C.T @ np.linalg.pinv(C @ Minv @ C.T) @ C @ Minv
 
 
 def law_form(law, v_i: float) -> tuple[float, float, float, float, float] | None:

@@ -33,7 +33,13 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..contact.reduced import ReducedImpact, reduced_impact, static_indentation, static_loads
+from ..contact.reduced import (
+    ReducedImpact,
+    held_inverse,
+    reduced_impact,
+    static_indentation,
+    static_loads,
+)
 from ..scenario import Scenario
 
 __all__ = ["ReducedSystem", "reduced_system"]
@@ -164,13 +170,7 @@ def reduced_system(sc: Scenario, setup=None) -> ReducedSystem | None:
               if lab.startswith("ground:") and lab.endswith(":normal")]
     rigid = [i for i in range(len(labels)) if i != o and i not in ground]
     tau = -pin.nonLinearEffects(sys_.model, sys_.data, q, v) + sys_.spring_torque(q, v)
-    M = full.M
-    Minv = np.linalg.inv(M)
-    if rigid:
-        C = full.A[rigid]
-        N = Minv - Minv @ C.T @ np.linalg.pinv(C @ Minv @ C.T) @ C @ Minv
-    else:
-        N = Minv
+    N = held_inverse(full.M, full.A[rigid] if rigid else None)
     rows = [*ground, o]
     AU = full.A[rows]
     G = AU @ N @ AU.T

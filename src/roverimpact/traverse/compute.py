@@ -49,7 +49,8 @@ from ..scenario.schema import ContactsSpec, VelocitySpec
 from .lookahead import first_contact_ahead
 
 __all__ = ["ImpactBatch", "RoverStates", "StationResult", "drive_velocity", "driving_velocity",
-           "evaluate_stations", "impact_energies", "place_on_path", "rover_states"]
+           "evaluate_stations", "impact_energies", "place_on_path", "point_rows",
+           "rover_states"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -215,7 +216,7 @@ def rover_states(mbm, Q, *, loop_closure: bool = True) -> RoverStates:
     return RoverStates(q=Q, M=M, J=J, centre=C, axis=A, loop_J=L)
 
 
-def _point_rows(J, lever, dirs):
+def point_rows(J, lever, dirs):
     r"""Rows :math:`d^T J_p` of points at ``lever`` from the frame origin:
     :math:`d^T J_{lin} + (r \times d)^T J_{ang}`. ``J (..., 6, nv)``, ``lever (..., 3)``,
     ``dirs (..., m, 3)`` -> ``(..., m, nv)``."""
@@ -291,7 +292,7 @@ def driving_velocity(mbm, problem: PoseProblem, states: RoverStates, support, no
     T = np.array([problem.tangent(q) for q in states.q]).reshape(k, mbm.model.nv, problem.nx)
     ic = np.flatnonzero(chosen)
     lever = support[:, ic] - states.centre[:, ic]
-    rows = _point_rows(states.J[:, ic], lever, normal[:, ic, None, :])[:, :, 0, :]
+    rows = point_rows(states.J[:, ic], lever, normal[:, ic, None, :])[:, :, 0, :]
     C = np.concatenate([rows, states.loop_J], axis=1)
     G = C @ T
     rhs = -np.einsum("kmv,kv->km", C, V)
@@ -304,7 +305,7 @@ def driving_velocity(mbm, problem: PoseProblem, states: RoverStates, support, no
                 continue
             lev = support[:, w] - states.centre[:, w]
             t = _tangent_dirs(states.axis[:, w], normal[:, w], True)[0]
-            Jp = _point_rows(states.J[:, w], lev, t[:, None, :])[:, 0, :]
+            Jp = point_rows(states.J[:, w], lev, t[:, None, :])[:, 0, :]
             slip = np.einsum("kv,kv->k", Jp, V)
             col = Jp[:, j]
             ok = np.abs(col) > 1e-12
@@ -397,7 +398,7 @@ def impact_energies(mbm, states: RoverStates, v, support, normal, hit, *, chosen
             if noslip:
                 dirs += _tangent_dirs(states.axis[items][:, ground], nrm, planar)
             D = np.stack(dirs, axis=2)                       # (b, g, d, 3)
-            R = _point_rows(states.J[items][:, ground], lev, D)  # (b, g, d, nv)
+            R = point_rows(states.J[items][:, ground], lev, D)  # (b, g, d, nv)
             blocks.append(R.reshape(items.size, -1, nv))
         if contacts.loop_closure and mbm.loop_closure is not None:
             blocks.append(states.loop_J[items])
@@ -405,7 +406,7 @@ def impact_energies(mbm, states: RoverStates, v, support, normal, hit, *, chosen
             blocks.append(np.broadcast_to(lock_rows, (items.size, *lock_rows.shape)))
         n_hit = np.asarray(hit.normal)[items, w]
         lev = np.asarray(hit.point)[items, w] - np.asarray(hit.centre)[items, w]
-        a = _point_rows(states.J[items, w], lev, n_hit[:, None, :])
+        a = point_rows(states.J[items, w], lev, n_hit[:, None, :])
         blocks.append(a)
         A = np.concatenate(blocks, axis=1)
         M, vv = states.M[items], v[items]

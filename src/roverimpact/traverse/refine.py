@@ -42,15 +42,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact.reduced import law_form, reduced_impact, reduced_impact_batch
+from ..contact.reduced import held_inverse, law_form, reduced_impact, reduced_impact_batch
 from ..exceptions import InputError, SolverError
 from ..models.joints import lock_row
+from ..scenario.schema import GRAVITY
 
 __all__ = ["EARTH", "ImpactModels", "ModelPeaks", "impact_models", "model_speed_cap",
            "peak_forces", "speed_limits", "station_model"]
 
 #: gravity of the harness and of the model unless told [m/s^2]
-EARTH = np.array([0.0, 0.0, -9.81])
+EARTH = np.array([0.0, 0.0, -GRAVITY["earth"]])
 
 
 @dataclass(frozen=True)
@@ -94,14 +95,16 @@ class ImpactModels:
 
 
 def _rim_rows(J, axis, radius, n):
-    """Rows n^T J_p of the rim points facing ``n``: J (..., 6, nv), axis, n (..., 3),
-    radius (...,) -> (..., nv); NaN where ``n`` is along the axis (no rim point faces it)."""
+    """Rows n^T J_p of the rim points facing ``n`` (``c - r d``, ``d`` the unit part of
+    ``n`` orthogonal to the axis, as ``models.constraints.wheel_contact_point``): J (..., 6,
+    nv), axis, n (..., 3), radius (...,) -> (..., nv); NaN where ``n`` is along the axis (no
+    rim point faces it)."""
+    from .compute import point_rows
+
     n = n / np.linalg.norm(n, axis=-1)[..., None]
     d = n - np.einsum("...j,...j->...", n, axis)[..., None] * axis
     d /= np.linalg.norm(d, axis=-1)[..., None]
-    lever = -radius[..., None] * d
-    return (np.einsum("...j,...jv->...v", n, J[..., :3, :])
-            + np.einsum("...j,...jv->...v", np.cross(lever, n), J[..., 3:, :]))
+    return point_rows(J, -radius[..., None] * d, n[..., None, :])[..., 0, :]
 
 
 def impact_models(mbm, states, v, support_normal, station, wheel, normal, *, supports,
@@ -145,20 +148,11 @@ def impact_models(mbm, states, v, support_normal, station, wheel, normal, *, sup
     tau_g = np.empty((uniq.size, nv))
     tau_v = np.empty((uniq.size, nv))
     lock = np.array([lock_row(mbm, j) for j in locked]).reshape(-1, nv)
+    loops = loop_closure and mbm.loop_closure is not None and states.loop_J.shape[1] > 0
     for j, kk in enumerate(uniq):
         q, vv = states.q[kk], v[kk]
-        Minv = np.linalg.inv(states.M[kk])
-        held = []
-        if loop_closure and mbm.loop_closure is not None and states.loop_J.shape[1]:
-            held.append(states.loop_J[kk])
-        if lock.size:
-            held.append(lock)
-        if held:
-            C = np.concatenate(held)
-            MC = Minv @ C.T
-            N[j] = Minv - MC @ np.linalg.pinv(C @ MC) @ MC.T
-        else:
-            N[j] = Minv
+        N[j] = held_inverse(states.M[kk],
+                            np.concatenate([states.loop_J[kk], lock]) if loops else lock)
         g = pin.computeGeneralizedGravity(model, data, q)
         tau_g[j] = -g
         tau_v[j] = -(pin.nonLinearEffects(model, data, q, vv) - g)
