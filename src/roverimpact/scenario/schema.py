@@ -194,7 +194,7 @@ class ConfigurationSpec(StrictModel):
     """
 
     joints: dict[str, JointValue] = Field(default_factory=dict)
-    base: BaseSpec = BaseSpec()
+    base: BaseSpec = Field(default_factory=BaseSpec)
 
 
 class VelocitySpec(StrictModel):
@@ -438,7 +438,7 @@ class SimulationSpec(StrictModel):
     springs: dict[str, JointSpring] = Field(default_factory=dict)
     t_max: float = Field(1.0, gt=0.0, allow_inf_nan=False)
     t_after: float = Field(0.2, gt=0.0, allow_inf_nan=False)
-    integrator: IntegratorSpec = IntegratorSpec()
+    integrator: IntegratorSpec = Field(default_factory=IntegratorSpec)
 
     @model_validator(mode="before")
     @classmethod
@@ -544,9 +544,9 @@ class Scenario(StrictModel):
 
     description: str = ""
     model: ModelSpec
-    configuration: ConfigurationSpec = ConfigurationSpec()
-    velocity: VelocitySpec = VelocitySpec()
-    contacts: ContactsSpec = ContactsSpec()
+    configuration: ConfigurationSpec = Field(default_factory=ConfigurationSpec)
+    velocity: VelocitySpec = Field(default_factory=VelocitySpec)
+    contacts: ContactsSpec = Field(default_factory=ContactsSpec)
     obstacle: ObstacleSpec
     constraints: Literal["auto", "all"] | list[str] = "auto"
     contact_law: ContactLawSpec | None = None

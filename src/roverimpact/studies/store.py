@@ -14,6 +14,7 @@ A file appears only once complete (temp file + ``os.replace``).
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import uuid
@@ -113,6 +114,13 @@ def simulated_forces(table: pd.DataFrame, simulate=True) -> list[tuple[str, str,
 
 
 def versions() -> dict[str, str]:
+    """Versions of roverimpact, Python and the packages it runs with (read once per
+    process: a study's manifest asks for them every run)."""
+    return dict(_versions())
+
+
+@functools.lru_cache(maxsize=1)
+def _versions() -> dict[str, str]:
     import platform
     from importlib import metadata
 
