@@ -194,9 +194,10 @@ ROVER = {
 
 def test_model_changing_cases_match_a_fresh_build_per_case(monkeypatch):
     """Every case changes the model (random COM height, chassis mass, speed, angle), a
-    few share a model (a beta sweep within the chunk; other speeds: the built model
-    reused): the evaluator's outputs equal one evaluate_case (fresh scenario, model and
-    setup) per case to 1e-12."""
+    few share a model (a beta sweep within the chunk; other speeds): the evaluator's
+    outputs equal one evaluate_case (fresh scenario, model and setup) per case to 1e-12.
+    The cases of their own are one block of the model family: one model built for them
+    all (scenario.block), one for the beta sweep."""
     from roverimpact.studies import ScenarioEvaluator, evaluate_case
     from roverimpact.studies.config import apply_overrides
 
@@ -211,14 +212,15 @@ def test_model_changing_cases_match_a_fresh_build_per_case(monkeypatch):
     # the same model at other speeds and angles: groups of their own, one built model
     overrides += [shared | {"velocity.u": u, "obstacle.beta_deg": b}
                   for u, b in ((0.15, 20.0), (0.45, 70.0), (0.3, 33.0))]
-    from roverimpact.scenario import build
+    from roverimpact.scenario import block, build
 
     built = []
     real = build.scenario_model
-    monkeypatch.setattr(build, "scenario_model", lambda *a: built.append(1) or real(*a))
+    for mod in (build, block):
+        monkeypatch.setattr(mod, "scenario_model", lambda *a: built.append(1) or real(*a))
     got = ScenarioEvaluator().evaluate(ROVER, overrides)
     monkeypatch.undo()
-    assert len(built) == 12  # one model per distinct model, not per group
+    assert len(built) == 2  # one model for the block, one for the beta sweep
     for i, ov in enumerate(overrides):
         ref = evaluate_case(apply_overrides(ROVER, ov))
         for col in ("T_c_minus", "m_eff", "v_n", "F_pred", "m_total", "m_eff_free",

@@ -115,9 +115,11 @@ def _symmetrize(M):  # pragma: no cover - compiled
 def _evaluate_signature(nd: int):
     """``(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
     r_const, support, M, A)``: ``J, X, r_const, M, A`` with ``nd`` dimensions (2: one
-    configuration, 3: stacked), inputs read-only C arrays, ``M`` and ``A`` written."""
-    return (ro(f8, nd), ro(f8, nd), ro(i8, 1), ro(i8, 1), ro(i8, 1), ro(f8, 2), ro(f8, 2),
-            ro(f8, 1), ro(i8, 1), ro(i8, 1), ro(f8, nd), ro(b1, 2), rw(f8, nd), rw(f8, nd))
+    configuration, 3: stacked; stacked, ``c_normal`` and ``c_radius`` have one more),
+    inputs read-only C arrays, ``M`` and ``A`` written."""
+    return (ro(f8, nd), ro(f8, nd), ro(i8, 1), ro(i8, 1), ro(i8, 1), ro(f8, 2),
+            ro(f8, nd), ro(f8, nd - 1), ro(i8, 1), ro(i8, 1), ro(f8, nd), ro(b1, 2),
+            rw(f8, nd), rw(f8, nd))
 
 
 # one explicit signature each (compiled on first use): the placements X may be a read-only
@@ -134,12 +136,13 @@ def _evaluate_one(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_con
 def _evaluate_many(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
                    r_const, support, M, A):  # pragma: no cover - compiled
     """Items ``i`` of ``J`` (k, 6, nv), ``X`` (k, ., 12), ``M`` (k, nv, nv), ``A`` (k, m, nv);
-    ``r_const`` (1 or k, m, nv)."""
-    kc = r_const.shape[0]
+    ``r_const`` (1 or k, m, nv), ``c_normal`` (1 or k, nc, 3), ``c_radius`` (1 or k, nc)."""
+    kc, kn, kr = r_const.shape[0], c_normal.shape[0], c_radius.shape[0]
     for i in range(J.shape[0]):
         _symmetrize(M[i])
-        _assemble(J[i], X[i], f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-                  r_const[min(i, kc - 1)], support, A[i])
+        _assemble(J[i], X[i], f_row, c_frame, c_kind, c_vec, c_normal[min(i, kn - 1)],
+                  c_radius[min(i, kr - 1)], r_contact, r_kind, r_const[min(i, kc - 1)],
+                  support, A[i])
 
 
 class RowPlan:
@@ -154,9 +157,18 @@ class RowPlan:
         rows = []  # (contact, kind, const row)
         self.loop_rows: list[int] = []  # rows of a nonlinear loop closure (per call)
         self._loop_constant = True
+        #: contact index of each constraint (-1: not a contact), and the wheel of each
+        #: contact (None: a point)
+        self.constraint_contact: list[int] = []
+        self.contact_wheel: list[str | None] = []
         for c, fid in zip(cs.constraints, cs._fids, strict=True):
             if fid is not None and fid not in frames:
                 frames.append(fid)
+            wheel = getattr(c, "wheel", None)
+            is_contact = isinstance(c, (GroundContact, PointContact))
+            self.constraint_contact.append(len(contacts) if is_contact else -1)
+            if is_contact:
+                self.contact_wheel.append(None if wheel is None else wheel.name)
             if isinstance(c, GroundContact):
                 ci = len(contacts)
                 contacts.append((frames.index(fid), _WHEEL, c.wheel.axis, c.normal,
@@ -224,6 +236,11 @@ class RowPlan:
         self._args = (self.f_row, self.c_frame, self.c_kind, self.c_vec, self.c_normal,
                       self.c_radius, self.r_contact, self.r_kind)
 
+    @property
+    def loops_constant(self) -> bool:
+        """Whether the loop-closure rows are the same at every configuration."""
+        return self._loop_constant
+
     def _placements(self, X=None) -> np.ndarray:
         """Placements ``(., 12)`` of the frames (after ``updateFramePlacements``)."""
         if self._oMf is not None:
@@ -260,14 +277,27 @@ class RowPlan:
         _evaluate_one.get()(J, X, *self._args, self.r_const, self.support, M, A)
         return M, A
 
-    def evaluate_many(self, Q, chunk: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    def evaluate_many(self, Q, chunk: int = 64, *, before=None, c_normal=None,
+                      c_radius=None) -> tuple[np.ndarray, np.ndarray]:
         """``(M (k, nv, nv), A (k, m, nv))`` for configurations ``Q`` (k, nq).
 
         One Pinocchio pass per configuration, its Jacobian and placements copied into
         small stacked buffers; one compiled call per ``chunk`` items (the buffers stay in
         cache).
+
+        Items may be other models of the same structure (a family,
+        :class:`~roverimpact.models.family.ModelFamily`): ``before(i)`` is called before
+        item ``i``'s Pinocchio pass (to write its numbers into the model), and
+        ``c_normal`` (k, nc, 3) and ``c_radius`` (k, nc) give each item's contact normals
+        and wheel radii (default: this plan's, :attr:`c_normal`, :attr:`c_radius`).
         """
         model, data = self._cs.mbm.model, self._cs.data
+        cn = self.c_normal[None] if c_normal is None else np.ascontiguousarray(c_normal)
+        cr = self.c_radius[None] if c_radius is None else np.ascontiguousarray(c_radius)
+        for x, name in ((cn, "c_normal"), (cr, "c_radius")):
+            if x.shape[0] not in (1, Q.shape[0]):
+                raise ValueError(f"{name}: one item or {Q.shape[0]}, got {x.shape}")
+        args = (*self._args[:4], cn, cr, *self._args[6:])
         k, nv, m = Q.shape[0], self.nv, self.m
         Ms = np.empty((k, nv, nv))
         A = np.empty((k, m, nv))
@@ -289,6 +319,8 @@ class RowPlan:
             e = min(s + c, k)
             for i in range(s, e):
                 q = Q[i]
+                if before is not None:
+                    before(i)
                 Mo[i] = crba(model, data, q)
                 Jo[i - s] = jac(model, data, q)
                 place(model, data)
@@ -296,7 +328,9 @@ class RowPlan:
                     Xs[i - s] = view
                 else:
                     self._placements(Xs[i - s])
-            _evaluate_many.get()(Js[:e - s], Xs[:e - s], *self._args,
+            _evaluate_many.get()(Js[:e - s], Xs[:e - s], *args[:4],
+                                 cn if cn.shape[0] == 1 else cn[s:e],
+                                 cr if cr.shape[0] == 1 else cr[s:e], *args[6:],
                                  rc if rc.shape[0] == 1 else rc[s:e], self.support, Ms[s:e],
                                  A[s:e])
         return Ms, A

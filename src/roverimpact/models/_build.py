@@ -9,6 +9,7 @@ map (see :mod:`roverimpact.models.robot`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -30,25 +31,34 @@ def check_positive(params: object, names: tuple[str, ...], *, allow_zero: tuple[
             raise ModelError(f"{cls}.{name} must be a finite number {rel}, got {val!r}")
 
 
-def box_inertia(mass: float, lx: float, ly: float, lz: float) -> np.ndarray:
-    """Central inertia tensor of a solid box [kg m^2]: diag(m(ly²+lz²)/12, ...)."""
-    return np.diag([
-        mass * (ly**2 + lz**2) / 12.0,
-        mass * (lx**2 + lz**2) / 12.0,
-        mass * (lx**2 + ly**2) / 12.0,
-    ])
+def diag3(a, b, c) -> np.ndarray:
+    """Diagonal 3 x 3 matrices ``diag(a, b, c)`` (..., 3, 3) of numbers or arrays (one
+    matrix per item of a batch of parameters; for numbers, ``np.diag([a, b, c])``)."""
+    a, b, c = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (a, b, c)))
+    out = np.zeros((*a.shape, 3, 3))
+    out[..., 0, 0], out[..., 1, 1], out[..., 2, 2] = a, b, c
+    return out
 
 
-def wheel_inertia(mass: float, radius: float, width: float) -> np.ndarray:
+def box_inertia(mass, lx, ly, lz) -> np.ndarray:
+    """Central inertia tensor of a solid box [kg m^2]: diag(m(ly²+lz²)/12, ...).
+
+    Numbers give one (3, 3) tensor; arrays (a batch of boxes) give (..., 3, 3)."""
+    return diag3(mass * (ly**2 + lz**2) / 12.0, mass * (lx**2 + lz**2) / 12.0,
+                 mass * (lx**2 + ly**2) / 12.0)
+
+
+def wheel_inertia(mass, radius, width) -> np.ndarray:
     """Central inertia of a solid disc/cylinder spinning about y [kg m^2].
 
-    ``I_yy = m r²/2`` (spin axis), ``I_xx = I_zz = m (3 r² + w²)/12``.
+    ``I_yy = m r²/2`` (spin axis), ``I_xx = I_zz = m (3 r² + w²)/12``; (..., 3, 3) for
+    arrays.
     """
     a = mass * (3.0 * radius**2 + width**2) / 12.0
-    return np.diag([a, 0.5 * mass * radius**2, a])
+    return diag3(a, 0.5 * mass * radius**2, a)
 
 
-def rod_inertia(mass: float, length_x: float, thickness: float = 0.04) -> np.ndarray:
+def rod_inertia(mass, length_x, thickness: float = 0.04) -> np.ndarray:
     """Central inertia of a slender bar along x (square section ``thickness``) [kg m^2]."""
     return box_inertia(mass, length_x, thickness, thickness)
 
@@ -77,6 +87,106 @@ def add_body(
     fid = model.addJointFrame(jid, -1)
     model.addBodyFrame(link_name, jid, pin.SE3.Identity(), fid)
     return jid
+
+
+@dataclass(frozen=True)
+class Body:
+    """One body of a built-in rover's layout: its joint, placed in its parent's joint frame
+    (translation ``xyz``, no rotation), and its link (``mass`` at ``com``, central
+    ``inertia``), as :func:`add_body` adds it.
+
+    The numbers may be arrays over a batch of parameter sets (one layout for a whole
+    family of models, :class:`FamilyNumbers`).
+
+    Attributes
+    ----------
+    parent : int
+        Index of the parent body in the layout; -1 for the world.
+    joint : str
+        Pinocchio joint model, without ``JointModel`` (``"FreeFlyer"``, ``"RY"``, ...).
+    """
+
+    parent: int
+    joint: str
+    xyz: tuple
+    joint_name: str
+    link_name: str
+    mass: Any
+    com: tuple = (0.0, 0.0, 0.0)
+    inertia: Any = None
+
+
+def add_bodies(model: pin.Model, bodies) -> list[int]:
+    """:func:`add_body` for each :class:`Body` of a layout (of numbers), in order; returns
+    the joint ids."""
+    jids: list[int] = []
+    for b in bodies:
+        parent = 0 if b.parent < 0 else jids[b.parent]
+        jids.append(add_body(model, parent, getattr(pin, f"JointModel{b.joint}")(), b.xyz,
+                             b.joint_name, b.link_name, b.mass, com=b.com,
+                             inertia=b.inertia))
+    return jids
+
+
+@dataclass(frozen=True)
+class FamilyNumbers:
+    """The numbers of ``k`` models of one builder that share their structure (joints,
+    bodies, frames, wheels) and differ in their parameters: body ``b`` is joint ``b + 1``.
+
+    Attributes
+    ----------
+    mass : (k, nb) ndarray
+        Body masses [kg].
+    lever : (k, nb, 3) ndarray
+        Centres of mass in the joint frames [m].
+    inertia : (k, nb, 3, 3) ndarray
+        Central inertia tensors [kg m^2].
+    translation : (k, nb, 3) ndarray
+        Joint placements in the parent joint frames [m] (no rotation).
+    q_nominal : (k, nq) ndarray
+        Nominal configurations.
+    wheel_radius : (k, nw) ndarray
+        Radii of the model's wheels, in the order of ``MultibodyModel.wheels`` [m].
+    """
+
+    mass: np.ndarray
+    lever: np.ndarray
+    inertia: np.ndarray
+    translation: np.ndarray
+    q_nominal: np.ndarray
+    wheel_radius: np.ndarray
+
+    @classmethod
+    def of_layout(cls, bodies, k: int, q_nominal, wheel_radius) -> FamilyNumbers:
+        """The numbers of a layout whose entries are numbers or (k,) arrays."""
+        def each(x, shape=()):
+            return np.broadcast_to(np.asarray(x, dtype=float), (k, *shape))
+
+        def vec(x):
+            return np.stack([each(c) for c in x], axis=-1)
+
+        nb = len(bodies)
+        mass = np.stack([each(b.mass) for b in bodies], axis=1)
+        lever = np.stack([vec(b.com) for b in bodies], axis=1)
+        inertia = np.zeros((k, nb, 3, 3))
+        for i, b in enumerate(bodies):
+            if b.inertia is not None:
+                inertia[:, i] = each(b.inertia, (3, 3))
+        translation = np.stack([vec(b.xyz) for b in bodies], axis=1)
+        return cls(mass, lever, inertia, translation, np.asarray(q_nominal, dtype=float),
+                   np.stack([each(r) for r in wheel_radius], axis=1))
+
+    @property
+    def k(self) -> int:
+        return self.mass.shape[0]
+
+    def total_mass(self) -> np.ndarray:
+        """(k,) total masses, summed body by body in joint order (as
+        ``pin.computeTotalMass`` and a sum over ``model.inertias`` do)."""
+        tot = np.zeros(self.k)
+        for b in range(self.mass.shape[1]):
+            tot = tot + self.mass[:, b]
+        return tot
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ compiled assembly of every row in one pass (:mod:`._assemble`).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -141,6 +142,44 @@ class ConstraintSet:
         batch = q.shape[:-1]
         M, A = plan.evaluate_many(np.ascontiguousarray(q.reshape(-1, nq)))
         return M.reshape(*batch, *M.shape[1:]), A.reshape(*batch, *A.shape[1:])
+
+    def evaluate_members(self, family, Q, normals: Mapping[int, np.ndarray] | None = None
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """``(M (k, nv, nv), A (k, m, nv))`` of the members of a model family, member
+        ``i`` at ``Q[i]``.
+
+        Parameters
+        ----------
+        family : ModelFamily
+            Its model is this set's (:class:`~roverimpact.models.family.ModelFamily`);
+            each member's numbers are written into it before its Pinocchio pass, its
+            wheel radii go into its contact rows.
+        Q : (k, nq) array_like
+        normals : dict, optional
+            ``{constraint index: (k, 3) normals}``: a contact whose normal differs from
+            member to member (an obstacle face at another angle); the others keep their
+            own.
+
+        The loop-closure rows must not depend on the configuration
+        (:attr:`~roverimpact.models._assemble.RowPlan.loops_constant`).
+        """
+        plan = self._plan if self._plan is not None else self._row_plan()
+        if not plan.loops_constant:
+            raise ModelError("evaluate_members needs constant loop-closure rows")
+        Q = np.ascontiguousarray(np.asarray(Q, dtype=float))
+        k = Q.shape[0]
+        if Q.shape != (k, self.mbm.model.nq) or family.k != k:
+            raise ModelError(f"Q must have shape ({family.k}, {self.mbm.model.nq}), got "
+                             f"{Q.shape}")
+        cn = np.array(np.broadcast_to(plan.c_normal, (k, *plan.c_normal.shape)))
+        for ci, n in (normals or {}).items():
+            cn[:, plan.constraint_contact[ci]] = n
+        wheels = {w.name: j for j, w in enumerate(self.mbm.wheels)}
+        cr = np.array(np.broadcast_to(plan.c_radius, (k, *plan.c_radius.shape)))
+        for c, w in enumerate(plan.contact_wheel):
+            if w is not None:
+                cr[:, c] = family.numbers.wheel_radius[:, wheels[w]]
+        return plan.evaluate_many(Q, before=family.write, c_normal=cn, c_radius=cr)
 
 
 def _frame_id(model, name: str) -> int:

@@ -27,15 +27,20 @@ dependent coordinates as in the paper. Wheels have spin joints only (no steering
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
+from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelError
 from ._build import (
+    Body,
+    FamilyNumbers,
     LinearLoopClosure,
-    add_body,
+    add_bodies,
     box_inertia,
     check_positive,
     rod_inertia,
@@ -43,7 +48,7 @@ from ._build import (
 )
 from .base import MultibodyModel, Wheel
 
-__all__ = ["PRESETS", "RockerBogieParams", "rocker_bogie"]
+__all__ = ["PRESETS", "RockerBogieParams", "rocker_bogie", "rocker_bogie_numbers"]
 
 
 @dataclass(frozen=True)
@@ -95,20 +100,16 @@ class RockerBogieParams:
     bogie_pivot_height: float = 0.10
 
     def __post_init__(self):
-        check_positive(self, (
-            "chassis_mass", "chassis_length", "chassis_width", "chassis_height", "rocker_mass",
-            "bogie_mass", "wheel_mass", "wheel_radius", "wheel_width", "track",
-            "rocker_pivot_height", "bogie_pivot_height",
-        ), allow_zero=())
-        for name in ("chassis_com_above_pivot", "com_x", "front_x", "middle_x", "rear_x"):
+        check_positive(self, _POSITIVE, allow_zero=())
+        for name in _FINITE:
             if not np.isfinite(getattr(self, name)):
                 raise ModelError(f"RockerBogieParams.{name} must be finite")
-        if not self.rear_x < self.middle_x < self.front_x:
+        if not _axles_ordered(self):
             raise ModelError(
                 "RockerBogieParams needs rear_x < middle_x < front_x, got "
                 f"{self.rear_x}, {self.middle_x}, {self.front_x}"
             )
-        if not self.bogie_pivot_height < self.rocker_pivot_height:
+        if not _pivots_ordered(self):
             raise ModelError("RockerBogieParams needs bogie_pivot_height < rocker_pivot_height")
 
     @property
@@ -119,7 +120,26 @@ class RockerBogieParams:
     @property
     def bogie_x(self) -> float:
         """Bogie pivot x, midway between middle and rear axles [m]."""
-        return 0.5 * (self.middle_x + self.rear_x)
+        return _bogie_x(self)
+
+
+def _bogie_x(p):
+    return 0.5 * (p.middle_x + p.rear_x)
+
+
+# the checks of RockerBogieParams, for numbers and for (k,) arrays of them (a family)
+_POSITIVE = ("chassis_mass", "chassis_length", "chassis_width", "chassis_height",
+             "rocker_mass", "bogie_mass", "wheel_mass", "wheel_radius", "wheel_width", "track",
+             "rocker_pivot_height", "bogie_pivot_height")
+_FINITE = ("chassis_com_above_pivot", "com_x", "front_x", "middle_x", "rear_x")
+
+
+def _axles_ordered(p):
+    return (p.rear_x < p.middle_x) & (p.middle_x < p.front_x)
+
+
+def _pivots_ordered(p):
+    return p.bogie_pivot_height < p.rocker_pivot_height
 
 
 #: Presets. Figures are approximate public values, rounded; they are a rover *class*,
@@ -179,52 +199,14 @@ def rocker_bogie(
     ModelError
         Unknown preset or parameter, non-positive mass or length, inconsistent geometry.
     """
-    if params is None:
-        params = PRESETS["prototype"]
-    elif isinstance(params, str):
-        if params not in PRESETS:
-            raise ModelError(f"unknown rocker_bogie preset {params!r}; presets: {sorted(PRESETS)}")
-        params = PRESETS[params]
-    if overrides:
-        known = {f.name for f in fields(RockerBogieParams)}
-        bad = sorted(set(overrides) - known)
-        if bad:
-            raise ModelError(f"unknown rocker_bogie parameter(s) {bad}; known: {sorted(known)}")
-        params = RockerBogieParams(**{**_fields(params), **overrides})
-    p = params
-    r = p.wheel_radius
+    p = _params(params, overrides)
+    bodies, wheel_names = _layout(p)
     model = pin.Model()
     model.name = "rocker_bogie"
-    jc = add_body(model, 0, pin.JointModelFreeFlyer(), (0, 0, 0), "root_joint", "chassis",
-                  p.chassis_mass, inertia=box_inertia(p.chassis_mass, p.chassis_length,
-                                                      p.chassis_width, p.chassis_height))
-    Iw = wheel_inertia(p.wheel_mass, r, p.wheel_width)
-    rh, bh, bx = p.rocker_pivot_height, p.bogie_pivot_height, p.bogie_x
-    rocker_com = ((p.front_x + bx) / 3.0, 0.0, -(rh + (rh - bh)) / 3.0)
-    wheels: list[Wheel] = []
-
-    def add_wheel(parent, side, pos, xyz):
-        add_body(model, parent, pin.JointModelRY(), xyz, f"wheel_{side}_{pos}",
-                 f"wheel_{side}_{pos}_link", p.wheel_mass, inertia=Iw)
-        wheels.append(Wheel(name=f"{side}_{pos}", frame=f"wheel_{side}_{pos}", radius=r,
-                            width=p.wheel_width))
-
-    for side, sy in SIDES:
-        jr = add_body(model, jc, pin.JointModelRY(),
-                      (-p.com_x, sy * 0.5 * p.track, -p.chassis_com_above_pivot),
-                      f"rocker_{side}", f"rocker_{side}_link", p.rocker_mass, com=rocker_com,
-                      inertia=rod_inertia(p.rocker_mass, p.front_x - bx))
-        # children in alphabetical order of joint names (bogie_ < wheel_), the order of
-        # Pinocchio's URDF parser, so that an export loads back with the same q layout
-        jb = add_body(model, jr, pin.JointModelRY(), (bx, 0.0, -(rh - bh)), f"bogie_{side}",
-                      f"bogie_{side}_link", p.bogie_mass, com=(0.0, 0.0, -0.5 * bh),
-                      inertia=rod_inertia(p.bogie_mass, p.middle_x - p.rear_x))
-        add_wheel(jb, side, "middle", (p.middle_x - bx, 0.0, -bh))
-        add_wheel(jb, side, "rear", (p.rear_x - bx, 0.0, -bh))
-        add_wheel(jr, side, "front", (p.front_x, 0.0, -rh))
-
-    q_nominal = pin.neutral(model)
-    q_nominal[2] = r + rh + p.chassis_com_above_pivot
+    add_bodies(model, bodies)
+    wheels = [Wheel(name=w, frame=f"wheel_{w}", radius=p.wheel_radius, width=p.wheel_width)
+              for w in wheel_names]
+    q_nominal = _nominal(p, pin.neutral(model))
     loop = LinearLoopClosure.from_model(model, ("rocker_left", "rocker_right"), ((1.0, 1.0),))
     info = _fields(p) | {
         "planar": False,
@@ -238,3 +220,109 @@ def rocker_bogie(
         lockable_joints=["rocker_left", "rocker_right", "bogie_left", "bogie_right"],
         params=info,
     )
+
+
+def _params(params, overrides) -> RockerBogieParams:
+    """The parameters of :func:`rocker_bogie` (a preset name, with overrides), checked."""
+    if params is None:
+        params = PRESETS["prototype"]
+    elif isinstance(params, str):
+        if params not in PRESETS:
+            raise ModelError(f"unknown rocker_bogie preset {params!r}; presets: {sorted(PRESETS)}")
+        params = PRESETS[params]
+    if overrides:
+        known = {f.name for f in fields(RockerBogieParams)}
+        bad = sorted(set(overrides) - known)
+        if bad:
+            raise ModelError(f"unknown rocker_bogie parameter(s) {bad}; known: {sorted(known)}")
+        params = RockerBogieParams(**{**_fields(params), **overrides})
+    return params
+
+
+def _layout(p) -> tuple[list[Body], list[str]]:
+    """Bodies (in the order they are added) and wheel names of the rover of parameters
+    ``p``: :class:`RockerBogieParams`, or the same fields as (k,) arrays (a family)."""
+    r = p.wheel_radius
+    bodies = [Body(-1, "FreeFlyer", (0, 0, 0), "root_joint", "chassis", p.chassis_mass,
+                   inertia=box_inertia(p.chassis_mass, p.chassis_length, p.chassis_width,
+                                       p.chassis_height))]
+    Iw = wheel_inertia(p.wheel_mass, r, p.wheel_width)
+    rh, bh, bx = p.rocker_pivot_height, p.bogie_pivot_height, _bogie_x(p)
+    rocker_com = ((p.front_x + bx) / 3.0, 0.0, -(rh + (rh - bh)) / 3.0)
+    wheels: list[str] = []
+
+    def add_wheel(parent, side, pos, xyz):
+        bodies.append(Body(parent, "RY", xyz, f"wheel_{side}_{pos}", f"wheel_{side}_{pos}_link",
+                           p.wheel_mass, inertia=Iw))
+        wheels.append(f"{side}_{pos}")
+
+    for side, sy in SIDES:
+        jr = len(bodies)
+        bodies.append(Body(0, "RY", (-p.com_x, sy * 0.5 * p.track, -p.chassis_com_above_pivot),
+                           f"rocker_{side}", f"rocker_{side}_link", p.rocker_mass,
+                           com=rocker_com, inertia=rod_inertia(p.rocker_mass, p.front_x - bx)))
+        # children in alphabetical order of joint names (bogie_ < wheel_), the order of
+        # Pinocchio's URDF parser, so that an export loads back with the same q layout
+        jb = len(bodies)
+        bodies.append(Body(jr, "RY", (bx, 0.0, -(rh - bh)), f"bogie_{side}",
+                           f"bogie_{side}_link", p.bogie_mass, com=(0.0, 0.0, -0.5 * bh),
+                           inertia=rod_inertia(p.bogie_mass, p.middle_x - p.rear_x)))
+        add_wheel(jb, side, "middle", (p.middle_x - bx, 0.0, -bh))
+        add_wheel(jb, side, "rear", (p.rear_x - bx, 0.0, -bh))
+        add_wheel(jr, side, "front", (p.front_x, 0.0, -rh))
+    return bodies, wheels
+
+
+def _nominal(p, q_neutral) -> np.ndarray:
+    """``q_nominal``: six wheels on flat ground at z = 0 (a batch for arrays ``p``)."""
+    z = p.wheel_radius + p.rocker_pivot_height + p.chassis_com_above_pivot
+    q = np.array(np.broadcast_to(q_neutral, (*np.shape(z), len(q_neutral))), dtype=float)
+    q[..., 2] = z
+    return q
+
+
+def rocker_bogie_numbers(preset: str | None, params: Sequence[Mapping]) -> FamilyNumbers:
+    """The numbers of the rovers ``rocker_bogie(preset, **params[i])`` without building
+    them (:class:`~roverimpact.models.family.ModelFamily` writes them into one model of
+    the family), each parameter set checked as :func:`rocker_bogie` checks it.
+
+    Raises
+    ------
+    ModelError
+        As :func:`rocker_bogie`, for the first bad parameter set.
+    """
+    base = _fields(_params(preset, {}))
+    params = list(params)
+    k = len(params)
+    given = set().union(*params) if params else set()
+    cols = {}
+    ok = given <= base.keys()
+    for name in given if ok else ():
+        col = [ov.get(name, base[name]) for ov in params]
+        ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in col)
+        if not ok:
+            break
+        cols[name] = np.array(col, dtype=float)
+    if ok:
+        p = SimpleNamespace(**{name: cols[name] if name in cols else np.full(k, float(val))
+                               for name, val in base.items()})
+        with np.errstate(invalid="ignore"):
+            ok = (all(bool(np.all(np.isfinite(getattr(p, n)) & (getattr(p, n) > 0)))
+                      for n in _POSITIVE)
+                  and all(bool(np.all(np.isfinite(getattr(p, n)))) for n in _FINITE)
+                  and bool(np.all(_axles_ordered(p))) and bool(np.all(_pivots_ordered(p))))
+    if not ok:  # a bad parameter set: RockerBogieParams says which (raises)
+        ps = [_params(preset, dict(ov)) for ov in params]
+        p = SimpleNamespace(**{name: np.array([getattr(x, name) for x in ps], dtype=float)
+                               for name in base})
+    bodies, wheels = _layout(p)
+    q_nominal = _nominal(p, _neutral())
+    return FamilyNumbers.of_layout(bodies, k, q_nominal, [p.wheel_radius] * len(wheels))
+
+
+@functools.lru_cache(maxsize=1)
+def _neutral() -> np.ndarray:
+    """``pin.neutral`` of the rover (the same for every parameter set)."""
+    q = pin.neutral(rocker_bogie().model)
+    q.flags.writeable = False
+    return q

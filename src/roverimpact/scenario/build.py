@@ -43,6 +43,8 @@ __all__ = [
     "ImpactEnergy",
     "ImpactSetup",
     "active_mask",
+    "base_heading",
+    "base_slices",
     "candidate_constraints",
     "choose_active_rows",
     "configuration",
@@ -238,7 +240,7 @@ class ImpactSetup:
 
         q = np.asarray(q, dtype=float)
         v = np.asarray(v, dtype=float)
-        heading = _heading(mbm, q)
+        heading = base_heading(mbm, q)
         if obstacle.normal is not None:
             normal = np.asarray(obstacle.normal, float)
             normal = normal / np.linalg.norm(normal)
@@ -378,8 +380,9 @@ def _rpy_matrix(base: BaseSpec) -> np.ndarray:
     return pin.rpy.rpyToMatrix(*np.deg2rad([base.roll_deg, base.pitch_deg, base.yaw_deg]))
 
 
-def _base_slices(mbm):
-    """``(kind, q indices, v indices)`` of the base coordinates."""
+def base_slices(mbm):
+    """``(kind, q indices, v indices)`` of the base coordinates (kind: ``"floating"``,
+    ``"planar"`` or ``"fixed"``; one index per base joint)."""
     from ..models.declare import base_info
 
     info = base_info(mbm)
@@ -405,32 +408,41 @@ def _set_multi(jm, name: str, values, what: str, kind: str):
     return vals
 
 
-def configuration(mbm, spec: ConfigurationSpec) -> np.ndarray:
+def configuration(mbm, spec: ConfigurationSpec, q_nominal=None) -> np.ndarray:
     """The configuration ``q`` of ``[configuration]``: the model's nominal one, the base
     pose, then joint values by name (1-DoF: a number, continuous and mimic joints included;
-    free and ball joints: a list in MuJoCo's order)."""
+    free and ball joints: a list in MuJoCo's order).
+
+    ``q_nominal`` (k, nq): the nominal configurations of a family of models
+    (:class:`~roverimpact.models.family.FamilyNumbers`) in place of the model's; then
+    ``q`` is (k, nq)."""
     import pinocchio as pin
 
     from ..models.joints import set_joint_value
 
     model = mbm.model
-    q = np.array(mbm.params.get("q_nominal", pin.neutral(model)), dtype=float)
-    if q.shape != (model.nq,):
-        q = pin.neutral(model)
-    kind, iq, _ = _base_slices(mbm)
+    if q_nominal is not None:
+        q = np.array(q_nominal, dtype=float)
+    else:
+        q = np.array(mbm.params.get("q_nominal", pin.neutral(model)), dtype=float)
+        if q.shape != (model.nq,):
+            q = pin.neutral(model)
+    kind, iq, _ = base_slices(mbm)
     b = spec.base
     if kind == "planar":
         if b.y not in (None, 0.0) or b.roll_deg or b.yaw_deg:
             raise ConfigError("configuration.base: a planar base has x, z, pitch_deg only")
-        q[iq[0]] = q[iq[0]] if b.x is None else b.x
-        q[iq[1]] = q[iq[1]] if b.z is None else b.z
-        q[iq[2]] = np.deg2rad(b.pitch_deg)
+        if b.x is not None:
+            q[..., iq[0]] = b.x
+        if b.z is not None:
+            q[..., iq[1]] = b.z
+        q[..., iq[2]] = np.deg2rad(b.pitch_deg)
     elif kind == "floating":
         i0 = iq[0]
         for i, val in enumerate((b.x, b.y, b.z)):
             if val is not None:
-                q[i0 + i] = val
-        q[i0 + 3:i0 + 7] = pin.Quaternion(_rpy_matrix(b)).coeffs()
+                q[..., i0 + i] = val
+        q[..., i0 + 3:i0 + 7] = pin.Quaternion(_rpy_matrix(b)).coeffs()
     elif b != BaseSpec():
         raise ConfigError("configuration.base: this model has a fixed base; remove [base] or "
                           "declare [model.base] kind = 'floating'")
@@ -440,7 +452,8 @@ def configuration(mbm, spec: ConfigurationSpec) -> np.ndarray:
             if j.nq == 1 or j.nv == 1:
                 raise ConfigError(f"configuration.joints: joint {name!r} has one degree of "
                                   "freedom: give one number")
-            q[j.idx_q:j.idx_q + j.nq] = _set_multi(j, name, val, "configuration.joints", "q")
+            q[..., j.idx_q:j.idx_q + j.nq] = _set_multi(j, name, val, "configuration.joints",
+                                                        "q")
         else:
             q = _as_config_error(set_joint_value, mbm, q, name, val,
                                  what="configuration.joints")
@@ -457,10 +470,12 @@ def _as_config_error(fn, *args, **kwargs):
         raise ConfigError(str(exc)) from None
 
 
-def _heading(mbm, q) -> np.ndarray:
+def base_heading(mbm, q) -> np.ndarray:
+    """Driving direction of the base at ``q``: its x axis made horizontal (floating base),
+    else the world x axis."""
     import pinocchio as pin
 
-    kind, iq, _ = _base_slices(mbm)
+    kind, iq, _ = base_slices(mbm)
     if kind == "floating":
         i0 = iq[0]
         R = pin.Quaternion(np.asarray(q[i0 + 3:i0 + 7])).normalized().toRotationMatrix()
@@ -478,37 +493,44 @@ def _spin_joint(mbm, wheel) -> str | None:
     return wheel.frame if mbm.model.existJointName(wheel.frame) else None
 
 
-def velocity(mbm, q, spec: VelocitySpec) -> np.ndarray:
+def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None) -> np.ndarray:
     """The velocity ``v`` of ``[velocity]``: the base driving at ``u`` with rolling wheels
     (or ``base_linear``, ``base_angular``), then joint rates by name (1-DoF: a number; free
-    and ball joints: a list in MuJoCo's order)."""
+    and ball joints: a list in MuJoCo's order).
+
+    A batch (a family of models at one base pose ``q``): ``u`` (k,) speeds in place of
+    ``spec.u`` and ``wheel_radius`` (k, n_wheels) radii in place of the wheels'; then
+    ``v`` is (k, nv)."""
     import pinocchio as pin
 
     from ..models.joints import set_joint_rate
 
     model = mbm.model
-    v = np.zeros(model.nv)
-    kind, iq, iv = _base_slices(mbm)
-    heading = _heading(mbm, q)
-    lin = spec.u * heading if spec.base_linear is None else np.asarray(spec.base_linear, float)
+    u = np.asarray(spec.u if u is None else u, dtype=float)
+    v = np.zeros((*u.shape, model.nv))
+    kind, iq, iv = base_slices(mbm)
+    heading = base_heading(mbm, q)
+    lin = (u[..., None] * heading if spec.base_linear is None
+           else np.asarray(spec.base_linear, float))
     ang = np.zeros(3) if spec.base_angular is None else np.asarray(spec.base_angular, float)
     if kind == "planar":
-        if abs(lin[1]) > 0 or abs(ang[0]) > 0 or abs(ang[2]) > 0:
+        if np.any(np.abs(lin[..., 1]) > 0) or abs(ang[0]) > 0 or abs(ang[2]) > 0:
             raise ConfigError("velocity: a planar base moves in x-z with pitch rate about y "
                               "only (base_linear y and base_angular x, z must be 0)")
-        v[iv[0]], v[iv[1]], v[iv[2]] = lin[0], lin[2], ang[1]
+        v[..., iv[0]], v[..., iv[1]], v[..., iv[2]] = lin[..., 0], lin[..., 2], ang[1]
     elif kind == "floating":
         i0, v0 = iq[0], iv[0]
         R = pin.Quaternion(np.asarray(q[i0 + 3:i0 + 7])).normalized().toRotationMatrix()
-        v[v0:v0 + 3], v[v0 + 3:v0 + 6] = R.T @ lin, R.T @ ang
-    elif spec.u or spec.base_linear is not None or spec.base_angular is not None:
+        v[..., v0:v0 + 3], v[..., v0 + 3:v0 + 6] = lin @ R, ang @ R
+    elif np.any(u != 0) or spec.base_linear is not None or spec.base_angular is not None:
         raise ConfigError("velocity: u/base_linear/base_angular need a moving base; this model "
                           "has a fixed base (set joint rates in velocity.joints)")
-    if spec.u:
-        for w in mbm.wheels:
+    if np.any(u != 0):
+        for k, w in enumerate(mbm.wheels):
             spin = _spin_joint(mbm, w)
             if spin is not None:
-                v = _as_config_error(set_joint_rate, mbm, v, spin, spec.u / w.radius,
+                r = w.radius if wheel_radius is None else wheel_radius[..., k]
+                v = _as_config_error(set_joint_rate, mbm, v, spin, u / r,
                                      what=f"wheel {w.name!r}")
     for name, val in spec.joints.items():
         if isinstance(val, list):
@@ -521,7 +543,7 @@ def velocity(mbm, q, spec: VelocitySpec) -> np.ndarray:
                 R = pin.Quaternion(np.asarray(q[j.idx_q + 3:j.idx_q + 7])).normalized() \
                     .toRotationMatrix()
                 rates = np.concatenate([R.T @ rates[:3], rates[3:]])
-            v[j.idx_v:j.idx_v + j.nv] = rates
+            v[..., j.idx_v:j.idx_v + j.nv] = rates
         else:
             v = _as_config_error(set_joint_rate, mbm, v, name, val, what="velocity.joints")
     return v
@@ -569,7 +591,7 @@ def candidate_constraints(mbm, obstacle: ObstacleSpec, contacts: ContactsSpec,
     for jn in cw.locked:
         _joint(mbm.model, jn, "contacts.locked")
         cons.append(LockedJoint(jn))
-    planar = bool(mbm.params.get("planar", False)) or _base_slices(mbm)[0] == "planar"
+    planar = bool(mbm.params.get("planar", False)) or base_slices(mbm)[0] == "planar"
     for k, pt in enumerate(cw.points):
         cons.extend(_point_contacts(mbm, pt, k, planar))
     n = tuple(float(x) for x in normal)
@@ -831,7 +853,7 @@ def jam_total_mass(mbm) -> float | None:
     compares ``m_eff`` with; None for a fixed base (never warned)."""
     import pinocchio as pin
 
-    if mbm is None or _base_slices(mbm)[0] not in ("floating", "planar"):
+    if mbm is None or base_slices(mbm)[0] not in ("floating", "planar"):
         return None
     return float(pin.computeTotalMass(mbm.model))
 

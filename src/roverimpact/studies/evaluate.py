@@ -57,6 +57,7 @@ import numpy as np
 from ..contact import peak_force
 from ..exceptions import RoverImpactError
 from ..scenario import ImpactSetup, Scenario, scenario_from_dict, sweep_energy
+from ..scenario.block import block_key, impact_block
 from ..scenario.build import jam_total_mass, model_key, warn_jammed
 from ..simulate import SimulationConfig, simulate_scenario
 from ..simulate.engines import check_engine
@@ -299,6 +300,16 @@ class ScenarioEvaluator:
             for engine in engines:
                 check_engine(engine, setup.model, cfg, terrain=sc.terrain is not None)
 
+    @staticmethod
+    def _setup(sc: Scenario, models: dict[str, Any]) -> ImpactSetup:
+        """The setup of one scenario, reusing a model built in this call (``models``, by
+        :func:`~roverimpact.scenario.build.model_key`)."""
+        key = model_key(sc)
+        setup = ImpactSetup.from_scenario(sc, model=models.get(key))
+        if len(models) < _MODELS:
+            models.setdefault(key, setup.model)
+        return setup
+
     def evaluate(self, base, overrides, *, simulate=False) -> dict[str, np.ndarray]:
         engines = engines_of(simulate)
         n = len(overrides)
@@ -318,21 +329,26 @@ class ScenarioEvaluator:
         own = _OwnCases(T, m_eff, m_eff_free, v_n)
         models: dict[str, Any] = {}  # built models of this call, by what builds them
         pending: list[tuple[list[int], ImpactSetup]] = []  # refined / simulated cases
+        blocks: dict[str, list[tuple[int, Scenario]]] = {}  # cases of one model family
         for idx in groups.values():
             sc = scenario_from_dict(apply_overrides(base, overrides[idx[0]]))
-            key = model_key(sc)
-            setup = ImpactSetup.from_scenario(sc, model=models.get(key))
-            if len(models) < _MODELS:
-                models.setdefault(key, setup.model)
-            m_total[idx] = _total_mass(setup.model)
             for i in idx:
                 laws.setdefault(_law_key(overrides[i]), []).append(i)
+            if len(idx) == 1 and not (engines or sc.band is not None):
+                # a case of its own (a model-changing design): computed with the other
+                # cases of its model family, in blocks
+                bkey = block_key(sc)
+                if bkey is not None:
+                    blocks.setdefault(bkey, []).append((idx[0], sc))
+                    continue
+            setup = self._setup(sc, models)
+            m_total[idx] = _total_mass(setup.model)
             if engines or sc.band is not None:
                 pending.append((idx, setup))
             if len(idx) == 1:
-                # a case of its own (a model-changing design): the setup was built at its
-                # angle, so its T_c^- is the setup's partition (as evaluate_case computes
-                # it), batched with the other such cases of the same shape
+                # a case of its own: the setup was built at its angle, so its T_c^- is the
+                # setup's partition (as evaluate_case computes it), batched with the other
+                # such cases of the same shape
                 own.add(idx[0], setup)
                 continue
             if sc.obstacle.beta_deg is not None:
@@ -345,6 +361,22 @@ class ScenarioEvaluator:
             m_eff[idx] = en.m_eff
             m_eff_free[idx] = en.m_eff_free
             v_n[idx] = en.v_n
+        for bkey, members in blocks.items():
+            for s in range(0, len(members), _OwnCases.BLOCK):
+                part = members[s:s + _OwnCases.BLOCK]
+                idx = [i for i, _ in part]
+                try:
+                    blk = impact_block([sc for _, sc in part], key=bkey)
+                except RoverImpactError:
+                    blk = None  # case by case below: the same error, from its own case
+                if blk is not None:
+                    m_total[idx] = blk.total_mass
+                    own.add_block(idx, blk)
+                    continue
+                for i, sc in part:
+                    setup = self._setup(sc, models)
+                    m_total[i] = _total_mass(setup.model)
+                    own.add(i, setup)
         own.flush()
         # the predicted peak force: one vectorized call per contact law over all the cases
         for members in laws.values():
@@ -374,38 +406,63 @@ _MODELS = 64
 
 class _OwnCases:
     """The partition of cases that each have their own setup, batched: ``M``, ``A``, ``v``
-    of up to :attr:`BLOCK` setups of the same shape are stacked (the setups themselves are
+    of up to :attr:`BLOCK` cases of the same shape are stacked (the setups themselves are
     not kept) and go through one batched :func:`roverimpact.partition` and
     :func:`roverimpact.effective_mass` call, the same quantities as
-    :meth:`ImpactSetup.partition` (tested to 1e-12 against it)."""
+    :meth:`ImpactSetup.partition` (tested to 1e-12 against it). Cases come one setup at
+    a time (:meth:`add`) or as a block of a model family
+    (:meth:`add_block`: :func:`roverimpact.scenario.block.impact_block`)."""
 
     BLOCK = 256
 
     def __init__(self, T, m_eff, m_eff_free, v_n):
         self.out = (T, m_eff, m_eff_free, v_n)
+        # (shape of M, shape of A, obstacle row) -> [cases, count]; a part of the cases is
+        # (indices, M, A, v, labels, total mass of each or None)
         self.pending: dict[tuple, list] = {}
 
     def add(self, i: int, setup: ImpactSetup) -> None:
-        key = (setup.M.shape, setup.A.shape, setup.obstacle_row)
-        items = self.pending.setdefault(key, [])
         # what warn_if_jammed needs, without the model: its labels and total mass
-        items.append((i, setup.M, setup.A, setup.v, setup.labels,
-                      jam_total_mass(setup.model)))
-        if len(items) >= self.BLOCK:
-            self._run(key, self.pending.pop(key))
+        total = jam_total_mass(setup.model)
+        self._add((setup.M.shape, setup.A.shape, setup.obstacle_row),
+                  (np.array([i]), setup.M[None], setup.A[None], setup.v[None], setup.labels,
+                   None if total is None else np.array([total])))
+
+    def add_block(self, idx, blk) -> None:
+        """The cases ``idx`` of an :class:`~roverimpact.scenario.block.ImpactBlock`, by
+        active set."""
+        idx = np.asarray(idx)
+        patterns, which = np.unique(blk.active, axis=0, return_inverse=True)
+        which = which.reshape(-1)
+        for p, mask in enumerate(patterns):
+            sel = np.flatnonzero(which == p)
+            rows = np.flatnonzero(mask)
+            obstacle_row = int(np.flatnonzero(rows == blk.obstacle_row)[0])
+            A = blk.A[sel][:, rows]
+            self._add((blk.M.shape[1:], A.shape[1:], obstacle_row),
+                      (idx[sel], blk.M[sel], A, blk.v[sel],
+                       tuple(blk.labels[r] for r in rows),
+                       blk.total_mass[sel] if blk.vehicle else None))
+
+    def _add(self, key, part) -> None:
+        entry = self.pending.setdefault(key, [[], 0])
+        entry[0].append(part)
+        entry[1] += len(part[0])
+        if entry[1] >= self.BLOCK:
+            self._run(key, self.pending.pop(key)[0])
 
     def flush(self) -> None:
         for key in list(self.pending):
-            self._run(key, self.pending.pop(key))
+            self._run(key, self.pending.pop(key)[0])
 
-    def _run(self, key, items) -> None:
+    def _run(self, key, parts) -> None:
         from ..energy import effective_mass, partition
 
         obstacle_row = key[2]
-        idx = [it[0] for it in items]
-        M = np.stack([it[1] for it in items])
-        A = np.stack([it[2] for it in items])
-        v = np.stack([it[3] for it in items])
+        idx = np.concatenate([pt[0] for pt in parts])
+        M = np.concatenate([pt[1] for pt in parts])
+        A = np.concatenate([pt[2] for pt in parts])
+        v = np.concatenate([pt[3] for pt in parts])
         p = partition(M, A, v, want_velocities=False)
         a = A[:, obstacle_row, :]
         others = np.delete(A, obstacle_row, axis=1)
@@ -414,9 +471,13 @@ class _OwnCases:
         v_n = -np.einsum("kn,kn->k", a, v)
         T, me, mf, vn = self.out
         T[idx], me[idx], mf[idx], vn[idx] = p.T_c, m_eff, m_eff_free, v_n
-        for (_, _, _, _, labels, total), m in zip(items, m_eff, strict=True):
+        s = 0
+        for pt in parts:
+            n, labels, total = len(pt[0]), pt[4], pt[5]
             if total is not None:
-                warn_jammed(float(m), total, labels, obstacle_row)
+                for j in np.flatnonzero(m_eff[s:s + n] > total * (1.0 + 1e-9)):
+                    warn_jammed(float(m_eff[s + j]), float(total[j]), labels, obstacle_row)
+            s += n
 
 
 def _group_key(ov: Mapping[str, Any]) -> str:

@@ -1,0 +1,167 @@
+"""Many scenarios of one model family at once: M, A, v and the active rows of a block.
+
+A study whose cases change a built-in rover's parameters (COM height, masses, lengths),
+the speed and the impact angle builds, case by case, models that differ in numbers only.
+Scenarios with the same :func:`block_key` are such a block: :func:`impact_block` builds
+one model of the family and its constraint set, writes each member's numbers into that
+model for its Pinocchio pass (:class:`roverimpact.models.family.ModelFamily`), and
+computes the configurations, velocities, obstacle normals and active rows of the whole
+block with arrays over the block. Member ``i`` of the result is what
+:meth:`~roverimpact.scenario.ImpactSetup.from_scenario` gives for ``scenarios[i]``: the
+same candidate rows, ``M``, ``A``, ``v`` and active set (tested to 1e-12).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import InputError
+from .build import (
+    active_mask,
+    base_heading,
+    base_slices,
+    candidate_constraints,
+    configuration,
+    friction_of,
+    normal_from_beta,
+    scenario_model,
+    velocity,
+)
+from .schema import Scenario
+
+__all__ = ["ImpactBlock", "block_key", "impact_block"]
+
+#: The tables of a scenario that make its impact setup (the others: the contact law, the
+#: simulation, the band, do not change M, A, v).
+_SETUP_TABLES = {"model", "configuration", "velocity", "contacts", "obstacle", "constraints"}
+
+
+def block_key(scenario: Scenario) -> str | None:
+    """What a block's scenarios share; None if the scenario has no block.
+
+    A block is scenarios of a built-in rover with family numbers
+    (:func:`roverimpact.models.family.has_family`), without terrain or declared loops,
+    that are the same but for the numbers of ``model.params`` (which parameters are set
+    is part of the key, their values are not when they are numbers), ``velocity.u`` and
+    ``obstacle.beta_deg``.
+    """
+    from ..models.family import has_family
+
+    if (scenario.model.name is None or not has_family(scenario.model.name)
+            or scenario.terrain is not None or scenario.contacts.loops):
+        return None
+    data = scenario.model_dump(include=_SETUP_TABLES)
+    data["model"]["params"] = sorted((k, None if _number(v) else v)
+                                     for k, v in data["model"]["params"].items())
+    data["velocity"]["u"] = None
+    if data["obstacle"]["beta_deg"] is not None:
+        data["obstacle"]["beta_deg"] = None
+    return repr(data)
+
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+@dataclass(frozen=True)
+class ImpactBlock:
+    """The impact setups of a block of scenarios (member ``i``: ``scenarios[i]``).
+
+    Attributes
+    ----------
+    M : (k, n, n) ndarray
+        Mass matrices.
+    A : (k, m, n) ndarray
+        All candidate rows (the obstacle row last), in the order of ``labels``.
+    v : (k, n) ndarray
+        Velocities before impact.
+    q : (k, nq) ndarray
+        Configurations.
+    active : (k, m) bool ndarray
+        The active rows of each member
+        (:func:`~roverimpact.scenario.build.active_mask`).
+    labels : tuple of str
+        Candidate row labels (the same for every member).
+    obstacle_row : int
+        Index of the obstacle row among the candidates.
+    total_mass : (k,) ndarray
+        Mass of each member's whole model [kg].
+    vehicle : bool
+        A floating or planar base (the held-rows check of
+        :func:`~roverimpact.scenario.build.warn_if_jammed` applies).
+    """
+
+    M: np.ndarray
+    A: np.ndarray
+    v: np.ndarray
+    q: np.ndarray
+    active: np.ndarray
+    labels: tuple[str, ...]
+    obstacle_row: int
+    total_mass: np.ndarray
+    vehicle: bool
+
+
+def impact_block(scenarios: Sequence[Scenario], *, base_dir: str | Path | None = None,
+                 key: str | None = None) -> ImpactBlock:
+    """The impact setups of scenarios with one :func:`block_key`, computed together.
+
+    ``key``: that key, when the caller has grouped the scenarios by it (then it is not
+    computed again for each); ``base_dir`` as for
+    :meth:`~roverimpact.scenario.ImpactSetup.from_scenario`.
+
+    Raises
+    ------
+    InputError
+        Scenarios of different blocks; otherwise what
+        :meth:`~roverimpact.scenario.ImpactSetup.from_scenario` raises for one of them
+        (a bad parameter set, an impact problem without solution, ...).
+    """
+    from ..models.family import ModelFamily, family_numbers
+    from ..models.kinematics import ConstraintSet
+
+    scenarios = list(scenarios)
+    if not scenarios:
+        raise InputError("impact_block needs at least one scenario")
+    sc0 = scenarios[0]
+    if key is None:
+        key = block_key(sc0)
+        if key is not None and any(block_key(sc) != key for sc in scenarios[1:]):
+            key = None
+    if key is None:
+        raise InputError("impact_block: the scenarios are not one block (block_key)")
+    numbers = family_numbers(sc0.model.name, sc0.model.preset,
+                             [sc.model.params for sc in scenarios])
+    mbm = scenario_model(sc0, base_dir)  # a member: the family's model, rewritten below
+    family = ModelFamily(mbm, numbers)
+    Q = configuration(mbm, sc0.configuration, q_nominal=numbers.q_nominal)
+    kind, iq, _ = base_slices(mbm)
+    if kind == "floating":  # one base orientation: one heading, one base rotation
+        rot = Q[:, iq[0] + 3:iq[0] + 7]
+        if not (rot == rot[:1]).all():  # pragma: no cover - configuration() sets it
+            raise InputError("impact_block: the members' base orientations differ")
+    q0 = Q[0]
+    heading = base_heading(mbm, q0)
+    u = np.array([sc.velocity.u for sc in scenarios], dtype=float)
+    v = velocity(mbm, q0, sc0.velocity, u=u, wheel_radius=numbers.wheel_radius)
+    obs = sc0.obstacle
+    if obs.normal is not None:
+        normal = np.asarray(obs.normal, float)
+        normals = np.broadcast_to(normal / np.linalg.norm(normal), (len(scenarios), 3))
+    else:
+        beta = np.array([sc.obstacle.beta_deg for sc in scenarios], dtype=float)
+        normals = normal_from_beta(np.deg2rad(beta), heading)
+    cons = candidate_constraints(mbm, obs, sc0.contacts, normals[0])
+    cs = ConstraintSet(mbm, cons)
+    M, A = cs.evaluate_members(family, Q, normals={len(cons) - 1: normals})
+    labels = tuple(cs.labels)
+    obstacle = len(labels) - 1
+    active = active_mask(sc0.constraints, labels, M, A, v, obstacle_row=obstacle,
+                         **friction_of(sc0.contacts))
+    return ImpactBlock(M=M, A=A, v=v, q=Q, active=active, labels=labels,
+                       obstacle_row=obstacle, total_mass=numbers.total_mass(),
+                       vehicle=kind in ("floating", "planar"))

@@ -1,0 +1,231 @@
+"""Model families (issue #19: model-changing sweeps): one Pinocchio model rewritten member
+by member, and the impact setups of a block of scenarios computed together, against a
+freshly built model / setup per member."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from roverimpact.exceptions import ModelError
+from roverimpact.models import rocker_bogie
+from roverimpact.models.family import ModelFamily, family_numbers, has_family
+from roverimpact.models.kinematics import ConstraintSet
+from roverimpact.scenario import ImpactSetup, scenario_from_dict
+from roverimpact.scenario.block import block_key, impact_block
+from roverimpact.scenario.build import (
+    candidate_constraints,
+    configuration,
+    normal_from_beta,
+    velocity,
+)
+from roverimpact.studies import ScenarioEvaluator, evaluate_case
+from roverimpact.studies.config import apply_overrides
+
+ROVER = {
+    "model": {"name": "rocker_bogie", "preset": "prototype"},
+    "velocity": {"u": 0.3},
+    "contacts": {"ground": "normal"},
+    "obstacle": {"wheel": "left_front", "beta_deg": 60.0},
+    "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 1.0},
+}
+
+
+def _random_params(rng, k):
+    """Parameter sets that change masses, the COM, lengths, pivots and the wheel radius."""
+    out = []
+    for _ in range(k):
+        out.append({
+            "chassis_mass": float(rng.uniform(8.0, 25.0)),
+            "chassis_com_above_pivot": float(rng.uniform(-0.05, 0.25)),
+            "com_x": float(rng.uniform(-0.05, 0.05)),
+            "rocker_mass": float(rng.uniform(0.5, 2.0)),
+            "wheel_mass": float(rng.uniform(0.3, 1.0)),
+            "wheel_radius": float(rng.uniform(0.07, 0.15)),
+            "front_x": float(rng.uniform(0.25, 0.4)),
+            "rear_x": float(rng.uniform(-0.4, -0.25)),
+            "track": float(rng.uniform(0.4, 0.6)),
+            "bogie_pivot_height": float(rng.uniform(0.05, 0.12)),
+        })
+    out[1] = {"chassis_mass": 17.0}  # a member that sets one parameter only
+    out[2] = {}
+    return out
+
+
+def _close(a, b):
+    np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(b).max()))
+
+
+@pytest.mark.parametrize("preset", ["prototype", "mer"])
+def test_rewritten_model_gives_the_fresh_models_M_A_v(preset):
+    """M, A (every candidate row, the obstacle normal turning from member to member) and
+    v of each member, from one Pinocchio model rewritten member by member, equal those of
+    a model built for the member; so do its nominal q and total mass."""
+    rng = np.random.default_rng(11)
+    params = _random_params(rng, 9)
+    sc = scenario_from_dict(ROVER)
+    nums = family_numbers("rocker_bogie", preset, params)
+    fam = ModelFamily(rocker_bogie(preset, **params[0]), nums)
+    mbm = fam.mbm
+    Q = configuration(mbm, sc.configuration, q_nominal=nums.q_nominal)
+    u = rng.uniform(0.1, 0.5, len(params))
+    V = velocity(mbm, Q[0], sc.velocity, u=u, wheel_radius=nums.wheel_radius)
+    beta = np.deg2rad(rng.uniform(5.0, 90.0, len(params)))
+    normals = normal_from_beta(beta, (1.0, 0.0, 0.0))
+    cons = candidate_constraints(mbm, sc.obstacle, sc.contacts, normals[0])
+    M, A = ConstraintSet(mbm, cons).evaluate_members(fam, Q,
+                                                     normals={len(cons) - 1: normals})
+    for i, p in enumerate(params):
+        fresh = rocker_bogie(preset, **p)
+        q = configuration(fresh, sc.configuration)
+        np.testing.assert_array_equal(Q[i], q)
+        assert nums.total_mass()[i] == sum(Y.mass for Y in fresh.model.inertias)
+        _close(V[i], velocity(fresh, q, sc.velocity.model_copy(update={"u": u[i]})))
+        Mi, Ai = ConstraintSet(fresh, candidate_constraints(
+            fresh, sc.obstacle, sc.contacts, normals[i])).evaluate(q)
+        _close(M[i], Mi)
+        _close(A[i], Ai)
+    assert len({round(float(m), 9) for m in M[:, 0, 0]}) > 5  # the model did change
+
+
+def test_family_writes_only_what_changes():
+    """A family that changes the chassis mass rewrites one inertia and no placement."""
+    nums = family_numbers("rocker_bogie", None, [{"chassis_mass": m} for m in (10, 12, 14)])
+    fam = ModelFamily(rocker_bogie(chassis_mass=10), nums)
+    assert fam._inertias == [0] and fam._placements == []
+    fam.write(2)
+    assert fam.mbm.model.inertias[1].mass == 14.0
+    with pytest.raises(ValueError):  # numbers of another structure (3 bodies)
+        ModelFamily(rocker_bogie(), _other_numbers())
+
+
+def _other_numbers():
+    from roverimpact.models._build import FamilyNumbers
+
+    n = family_numbers("rocker_bogie", None, [{}])
+    return FamilyNumbers(n.mass[:, :3], n.lever[:, :3], n.inertia[:, :3],
+                         n.translation[:, :3], n.q_nominal, n.wheel_radius)
+
+
+@pytest.mark.parametrize("bad", [{"rear_x": 0.5}, {"chassis_mass": -1.0},
+                                 {"bogie_pivot_height": 0.3}, {"wheel_radius": float("nan")},
+                                 {"no_such": 1.0}, {"track": "wide"}])
+def test_family_numbers_refuse_what_the_builder_refuses(bad):
+    with pytest.raises(ModelError) as ref:
+        rocker_bogie("prototype", **bad)
+    with pytest.raises(ModelError) as got:
+        family_numbers("rocker_bogie", "prototype", [{"chassis_mass": 12.0}, bad])
+    assert str(got.value) == str(ref.value)
+
+
+def test_block_key():
+    """Numbers of model.params, the speed and the angle may differ within a block; which
+    parameters are set, strings, and every other table may not. No block for models
+    without family numbers, terrain or declared loops."""
+    def key(**ov):
+        return block_key(scenario_from_dict(apply_overrides(ROVER, ov)))
+
+    k = key(**{"model.params.chassis_mass": 12.0})
+    assert k is not None and has_family("rocker_bogie") and not has_family("rover2d")
+    assert key(**{"model.params.chassis_mass": 15, "velocity.u": 0.1,
+                  "obstacle.beta_deg": 20.0}) == k
+    for ov in ({"model.params.com_x": 0.0}, {"obstacle.wheel": "right_front"},
+               {"contacts.ground": "noslip"}, {"model.preset": "mer"},
+               {"model.params.chassis_mass": "12"}, {"constraints": "all"},
+               {"configuration.base.yaw_deg": 10.0}):
+        assert key(**{"model.params.chassis_mass": 12.0, **ov}) != k, ov
+    assert key(**{"model": {"name": "rover2d"}, "obstacle.wheel": "front"}) is None
+    assert key(**{"model": {"name": "rigid_body"}, "obstacle": {"frame": "contact",
+                                                                "beta_deg": 30.0}}) is None
+
+
+SETUPS = [
+    {},
+    {"contacts": {"ground": "noslip"}},
+    {"contacts": {"ground": "coulomb", "mu": 0.4}},
+    {"constraints": "all"},
+    {"constraints": ["ground:*:normal"], "obstacle": {"wheel": "right_middle",
+                                                      "beta_deg": 45.0}},
+    {"obstacle": {"wheel": "left_rear", "normal": [-0.6, 0.1, 0.8]}},
+    {"configuration": {"base": {"yaw_deg": 30.0, "roll_deg": 3.0, "z": 0.5},
+                       "joints": {"bogie_left": 0.05}},
+     "velocity": {"u": 0.3, "joints": {"bogie_left": 0.2}}},
+    {"contacts": {"ground": "normal", "locked": ["bogie_right"]}},
+]
+
+
+@pytest.mark.parametrize("extra", SETUPS)
+def test_impact_block_is_the_setup_of_each_scenario(extra):
+    """M, v, the active set and the active rows of each member of a block equal those of
+    ImpactSetup.from_scenario (fresh model) for its scenario, to 1e-12."""
+    rng = np.random.default_rng(3)
+    params = _random_params(rng, 7)
+    base = {**ROVER, **extra}
+    scs = []
+    for i, p in enumerate(params):
+        ov = {f"model.params.{k}": v for k, v in p.items()}
+        ov["velocity.u"] = float(rng.uniform(0.1, 0.5))
+        if "normal" not in base["obstacle"]:
+            ov["obstacle.beta_deg"] = float(rng.uniform(5.0, 90.0)) if i else 90.0
+        scs.append(scenario_from_dict(apply_overrides(base, ov)))
+    keys = {block_key(sc) for sc in scs}
+    params_set = {tuple(sorted(sc.model.params)) for sc in scs}
+    if len(keys) != 1:  # members that set other parameters: give them all the same
+        assert len(params_set) > 1
+        scs = [sc for sc in scs if tuple(sorted(sc.model.params)) == max(params_set)]
+    blk = impact_block(scs)
+    for i, sc in enumerate(scs):
+        ref = ImpactSetup.from_scenario(sc)
+        _close(blk.M[i], ref.M)
+        _close(blk.v[i], ref.v)
+        _close(blk.q[i], ref.q)
+        assert blk.labels == ref.candidate_labels
+        rows = np.flatnonzero(blk.active[i])
+        assert tuple(blk.labels[r] for r in rows) == ref.labels
+        _close(blk.A[i][rows], ref.A)
+        assert blk.total_mass[i] == sum(Y.mass for Y in ref.model.model.inertias)
+
+
+def test_impact_block_refuses_scenarios_of_two_blocks():
+    a = scenario_from_dict(apply_overrides(ROVER, {"model.params.chassis_mass": 12.0}))
+    b = scenario_from_dict(apply_overrides(ROVER, {"obstacle.wheel": "right_front"}))
+    from roverimpact.exceptions import InputError
+
+    with pytest.raises(InputError):
+        impact_block([a, b])
+    with pytest.raises(InputError):
+        impact_block([scenario_from_dict({**ROVER, "model": {"name": "rover2d"},
+                                          "obstacle": {"wheel": "front", "beta_deg": 30.0}})])
+
+
+def test_evaluator_blocks_match_evaluate_case():
+    """Cases of their own in two blocks (two obstacle wheels), wheel radius and lengths
+    changed, no-slip ground: the evaluator's outputs equal evaluate_case per case."""
+    rng = np.random.default_rng(8)
+    base = {**ROVER, "contacts": {"ground": "noslip"}}
+    overrides = []
+    for i in range(16):
+        overrides.append({
+            "obstacle.wheel": "left_front" if i % 3 else "right_middle",
+            "obstacle.beta_deg": float(rng.uniform(10.0, 90.0)),
+            "velocity.u": float(rng.uniform(0.1, 0.5)),
+            "model.params.wheel_radius": float(rng.uniform(0.08, 0.14)),
+            "model.params.front_x": float(rng.uniform(0.25, 0.4)),
+            "model.params.chassis_com_above_pivot": float(rng.uniform(0.0, 0.2))})
+    got = ScenarioEvaluator().evaluate(base, overrides)
+    for i, ov in enumerate(overrides):
+        ref = evaluate_case(apply_overrides(base, ov))
+        for col in ("T_c_minus", "m_eff", "v_n", "F_pred", "m_total", "m_eff_free",
+                    "T_n_total", "T_c_obstacle"):
+            assert got[col][i] == pytest.approx(ref[col], rel=1e-12, abs=1e-15), (i, col)
+
+
+def test_evaluator_bad_case_raises_as_evaluate_case():
+    """A bad parameter set in a block: the error of that case's own build."""
+    overrides = [{"model.params.chassis_mass": 12.0, "obstacle.beta_deg": 30.0},
+                 {"model.params.chassis_mass": -3.0, "obstacle.beta_deg": 40.0}]
+    with pytest.raises(ModelError) as ref:
+        evaluate_case(apply_overrides(ROVER, overrides[1]))
+    with pytest.raises(ModelError) as got:
+        ScenarioEvaluator().evaluate(ROVER, overrides)
+    assert str(got.value) == str(ref.value)
