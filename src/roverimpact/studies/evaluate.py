@@ -330,6 +330,7 @@ class ScenarioEvaluator:
         models: dict[str, Any] = {}  # built models of this call, by what builds them
         pending: list[tuple[list[int], ImpactSetup]] = []  # refined / simulated cases
         blocks: dict[str, list[tuple[int, Scenario]]] = {}  # cases of one model family
+        family_keys: dict[str, str | None] = {}  # block_key by _family_key
         for idx in groups.values():
             sc = scenario_from_dict(apply_overrides(base, overrides[idx[0]]))
             for i in idx:
@@ -337,7 +338,10 @@ class ScenarioEvaluator:
             if len(idx) == 1 and not (engines or sc.band is not None):
                 # a case of its own (a model-changing design): computed with the other
                 # cases of its model family, in blocks
-                bkey = block_key(sc)
+                fkey = _family_key(overrides[idx[0]])
+                if fkey not in family_keys:
+                    family_keys[fkey] = block_key(sc)
+                bkey = family_keys[fkey]
                 if bkey is not None:
                     blocks.setdefault(bkey, []).append((idx[0], sc))
                     continue
@@ -485,6 +489,23 @@ def _group_key(ov: Mapping[str, Any]) -> str:
     items = sorted((k, v) for k, v in ov.items()
                    if k != _BETA and not k.startswith(("contact_law.", "simulation.")))
     return repr(items)
+
+
+def _family_key(ov: Mapping[str, Any]) -> str:
+    """Cases of one call with the same key have the same
+    :func:`~roverimpact.scenario.block.block_key` (they differ in numbers of
+    ``model.params``, ``velocity.u`` and ``obstacle.beta_deg`` only; computed for the
+    first of them)."""
+    return repr(sorted((k, None if _number(v) and (k.startswith("model.params.")
+                                                   or k in _FAMILY_NUMBERS) else v)
+                       for k, v in ov.items()))
+
+
+_FAMILY_NUMBERS = ("velocity.u", _BETA)
+
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def _law_key(ov: Mapping[str, Any]) -> str:
