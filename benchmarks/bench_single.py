@@ -106,10 +106,13 @@ def main() -> None:
     assert abs(got - ref) <= 1e-12 * abs(ref), (got, ref)
     t_hand = per_call(lambda: hand_tc(M, A, v), 20000)
     t_ri = per_call(lambda: ri.partition(M, A, v), 20000)
+    t_tc = per_call(lambda: ri.partition(M, A, v, want_velocities=False), 20000)
     print(f"one item, n = {n}, m = {m}, one core (T_c equal to {abs(got - ref) / ref:.1e}):")
     print(f"  hand-written numba kernel (Cholesky, full-rank rows)  {1e6 * t_hand:6.2f} us")
     print(f"  roverimpact.partition                                  {1e6 * t_ri:6.2f} us   "
           f"{t_ri / t_hand:4.2f}x   (target <= 2x)")
+    print(f"  roverimpact.partition(want_velocities=False)           {1e6 * t_tc:6.2f} us   "
+          f"{t_tc / t_hand:4.2f}x   (T, T_c, T_a and the rank only)")
     print(f"batched roverimpact.partition, n = {n}, m = {m}, one core:")
     rates = {}
     for k in (100_000, 1_000_000):

@@ -215,3 +215,25 @@ def test_single_system_fast_path_equals_the_batched_path():
     with pytest.raises(InputError) as e2:
         ri.partition(bad.tolist(), [[1.0, 0.0]], [1.0, 1.0])       # the generic path
     assert str(e1.value) == str(e2.value)
+
+
+def test_single_system_result_is_a_normal_partition():
+    """The one-system path builds its result without ``__init__``: the same type, fields,
+    repr and frozenness as a Partition made the usual way."""
+    import dataclasses
+
+    rng = np.random.default_rng(3)
+    M = random_spd(rng, 4)
+    A = rng.standard_normal((2, 4))
+    v = rng.standard_normal(4)
+    p = ri.partition(M, A, v)
+    assert type(p) is ri.Partition
+    q = ri.Partition(**{f.name: getattr(p, f.name) for f in dataclasses.fields(p)})
+    assert repr(p) == repr(q)
+    assert vars(p).keys() == vars(q).keys()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        p.T_c = 0.0
+    assert isinstance(p.T_c, np.float64) and isinstance(p.rank, np.int64)
+    # a Fortran-ordered (not C-contiguous) system takes the general path: same numbers
+    pf = ri.partition(np.asfortranarray(M), np.asfortranarray(A), v)
+    assert pf.T_c == pytest.approx(p.T_c, rel=1e-14)
