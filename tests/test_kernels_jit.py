@@ -89,3 +89,33 @@ print(json.dumps([before, sent, k.cached(), sum(d.stats.cache_hits.values()),
     code_off = ("from roverimpact._kernels._jit import compile_in_background as c; "
                 "from roverimpact._kernels.lemke import impact_kernel as k; print(c(k))")
     assert _python(code_off, tmp_path, ROVERIMPACT_BACKGROUND_COMPILE="0") == "[]"
+
+
+def test_build_settings_are_scoped_and_required_kernels_come_first(monkeypatch):
+    """``slp`` / ``loop_vectorize`` hold only while this kernel compiles (the lane kernel:
+    SLP on, loop vectoriser off); ``requires`` are compiled before, with numba's own
+    settings, so the functions they share are compiled the same way in every process."""
+    from numba import types
+    from numba.core import config as numba_config
+
+    from roverimpact._kernels import _jit
+    from roverimpact._kernels.lanes_jit import LANES
+
+    seen = []
+
+    def fake_njit(signature, **options):
+        seen.append((numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE))
+        return lambda f: f
+
+    monkeypatch.setattr(_jit, "njit", fake_njit)
+    before = (numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE)
+    sig = types.void()
+    first = _jit.Kernel(lambda: None, sig)
+    lanes_like = _jit.Kernel(lambda: None, sig, slp=True, loop_vectorize=False,
+                             requires=(first,))
+    lanes_like.get()
+    assert seen == [before, (1, 0)]
+    assert (numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE) == before
+    assert first.compiled and lanes_like.compiled
+    # the real lane kernel is declared that way
+    assert LANES._slp and not LANES._loop_vectorize and partition_kernel in LANES._requires

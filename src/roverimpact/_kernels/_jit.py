@@ -56,18 +56,24 @@ class Kernel:
 
     ``kernel.get()`` returns the compiled dispatcher (hot paths call it directly);
     ``kernel(*args)`` calls it. ``slp=True`` compiles with LLVM's SLP vectoriser switched
-    on for this function only (numba leaves it off; the previous setting is restored).
+    on for this function only (numba leaves it off), ``loop_vectorize=False`` with its
+    loop vectoriser off (numba leaves it on); the previous settings are restored.
+    ``requires``: kernels built first, with numba's settings, so that the ``@njit``
+    functions this one shares with them are compiled (and cached) with those settings
+    whichever kernel a process needs first.
     Thread-safe: a kernel is compiled once even if two threads ask for it together.
     """
 
-    def __init__(self, py_func, signature, *, slp: bool = False, home: str | None = None,
-                 **options):
+    def __init__(self, py_func, signature, *, slp: bool = False, loop_vectorize: bool = True,
+                 requires: tuple[Kernel, ...] = (), home: str | None = None, **options):
         self.py_func = py_func
         #: ``module:attribute`` where this object lives (for :func:`compile_in_background`)
         self.home = home or f"{py_func.__module__}:{py_func.__name__}"
         self.signature = signature
         self._options = {"cache": True, "nogil": True, **options}
         self._slp = slp
+        self._loop_vectorize = loop_vectorize
+        self._requires = tuple(requires)
         self._dispatcher = None
         self._background = None  # a process compiling this kernel into the cache
         self._lock = threading.Lock()
@@ -111,13 +117,18 @@ class Kernel:
             return True
 
     def _build(self):
-        previous = getattr(numba_config, "SLP_VECTORIZE", 0)
+        for other in self._requires:
+            other.get()
+        previous = (getattr(numba_config, "SLP_VECTORIZE", 0),
+                    getattr(numba_config, "LOOP_VECTORIZE", 1))
         if self._slp:
             numba_config.SLP_VECTORIZE = 1
+        if not self._loop_vectorize:
+            numba_config.LOOP_VECTORIZE = 0
         try:
             return njit(self.signature, **self._options)(self.py_func)
         finally:
-            numba_config.SLP_VECTORIZE = previous
+            numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE = previous
 
     def __call__(self, *args):
         return self.get()(*args)

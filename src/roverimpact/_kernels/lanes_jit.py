@@ -9,11 +9,19 @@ from __future__ import annotations
 
 from . import lanes
 from ._jit import Kernel, partition_signature
-from .partition import FASTMATH
+from .partition import FASTMATH, partition_kernel
 
 #: Inputs read-only (callers may pass read-only or broadcast views), outputs writable.
-LANES = Kernel(lanes.partition_lanes, partition_signature(), slp=True, fastmath=FASTMATH,
-               error_model="numpy", home=f"{__name__}:LANES")
+#: SLP vectoriser on, loop vectoriser off: the per-lane statements become one SIMD
+#: instruction each, where the loop vectoriser would vectorise the loops over rows and
+#: columns across iterations instead and read the lanes through gathers (328 gathers in
+#: the kernel; n = 18, m = 4, batch 1e5, one core: 1.2-1.3e6 items/s against 1.6-1.9e6/s
+#: without it, same results to 3e-15; ``benchmarks/bench_single.py``). The one-item
+#: kernel is built first: the fallback's functions it shares (``factor``,
+#: ``partition_factored``) are then compiled with the loop vectoriser, as for it.
+LANES = Kernel(lanes.partition_lanes, partition_signature(), slp=True, loop_vectorize=False,
+               requires=(partition_kernel,), fastmath=FASTMATH, error_model="numpy",
+               home=f"{__name__}:LANES")
 
 
 def lanes_kernel():
@@ -22,6 +30,7 @@ def lanes_kernel():
     Same arguments as :func:`.partition.partition_kernel`.
 
     Compiled once per process (or loaded from numba's on-disk cache) with SLP
-    vectorisation enabled for this function only; the previous setting is restored.
+    vectorisation enabled and loop vectorisation disabled for this function only; the
+    previous settings are restored.
     """
     return LANES.get()
