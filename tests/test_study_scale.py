@@ -62,6 +62,37 @@ def test_random_cases_on_demand_draw_as_before():
                                                                              strict=True)]
 
 
+@pytest.mark.parametrize("design", ["grid", "random"])
+def test_iterated_cases_are_the_cases_one_by_one(design, monkeypatch):
+    """Iterating a design makes its cases in blocks (values a column at a time, the id's
+    text written out): the same cases, values and ids as :meth:`CaseSequence.case` and
+    :func:`case_id`, across blocks, in views with an offset and for every value type."""
+    from roverimpact.studies import config
+
+    monkeypatch.setattr(config, "_ITER_BLOCK", 7)  # several blocks, one shorter
+    if design == "grid":
+        spec = {"grid": {"obstacle.beta_deg": [10.0, 1e-7, 90], "velocity.u": [0.1, 2],
+                         "contact_law.name": ["hertz", "hunt-crossley"],
+                         "model.params.com_height": {"start": 0.2, "stop": 0.5, "num": 3},
+                         "simulation.record": [True, False]}}
+    else:
+        spec = {"random": {"n": 40, "seed": 3, "params": {
+            "obstacle.beta_deg": {"low": 0.0, "high": 60.0},
+            "velocity.u": {"choices": [0.2, 4, "x", True]},
+            "model.params.com_height": {"low": 0.1, "high": 0.5}}}}
+    seq = cases_of(study_from_dict({"name": "it", "base": BASE, **spec}))
+    for s in (seq, seq.view(5, 31), seq.view(30, 30)):
+        got = list(s)
+        assert len(got) == len(s)
+        for i, c in enumerate(got):
+            ref = s.case(i)
+            assert (c.index, c.case_id, c.overrides) == (ref.index, ref.case_id, ref.overrides)
+            assert list(c.overrides) == list(ref.overrides)  # the same key order
+            assert [type(v) for v in c.overrides.values()] == \
+                [type(v) for v in ref.overrides.values()]
+            assert c.case_id == case_id(c.index, c.overrides)
+
+
 def _tc(scn):
     beta = np.deg2rad(scn["obstacle"]["beta_deg"])
     h = scn["model"]["params"]["com_height"]
@@ -254,3 +285,27 @@ def test_chunk_views_are_the_cases_and_small_to_ship(design):
     assert list(view) == full[3:5] and view[1] == full[4] and list(view.view(1, 2)) == full[4:5]
     if "cases" not in design:
         assert len(pickle.dumps(seq.view(0, 2))) < 2000
+
+
+def test_case_keys_group_cases_that_share_the_setup_and_the_law():
+    """Group key: the overrides but beta, the contact law and the simulation settings
+    (their repr, so 1 and 1.0 stay apart); law key: the contact-law overrides. Keys of
+    cases with different override names never collide."""
+    from roverimpact.studies.evaluate import _CaseKeys
+
+    def ref(ov):
+        g = sorted((k, v) for k, v in ov.items() if k != "obstacle.beta_deg"
+                   and not k.startswith(("contact_law.", "simulation.")))
+        law = sorted((k, v) for k, v in ov.items() if k.startswith("contact_law."))
+        return repr(g), repr(law)
+
+    keys = _CaseKeys()
+    cases = [{"obstacle.beta_deg": b, "velocity.u": u, "contact_law.k": k,
+              "simulation.t_after": 0.1}
+             for b in (10.0, 20.0) for u in (1, 1.0, 0.5) for k in (1e6, 1e7)]
+    cases += [{"contact_law.name": "hertz"}, {}, {"model.params.x": [1, 2]},
+              {"velocity.u": 1.0, "obstacle.beta_deg": 10.0}]
+    got = [keys(ov) for ov in cases]
+    assert got == [ref(ov) for ov in cases]
+    assert got[0][0] != got[2][0]  # u = 1 and u = 1.0: two groups
+    assert got[0][0] == got[6][0] and got[0][1] != got[1][1]  # beta apart, k apart

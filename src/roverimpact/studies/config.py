@@ -445,8 +445,43 @@ class CaseSequence(Sequence):
         return self.case(i)
 
     def __iter__(self):
-        for i in range(self._n):
-            yield self.case(i)
+        if self._rows is not None:  # listed cases: each has its own parameters
+            for i in range(self._n):
+                yield self.case(i)
+            return
+        for start in range(0, self._n, _ITER_BLOCK):
+            yield from self._cases(start, min(start + _ITER_BLOCK, self._n))
+
+    def _cases(self, start: int, stop: int) -> list[Case]:
+        """Cases ``start ... stop - 1`` of a grid or random design, made together: their
+        values a column at a time (numpy), their ids by :func:`case_id`'s text written
+        out (the same ids: tests/test_study_config.py checks them against :meth:`case`)."""
+        names = self.names
+        if self._grid is not None:
+            idx = np.arange(start, stop, dtype=np.int64) + self._offset
+            cols = []
+            for axis in reversed(self._grid):
+                idx, r = np.divmod(idx, len(axis))
+                ax = [_to_python(v) for v in axis]
+                cols.append([ax[j] for j in r.tolist()])
+            cols.reverse()
+        else:
+            cols = [arr[start:stop].tolist() if choices is None
+                    else [_to_python(choices[j]) for j in arr[start:stop].tolist()]
+                    for choices, arr in self._random]
+        order = sorted(range(len(names)), key=names.__getitem__)
+        heads = [f"({names[k]!r}, " for k in order]
+        out = []
+        rows = zip(*cols, strict=True) if cols else [()] * (stop - start)
+        for j, vals in enumerate(rows, start=start + self._offset):
+            text = ", ".join([h + repr(vals[k]) + ")" for h, k in zip(heads, order, strict=True)])
+            out.append(Case(index=j, overrides=dict(zip(names, vals, strict=True)),
+                            case_id=f"{j:07d}-{hashlib.sha1(f'[{text}]'.encode()).hexdigest()[:8]}"))
+        return out
+
+
+#: Cases made together when a grid or random design is iterated.
+_ITER_BLOCK = 4096
 
 
 def cases_of(study: Study) -> CaseSequence:

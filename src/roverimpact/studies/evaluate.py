@@ -322,10 +322,12 @@ class ScenarioEvaluator:
         sims: list[dict] = [{} for _ in range(n)]
         refined: list[dict] = [{} for _ in range(n)]
         groups: dict[str, list[int]] = {}
-        for i, ov in enumerate(overrides):
-            key = _group_key(ov)
-            groups.setdefault(key, []).append(i)
         laws: dict[str, list[int]] = {}
+        keys = _CaseKeys()
+        for i, ov in enumerate(overrides):
+            gkey, lkey = keys(ov)
+            groups.setdefault(gkey, []).append(i)
+            laws.setdefault(lkey, []).append(i)
         own = _OwnCases(T, m_eff, m_eff_free, v_n)
         models: dict[str, Any] = {}  # built models of this call, by what builds them
         pending: list[tuple[list[int], ImpactSetup]] = []  # refined / simulated cases
@@ -333,8 +335,6 @@ class ScenarioEvaluator:
         family_keys: dict[str, str | None] = {}  # block_key by _family_key
         for idx in groups.values():
             sc = scenario_from_dict(apply_overrides(base, overrides[idx[0]]))
-            for i in idx:
-                laws.setdefault(_law_key(overrides[i]), []).append(i)
             if len(idx) == 1 and not (engines or sc.band is not None):
                 # a case of its own (a model-changing design): computed with the other
                 # cases of its model family, in blocks
@@ -484,11 +484,26 @@ class _OwnCases:
             s += n
 
 
-def _group_key(ov: Mapping[str, Any]) -> str:
-    """Cases with the same key share M, A and v (they differ in beta / contact law only)."""
-    items = sorted((k, v) for k, v in ov.items()
-                   if k != _BETA and not k.startswith(("contact_law.", "simulation.")))
-    return repr(items)
+class _CaseKeys:
+    """``(group key, law key)`` of a case's overrides. Cases with the same group key share
+    M, A and v (their overrides differ in beta, contact law or simulation settings only);
+    cases with the same law key have the same contact law (the base's, with the same law
+    overrides). Which keys take part is worked out once per set of override keys (a
+    study's cases share one), not per case."""
+
+    def __init__(self):
+        self._plans: dict[tuple[str, ...], tuple[list[str], list[str]]] = {}
+
+    def __call__(self, ov: Mapping[str, Any]) -> tuple[str, str]:
+        names = tuple(ov)
+        plan = self._plans.get(names)
+        if plan is None:
+            group = sorted(k for k in names if k != _BETA
+                           and not k.startswith(("contact_law.", "simulation.")))
+            law = sorted(k for k in names if k.startswith("contact_law."))
+            plan = self._plans[names] = (group, law)
+        group, law = plan
+        return (repr([(k, ov[k]) for k in group]), repr([(k, ov[k]) for k in law]))
 
 
 def _family_key(ov: Mapping[str, Any]) -> str:
@@ -506,12 +521,6 @@ _FAMILY_NUMBERS = ("velocity.u", _BETA)
 
 def _number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
-
-
-def _law_key(ov: Mapping[str, Any]) -> str:
-    """Cases of one call with the same key have the same contact law (the base's, with
-    the same law overrides)."""
-    return repr(sorted((k, v) for k, v in ov.items() if k.startswith("contact_law.")))
 
 
 def _columns(rows: Sequence[Mapping[str, Any]]) -> dict[str, np.ndarray]:
