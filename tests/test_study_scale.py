@@ -152,6 +152,63 @@ def test_chunks_of_mixed_types_fall_back_to_the_in_memory_table(tmp_path):
     assert res.table["velocity.u"].dtype == float
 
 
+def _chunked_study(tmp_path, cases, chunk_size):
+    study = {"name": "st", "base": BASE, "cases": cases}
+    res = run_study(study, tmp_path / "ref", evaluator=EV, chunk_size=chunk_size, csv=True)
+    return study, res
+
+
+def test_results_stream_writes_the_table_as_chunks_arrive(tmp_path):
+    """The table written while the chunks arrive (out of order; the stream waits for the
+    first one missing) is the table written at the end, and so is its CSV."""
+    from roverimpact.studies.store import RESULTS, ResultsStream, write_results
+    from roverimpact.studies.sweep import Chunks
+
+    cases = [{"obstacle.beta_deg": float(b)} for b in range(5, 90, 7)]
+    study, ref = _chunked_study(tmp_path, cases, 3)
+    chunks = Chunks(cases_of(study_from_dict(study)), 3)
+    out = tmp_path / "stream"
+    (out / "chunks").mkdir(parents=True)
+    stream = ResultsStream(out, chunks, out / RESULTS)
+    order = [2, 0, 4, 1, 3]  # chunk 0 after 2: nothing written before it comes
+    written = []
+    for k in order:
+        chunk_path(out, k).write_bytes(chunk_path(tmp_path / "ref", k).read_bytes())
+        stream.advance()
+        written.append(stream.n_rows)
+    assert written == [0, 3, 3, 9, 13] and len(cases) == 13
+    assert len(list(out.glob(".*.tmp"))) == 1  # the table so far, not yet in place
+    n = write_results(out, chunks, out / RESULTS, csv=out / "results.csv", stream=stream)
+    assert n == 13 and not list(out.glob(".*.tmp"))
+    pd.testing.assert_frame_equal(pd.read_parquet(out / RESULTS), ref.table)
+    assert (out / "results.csv").read_text() == (tmp_path / "ref" / "results.csv").read_text()
+
+
+def test_results_stream_stops_at_another_column_type_and_leaves_nothing(tmp_path):
+    """Chunks whose columns differ in type (an int, then a float parameter) stop the
+    stream; the table is then written as without it (unified), and an abandoned stream
+    leaves no file behind."""
+    from roverimpact.studies.store import RESULTS, ResultsStream, write_results
+    from roverimpact.studies.sweep import Chunks
+
+    cases = [{"velocity.u": 1}, {"velocity.u": 1}, {"velocity.u": 0.5}, {"velocity.u": 0.7}]
+    study, _ = _chunked_study(tmp_path, cases, 2)
+    chunks = Chunks(cases_of(study_from_dict(study)), 2)
+    stream = ResultsStream(tmp_path / "ref", chunks, tmp_path / "ref" / "again.parquet")
+    stream.advance()
+    assert stream.n_rows == 2  # chunk 0 written; chunk 1 has a float column: stopped
+    assert stream.finish() is None and not list((tmp_path / "ref").glob(".*.tmp"))
+    n = write_results(tmp_path / "ref", chunks, tmp_path / "ref" / RESULTS,
+                      stream=ResultsStream(tmp_path / "ref", chunks, tmp_path / "x.parquet"))
+    assert n == 4 and pd.read_parquet(tmp_path / "ref" / RESULTS)["velocity.u"].tolist() == \
+        [1.0, 1.0, 0.5, 0.7]
+    assert not (tmp_path / "x.parquet").exists()
+    half = ResultsStream(tmp_path / "ref", chunks, tmp_path / "y.parquet")
+    half.advance()
+    half.abandon()
+    assert not list(tmp_path.glob(".*.tmp")) and not (tmp_path / "y.parquet").exists()
+
+
 def test_large_report_streams_and_matches_the_full_path(tmp_path, monkeypatch):
     """Above LARGE_TABLE rows the report reads the table in batches; with a sample that
     holds every row, its statistics are those of the full path, and its per-bin

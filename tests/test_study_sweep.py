@@ -223,6 +223,8 @@ def test_killed_worker_loses_and_duplicates_no_row(tmp_path):
     assert killed and killed[0] not in after  # the worker really died (the nanny restarted it)
     assert res.table["case_id"].is_unique and len(res.table) == 18
     pd.testing.assert_frame_equal(res.table, serial)
+    manifest = json.loads((tmp_path / "k" / "manifest.json").read_text())
+    assert manifest["executor"] == f"Dask scheduler at {cluster.scheduler_address}"
 
 
 def test_serial_run_needs_no_dask(tmp_path):

@@ -233,56 +233,140 @@ def _same_schemas(paths: list[Path]):
     return first
 
 
-def write_results(out_dir: Path, chunks, path: Path, csv: Path | None = None) -> int:
+def _chunk_table(paths: list[Path], chunks, k: int, schema):
+    """Chunk ``k``'s rows (a pyarrow Table of ``schema``), in case order; they must be the
+    chunk's cases (checked)."""
+    import pyarrow.parquet as pq
+
+    t = pq.read_table(paths[k], schema=schema)
+    case = t.column("case").to_numpy()
+    if case.size > 1 and not (case[1:] > case[:-1]).all():
+        t = t.take(np.argsort(case, kind="stable"))
+    # the chunk's cases in order: their indices (their ids were checked when a chunk
+    # was taken from an earlier run, and a fresh chunk's come from its own cases)
+    first = k * chunks.size if hasattr(chunks, "size") else None
+    expected = (np.arange(first, first + chunks.n_cases(k)) if first is not None
+                else np.array([c.index for c in chunks[k]], dtype=np.int64))
+    if case.size > 1 and not (case[1:] > case[:-1]).all():
+        case = np.sort(case)
+    if not np.array_equal(case, expected):  # pragma: no cover - a bug
+        raise RoverImpactError(
+            f"{paths[k]}: holds {t.num_rows} rows that are not the {len(expected)} "
+            "cases of its chunk (duplicated or missing rows); rerun with --overwrite")
+    return t
+
+
+class ResultsStream:
+    """The results table written while the chunks arrive (a Dask run: this process waits
+    for the workers meanwhile), in chunk order: :meth:`advance` appends every chunk whose
+    file is there, from the first one missing on; :meth:`finish` appends the rest and puts
+    the table in place, the same table as :func:`write_results` (tested). Chunks of
+    another column type than the first chunk's stop the stream (:meth:`finish` returns
+    None and nothing is left behind: the caller writes the table with
+    :func:`write_results`, which unifies them)."""
+
+    def __init__(self, out_dir: Path, chunks, path: Path):
+        self.path = Path(path)
+        self._chunks = chunks
+        self._paths = [chunk_path(out_dir, k) for k in range(len(chunks))]
+        self._tmp = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex}.tmp")
+        self._writer = None
+        self._schema = None
+        self._next = 0
+        self._stopped = not self._paths
+        self.n_rows = 0
+
+    @property
+    def schema(self):
+        """The table's schema (the first chunk's), once a chunk is written."""
+        return self._schema
+
+    def advance(self) -> None:
+        """Append the chunks whose files are there, in order (stops at the first missing)."""
+        import pyarrow.parquet as pq
+
+        while not self._stopped and self._next < len(self._paths):
+            path = self._paths[self._next]
+            if not path.is_file():
+                return
+            schema = pq.read_schema(path)
+            if self._writer is None:
+                self._schema = schema
+                self._writer = pq.ParquetWriter(self._tmp, schema)
+            elif not schema.remove_metadata().equals(self._schema.remove_metadata()):
+                self.abandon()
+                return
+            t = _chunk_table(self._paths, self._chunks, self._next, self._schema)
+            self._writer.write_table(t)
+            self.n_rows += t.num_rows
+            self._next += 1
+
+    def finish(self) -> int | None:
+        """Append the remaining chunks and put the table in place; the number of rows, or
+        None if the stream stopped (then nothing is written)."""
+        try:
+            self.advance()
+            if self._stopped or self._next < len(self._paths):
+                self.abandon()
+                return None
+            self._writer.close()
+            self._writer = None
+            os.replace(self._tmp, self.path)
+        except BaseException:
+            self.abandon()
+            raise
+        return self.n_rows
+
+    def abandon(self) -> None:
+        """Stop and remove the half-written table."""
+        self._stopped = True
+        if self._writer is not None:
+            try:
+                self._writer.close()
+            except Exception:  # pragma: no cover - a failing disk: the file goes anyway
+                pass
+            self._writer = None
+        self._tmp.unlink(missing_ok=True)
+
+
+def write_results(out_dir: Path, chunks, path: Path, csv: Path | None = None, *,
+                  stream: ResultsStream | None = None) -> int:
     """Write the results table ``path`` (and ``csv``) from the chunk files, one chunk at a
     time: memory is that of one chunk, whatever the number of cases. Each chunk's rows
     must be the chunk's cases in order (checked). Returns the number of rows.
+
+    ``stream``: a :class:`ResultsStream` that has written the table as far as the chunks
+    came; it is finished here (or, if it stopped, the table is written as without it).
 
     Chunk files of different column types (which :func:`assemble` unifies as
     ``pandas.concat`` does) fall back to :func:`assemble` (in memory): the table is the
     same either way.
     """
-    import pyarrow as pa
     import pyarrow.parquet as pq
 
     paths = [chunk_path(out_dir, k) for k in range(len(chunks))]
-    schema = _same_schemas(paths) if paths else None
-    if schema is None:
-        table = assemble(out_dir, chunks, {})
-        atomic_parquet(table, path)
-        if csv is not None:
-            atomic_write_bytes(csv, table.to_csv(index=False).encode())
-        return len(table)
+    n = stream.finish() if stream is not None else None
+    if n is not None:
+        schema = stream.schema
+    else:
+        schema = _same_schemas(paths) if paths else None
+        if schema is None:
+            table = assemble(out_dir, chunks, {})
+            atomic_parquet(table, path)
+            if csv is not None:
+                atomic_write_bytes(csv, table.to_csv(index=False).encode())
+            return len(table)
+        n = 0
 
-    def rows(k: int) -> pa.Table:
-        t = pq.read_table(paths[k], schema=schema)
-        case = t.column("case").to_numpy()
-        if case.size > 1 and not (case[1:] > case[:-1]).all():
-            t = t.take(np.argsort(case, kind="stable"))
-        # the chunk's cases in order: their indices (their ids were checked when a chunk
-        # was taken from an earlier run, and a fresh chunk's come from its own cases)
-        first = k * chunks.size if hasattr(chunks, "size") else None
-        expected = (np.arange(first, first + chunks.n_cases(k)) if first is not None
-                    else np.array([c.index for c in chunks[k]], dtype=np.int64))
-        if case.size > 1 and not (case[1:] > case[:-1]).all():
-            case = np.sort(case)
-        if not np.array_equal(case, expected):  # pragma: no cover - a bug
-            raise RoverImpactError(
-                f"{paths[k]}: holds {t.num_rows} rows that are not the {len(expected)} "
-                "cases of its chunk (duplicated or missing rows); rerun with --overwrite")
-        return t
+        def write_parquet(tmp: Path) -> None:
+            nonlocal n
+            with pq.ParquetWriter(tmp, schema) as writer:
+                for k in range(len(paths)):
+                    t = _chunk_table(paths, chunks, k, schema)
+                    writer.write_table(t)
+                    n += t.num_rows
 
-    n = 0
-
-    def write_parquet(tmp: Path) -> None:
-        nonlocal n
-        with pq.ParquetWriter(tmp, schema) as writer:
-            for k in range(len(paths)):
-                t = rows(k)
-                writer.write_table(t)
-                n += t.num_rows
-
-    _atomic(path, write_parquet)
+        _atomic(path, write_parquet)
     if csv is not None:
         def write_csv(tmp: Path) -> None:
             with open(tmp, "w", encoding="utf-8", newline="") as f:

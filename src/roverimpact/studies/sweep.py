@@ -45,6 +45,7 @@ from .store import (
     MANIFEST,
     RESULTS,
     STUDY_COPY,
+    ResultsStream,
     atomic_parquet,
     atomic_write_bytes,
     check_out_dir,
@@ -303,6 +304,12 @@ def run_study(
     if progress:
         progress(n_done, total)
 
+    # on Dask this process waits for the workers: it writes the table meanwhile, in
+    # chunk order as far as the chunks came (serially it would only move the same work)
+    stream = (ResultsStream(out_dir, chunks, out_dir / RESULTS)
+              if scheduler is not None or workers is not None or cluster is not None
+              else None)
+
     def store(k: int, df: pd.DataFrame | ChunkFile) -> None:
         # written and dropped: no chunk is kept in memory (the table is assembled from
         # the files, one chunk at a time); a worker's chunk comes as the file's bytes
@@ -315,6 +322,8 @@ def run_study(
             n_done += len(df)
         if progress:
             progress(n_done, total)
+        if stream is not None:
+            stream.advance()
 
     args = (prep.evaluator, prep.study.base, prep.base)
     params = prep.study.parameters()
@@ -322,11 +331,13 @@ def run_study(
     own = cluster is None and workers is not None
     if own:
         cluster = LazyCluster(workers)
+    finished = False
     try:
         if not pending:
             pass
         elif scheduler is not None:
             run_dask(pending, chunks, args, params, simulate, scheduler, retries, store)
+            manifest["executor"] = f"Dask scheduler at {scheduler}"
         elif cluster is not None:
             executor = _local_or_serial(pending, chunks, args, params, simulate, store,
                                         cluster, retries)
@@ -335,6 +346,7 @@ def run_study(
                 note(executor)
         else:
             run_serial(pending, chunks, args, params, simulate, store)
+        finished = True
     except KeyboardInterrupt:
         write_manifest(out_dir, manifest | {"status": "interrupted", "n_done": n_done})
         raise StudyInterrupted(
@@ -343,9 +355,11 @@ def run_study(
     finally:
         if own:
             cluster.close()
+        if stream is not None and not finished:
+            stream.abandon()
     return _finish(prep, out_dir, chunks, manifest, csv=csv, t0=t0,
                    n_computed=sum(chunks.n_cases(k) for k in pending),
-                   n_reused=sum(chunks.n_cases(k) for k in done))
+                   n_reused=sum(chunks.n_cases(k) for k in done), stream=stream)
 
 
 def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: LazyCluster,
@@ -431,15 +445,15 @@ def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int) -> dict:
     return manifest
 
 
-def _finish(prep, out_dir, chunks, manifest, *, csv, t0, n_computed, n_reused
-            ) -> StudyResult:
+def _finish(prep, out_dir, chunks, manifest, *, csv, t0, n_computed, n_reused,
+            stream=None) -> StudyResult:
     """Write the table (and the CSV) from the chunk files, one chunk at a time; mark the
     manifest. The table is not read back: :attr:`StudyResult.table` reads it if asked."""
     files = {"study": out_dir / STUDY_COPY, "manifest": out_dir / MANIFEST,
              "results": out_dir / RESULTS}
     if csv:
         files["csv"] = out_dir / "results.csv"
-    n = write_results(out_dir, chunks, files["results"], csv=files.get("csv"))
+    n = write_results(out_dir, chunks, files["results"], csv=files.get("csv"), stream=stream)
     elapsed = time.perf_counter() - t0
     write_manifest(out_dir, manifest | {"status": "complete", "elapsed_s": round(elapsed, 3),
                                         "n_computed": n_computed})
