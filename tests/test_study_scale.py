@@ -160,7 +160,8 @@ def _chunked_study(tmp_path, cases, chunk_size):
 
 def test_results_stream_writes_the_table_as_chunks_arrive(tmp_path):
     """The table written while the chunks arrive (out of order; the stream waits for the
-    first one missing) is the table written at the end, and so is its CSV."""
+    first one not ready, and never reads a file not marked ready) is the table written at
+    the end, and so is its CSV."""
     from roverimpact.studies.store import RESULTS, ResultsStream, write_results
     from roverimpact.studies.sweep import Chunks
 
@@ -169,14 +170,18 @@ def test_results_stream_writes_the_table_as_chunks_arrive(tmp_path):
     chunks = Chunks(cases_of(study_from_dict(study)), 3)
     out = tmp_path / "stream"
     (out / "chunks").mkdir(parents=True)
-    stream = ResultsStream(out, chunks, out / RESULTS)
-    order = [2, 0, 4, 1, 3]  # chunk 0 after 2: nothing written before it comes
+    # chunk 1: a damaged file of an earlier run, there but not ready (being recomputed)
+    chunk_path(out, 1).write_bytes(b"not parquet")
+    # chunk 3: finished by an earlier run
+    chunk_path(out, 3).write_bytes(chunk_path(tmp_path / "ref", 3).read_bytes())
+    stream = ResultsStream(out, chunks, out / RESULTS, done={3})
+    order = [2, 0, 4, 1]  # chunk 0 after 2: nothing written before it comes
     written = []
     for k in order:
         chunk_path(out, k).write_bytes(chunk_path(tmp_path / "ref", k).read_bytes())
-        stream.advance()
+        stream.ready(k)
         written.append(stream.n_rows)
-    assert written == [0, 3, 3, 9, 13] and len(cases) == 13
+    assert written == [0, 3, 3, 13] and len(cases) == 13
     assert len(list(out.glob(".*.tmp"))) == 1  # the table so far, not yet in place
     n = write_results(out, chunks, out / RESULTS, csv=out / "results.csv", stream=stream)
     assert n == 13 and not list(out.glob(".*.tmp"))
@@ -194,7 +199,8 @@ def test_results_stream_stops_at_another_column_type_and_leaves_nothing(tmp_path
     cases = [{"velocity.u": 1}, {"velocity.u": 1}, {"velocity.u": 0.5}, {"velocity.u": 0.7}]
     study, _ = _chunked_study(tmp_path, cases, 2)
     chunks = Chunks(cases_of(study_from_dict(study)), 2)
-    stream = ResultsStream(tmp_path / "ref", chunks, tmp_path / "ref" / "again.parquet")
+    stream = ResultsStream(tmp_path / "ref", chunks, tmp_path / "ref" / "again.parquet",
+                           done={0, 1})
     stream.advance()
     assert stream.n_rows == 2  # chunk 0 written; chunk 1 has a float column: stopped
     assert stream.finish() is None and not list((tmp_path / "ref").glob(".*.tmp"))
@@ -203,8 +209,9 @@ def test_results_stream_stops_at_another_column_type_and_leaves_nothing(tmp_path
     assert n == 4 and pd.read_parquet(tmp_path / "ref" / RESULTS)["velocity.u"].tolist() == \
         [1.0, 1.0, 0.5, 0.7]
     assert not (tmp_path / "x.parquet").exists()
-    half = ResultsStream(tmp_path / "ref", chunks, tmp_path / "y.parquet")
+    half = ResultsStream(tmp_path / "ref", chunks, tmp_path / "y.parquet", done={0})
     half.advance()
+    assert half.n_rows == 2
     half.abandon()
     assert not list(tmp_path.glob(".*.tmp")) and not (tmp_path / "y.parquet").exists()
 

@@ -154,6 +154,26 @@ def test_interrupted_then_resumed_equals_serial(tmp_path):
         run_study(other, tmp_path / "r", evaluator=ev3, resume=True)
 
 
+def test_resumed_with_a_cluster_never_reads_a_damaged_chunk(tmp_path):
+    """With a cluster the results table is written while chunks come in: on resume a
+    damaged chunk file of the earlier run is recomputed and only then read (a one-worker
+    cluster runs here, serially, with the same table streaming)."""
+    from roverimpact.studies.executors import LazyCluster
+
+    serial = run_study(_study(chunk_size=4), tmp_path / "serial",
+                       evaluator=ScenarioEvaluator()).table
+    run_study(_study(chunk_size=4), tmp_path / "r", evaluator=ScenarioEvaluator())
+    for k in (1, 3):  # when chunk 1 is back, the stream goes on to 2 and stops before 3
+        (tmp_path / "r" / "chunks" / f"chunk-{k:06d}.parquet").write_bytes(b"damaged")
+    (tmp_path / "r" / "results.parquet").unlink()
+    ev = CountingRigidBody()
+    res = run_study(_study(chunk_size=4), tmp_path / "r", evaluator=ev, resume=True,
+                    cluster=LazyCluster(1))
+    assert ev.n == 8 and res.n_computed == 8
+    pd.testing.assert_frame_equal(res.table, serial)
+    assert not list((tmp_path / "r").glob(".*.tmp"))
+
+
 ROVER_STUDY = {
     "name": "rover2d simulated",
     "simulate": True,

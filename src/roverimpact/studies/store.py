@@ -258,16 +258,19 @@ def _chunk_table(paths: list[Path], chunks, k: int, schema):
 
 class ResultsStream:
     """The results table written while the chunks arrive (a Dask run: this process waits
-    for the workers meanwhile), in chunk order: :meth:`advance` appends every chunk whose
-    file is there, from the first one missing on; :meth:`finish` appends the rest and puts
-    the table in place, the same table as :func:`write_results` (tested). Chunks of
-    another column type than the first chunk's stop the stream (:meth:`finish` returns
-    None and nothing is left behind: the caller writes the table with
-    :func:`write_results`, which unifies them)."""
+    for the workers meanwhile), in chunk order: :meth:`ready` marks a chunk's file complete
+    (``done``: those finished by an earlier run) and appends every ready chunk from the
+    first one not ready on; :meth:`finish` appends the rest and puts the table in place,
+    the same table as :func:`write_results` (tested). A file that is there but not marked
+    (a damaged chunk of an earlier run, being recomputed) is never read. Chunks of another
+    column type than the first chunk's stop the stream (:meth:`finish` returns None and
+    nothing is left behind: the caller writes the table with :func:`write_results`, which
+    unifies them)."""
 
-    def __init__(self, out_dir: Path, chunks, path: Path):
+    def __init__(self, out_dir: Path, chunks, path: Path, done=()):
         self.path = Path(path)
         self._chunks = chunks
+        self._ready = set(done)
         self._paths = [chunk_path(out_dir, k) for k in range(len(chunks))]
         self._tmp = self.path.with_name(f".{self.path.name}.{uuid.uuid4().hex}.tmp")
         self._writer = None
@@ -281,13 +284,18 @@ class ResultsStream:
         """The table's schema (the first chunk's), once a chunk is written."""
         return self._schema
 
+    def ready(self, k: int) -> None:
+        """Chunk ``k``'s file is complete: append it and those after it that are ready."""
+        self._ready.add(k)
+        self.advance()
+
     def advance(self) -> None:
-        """Append the chunks whose files are there, in order (stops at the first missing)."""
+        """Append the ready chunks, in order (stops at the first one not ready)."""
         import pyarrow.parquet as pq
 
         while not self._stopped and self._next < len(self._paths):
             path = self._paths[self._next]
-            if not path.is_file():
+            if self._next not in self._ready:
                 return
             schema = pq.read_schema(path)
             if self._writer is None:
@@ -302,9 +310,11 @@ class ResultsStream:
             self._next += 1
 
     def finish(self) -> int | None:
-        """Append the remaining chunks and put the table in place; the number of rows, or
-        None if the stream stopped (then nothing is written)."""
+        """Append the remaining chunks (every chunk is complete now) and put the table in
+        place; the number of rows, or None if the stream stopped (then nothing is
+        written)."""
         try:
+            self._ready.update(range(len(self._paths)))
             self.advance()
             if self._stopped or self._next < len(self._paths):
                 self.abandon()

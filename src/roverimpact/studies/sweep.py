@@ -306,7 +306,7 @@ def run_study(
 
     # on Dask this process waits for the workers: it writes the table meanwhile, in
     # chunk order as far as the chunks came (serially it would only move the same work)
-    stream = (ResultsStream(out_dir, chunks, out_dir / RESULTS)
+    stream = (ResultsStream(out_dir, chunks, out_dir / RESULTS, done=done)
               if scheduler is not None or workers is not None or cluster is not None
               else None)
 
@@ -323,7 +323,7 @@ def run_study(
         if progress:
             progress(n_done, total)
         if stream is not None:
-            stream.advance()
+            stream.ready(k)
 
     args = (prep.evaluator, prep.study.base, prep.base)
     params = prep.study.parameters()
