@@ -62,11 +62,16 @@ def main():
 
         t_e2e = per_call(end_to_end, 2000)
         t_kin = per_call(kin_only, 2000)
+        t_one = per_call(lambda setup=setup, q=q: setup.T_c_at(q), 2000)
         print(f"{name:32s} end to end {1e6 * t_e2e:7.1f} us  (kinematics + M + A "
               f"{1e6 * t_kin:6.1f} us, partition {1e6 * (t_e2e - t_kin):6.1f} us)")
+        print(f"{'':32s} setup.T_c_at(q), one compiled call: {1e6 * t_one:6.1f} us "
+              f"({t_e2e / t_one:4.2f}x faster)")
         if "rocker" in name and "bogie" in name:
             print(f"{'':32s} issue #5 target for the 3-D rover: <= 50 us end to end -> "
-                  f"{'met' if t_e2e <= 50e-6 else 'NOT met'}")
+                  f"{'met' if t_e2e <= 50e-6 else 'NOT met'}; issue #19: <= 10 us from a "
+                  f"built scenario object -> {'met' if t_one <= 10e-6 else 'NOT met'} "
+                  "(T_c_at)")
         model = setup.model.model
         rng = np.random.default_rng(0)
         for k in (100, 1000):

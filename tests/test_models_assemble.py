@@ -298,3 +298,83 @@ def test_wrong_configuration_shape_is_a_model_error(bad):
     cs = ConstraintSet(mbm, [LoopClosure(tuple(mbm.loop_names))])
     with pytest.raises(ModelError, match=r"q must have shape \(\.\.\., 17\)"):
         cs.evaluate(bad)
+
+
+# ----------------------------------------------------------------------------------------
+# One configuration to T_c in one compiled call (ConstraintSet.partition_at, ImpactSetup.T_c_at)
+# ----------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("case", sorted(_CASES))
+def test_partition_at_equals_evaluate_then_partition(case):
+    """The fused path gives ``partition(M, A[rows], v)`` on the arrays of ``evaluate`` to
+    rounding (the same compiled functions, compiled for other argument types), and T_c is
+    1/2 (A v)^T (A M^-1 A^T)^-1 (A v) for independent rows (numpy solve on the reference
+    rows, a second method)."""
+    from roverimpact import partition
+
+    rng = np.random.default_rng(3)
+    mbm, cons = _CASES[case](rng)
+    cs = ConstraintSet(mbm, cons)
+    for _ in range(4):
+        q = _random_q(mbm.model, rng, 0.2)
+        v = rng.standard_normal(mbm.model.nv)
+        rows = np.sort(rng.choice(len(cs.labels), size=min(3, len(cs.labels)),
+                                  replace=False)).astype(np.int64)
+        res = np.empty(4)
+        assert cs.partition_at(q, rows, v, 1e-9, res) == 0
+        M, A = cs.evaluate(q)
+        p = partition(M, A[rows], v, want_velocities=False)
+        np.testing.assert_allclose(res[:3], [p.T, p.T_c, p.T_a], rtol=1e-13,
+                                   atol=1e-15 * p.T)
+        assert int(res[3]) == p.rank
+        Mr, Ar = _reference(cs, mbm, q)
+        Ar = Ar[rows]
+        if np.linalg.matrix_rank(Ar) == len(rows):
+            g = Ar @ v
+            ref = 0.5 * g @ np.linalg.solve(Ar @ np.linalg.solve(Mr, Ar.T), g)
+            assert res[1] == pytest.approx(ref, rel=1e-9)
+
+
+def test_partition_at_recomputes_a_nonlinear_loop_and_takes_one_dof(tmp_path):
+    """A q-dependent loop closure is evaluated at each call; nv = 1 (Pinocchio's 1-D
+    arrays) works: T_c of the pendulum's bob row is 1/2 (a v)^2 / (a M^-1 a)."""
+    from roverimpact import partition
+    from roverimpact.models import load_robot
+
+    base = rover2d(suspension="rocker")
+    model = base.model
+    j = model.joints[1]
+
+    def loop(q):
+        J = np.zeros((1, model.nv))
+        J[0, j.idx_v] = np.cos(q[j.idx_q])
+        return np.zeros(1), J
+
+    mbm = MultibodyModel(model=model, name="x", wheels=base.wheels, loop_closure=loop,
+                         loop_names=["custom"], params=base.params)
+    cs = ConstraintSet(mbm, [LoopClosure(("custom",)), GroundContact(base.wheels[0])])
+    v = np.linspace(-1.0, 1.0, model.nv)
+    rows = np.array([0, 1], dtype=np.int64)
+    for a in (0.1, 0.7):
+        q = pin.neutral(model)
+        q[j.idx_q] = a
+        res = np.empty(4)
+        assert cs.partition_at(q, rows, v, 1e-9, res) == 0
+        M, A = cs.evaluate(q)
+        assert res[1] == pytest.approx(partition(M, A, v, want_velocities=False).T_c,
+                                       rel=1e-13)
+    f = tmp_path / "pend.urdf"
+    f.write_text("""<robot name="pend"><link name="base"/>
+  <link name="arm"><inertial><origin xyz="0.3 0 0"/><mass value="2"/>
+    <inertia ixx="0.01" iyy="0.04" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>""")
+    pend = ConstraintSet(load_robot(f), [PointContact("bob", "arm", (1.0, 0.0, 0.0),
+                                                      point=(0.5, 0.0, 0.0))])
+    res = np.empty(4)
+    assert pend.partition_at(np.array([0.4]), np.array([0], np.int64), np.array([2.0]),
+                             1e-9, res) == 0
+    a, m = -0.5 * np.sin(0.4), 0.04 + 2.0 * 0.3**2
+    assert res[1] == pytest.approx(0.5 * (a * 2.0) ** 2 / (a * a / m), rel=1e-13)

@@ -261,3 +261,30 @@ def test_held_rows_heavier_than_the_vehicle_warn():
     with pytest.warns(HeldRowsWarning):
         ri.scenario.sweep_energy(ri.Scenario.model_validate({**raw, "constraints": "all"}),
                                  np.radians([30.0, 60.0]))
+
+
+@pytest.mark.parametrize("model", [{"name": "rocker_bogie"},
+                                   {"name": "rover2d", "params": {"suspension": "rocker"}}])
+def test_T_c_at_equals_evaluate_then_partition(model):
+    """``setup.T_c_at(q)`` (one compiled call) is ``partition(*setup.evaluate(q), v).T_c``
+    to rounding, at the setup's q and at perturbed configurations; bad q is one error."""
+    from roverimpact.exceptions import InputError
+
+    wheel = "left_front" if model["name"] == "rocker_bogie" else "front"
+    sc = Scenario.model_validate({"model": model, "velocity": {"u": 0.3},
+                                  "obstacle": {"wheel": wheel, "beta_deg": 50.0}})
+    setup = ri.ImpactSetup.from_scenario(sc)
+    assert setup.T_c_at(setup.q) == pytest.approx(setup.partition().T_c_minus, rel=1e-13)
+    rng = np.random.default_rng(5)
+    mod = setup.model.model
+    for _ in range(10):
+        q = pin.integrate(mod, setup.q, 0.05 * rng.standard_normal(mod.nv))
+        M, A = setup.evaluate(q)
+        ref = ri.partition(M, A, setup.v, want_velocities=False).T_c
+        assert setup.T_c_at(q) == pytest.approx(ref, rel=1e-13, abs=1e-300)
+    with pytest.raises(ModelError, match="T_c_at takes one configuration"):
+        setup.T_c_at(np.stack([setup.q, setup.q]))
+    bad = setup.q.copy()
+    bad[0] = np.nan
+    with pytest.raises(InputError, match="q contains NaN"):
+        setup.T_c_at(bad)

@@ -25,6 +25,7 @@ import pinocchio as pin
 from numba import njit
 
 from .._kernels._jit import b1, f8, i8, kernel, ro, rw
+from .._kernels.partition import factor, partition_factored
 from ._build import LinearLoopClosure
 from .constraints import GroundContact, LockedJoint, LoopClosure, PointContact
 
@@ -130,6 +131,46 @@ def _evaluate_one(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_con
     _symmetrize(M)
     _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
               r_const, support, A)
+
+
+def _partition_at_signature():
+    """``(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+    r_const, support, M, rows, v, rtol, res) -> status``: one configuration's inputs as
+    for :func:`_evaluate_one` (``M`` the upper triangle ``pin.crba`` filled, mirrored in
+    place), then the rows ``rows`` of ``A``, ``v`` and ``rtol`` of the partition; ``res``
+    (4,) receives ``T, T_c, T_a, rank``."""
+    return i8(ro(f8, 2), ro(f8, 2), ro(i8, 1), ro(i8, 1), ro(i8, 1), ro(f8, 2), ro(f8, 2),
+              ro(f8, 1), ro(i8, 1), ro(i8, 1), ro(f8, 2), ro(b1, 2), rw(f8, 2), ro(i8, 1),
+              ro(f8, 1), f8, rw(f8, 1))
+
+
+@kernel(_partition_at_signature())
+def _partition_at(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+                  r_const, support, M, rows, v, rtol, res):  # pragma: no cover - compiled
+    """M and the chosen rows of A at one configuration, and their kinetic-energy partition
+    (``T``, ``T_c``, ``T_a``, rank; no velocities), in one call: the one-item partition of
+    :mod:`roverimpact._kernels.partition` (the same checks; a nonzero status is its code)."""
+    nv = M.shape[0]
+    _symmetrize(M)
+    A_all = np.empty((r_kind.shape[0], nv))
+    _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+              r_const, support, A_all)
+    m = rows.shape[0]
+    A = np.empty((m, nv))
+    for i in range(m):
+        for j in range(nv):
+            A[i, j] = A_all[rows[i], j]
+    L = np.zeros((nv, nv))
+    invd = np.empty(nv)
+    code = factor(M, L, invd)
+    if code != 0:
+        return code
+    W = np.empty((m, nv))
+    H = np.empty((m, nv))
+    scratch = np.empty((4, nv))
+    cn = np.empty((2, m))
+    return partition_factored(L, invd, A, v, rtol, False, W, H, cn[0], scratch[0],
+                              scratch[1], scratch[2], cn[1], scratch[3], res)
 
 
 @kernel(_evaluate_signature(3))
@@ -276,6 +317,26 @@ class RowPlan:
         A = np.empty((self.m, self.nv))
         _evaluate_one.get()(J, X, *self._args, self.r_const, self.support, M, A)
         return M, A
+
+    def partition_at(self, q, rows: np.ndarray, v: np.ndarray, rtol: float,
+                     res: np.ndarray) -> int:
+        """The partition (``T, T_c, T_a``, rank into ``res`` (4,)) of the rows ``rows`` of
+        ``A`` at one configuration ``q`` (nq,) with velocity ``v``: one Pinocchio pass and
+        one compiled call (:func:`_partition_at`). Returns the partition's status code
+        (nonzero: the caller makes the error message, from :meth:`evaluate`)."""
+        model, data = self._cs.mbm.model, self._cs.data
+        M = pin.crba(model, data, q)
+        J = pin.computeJointJacobians(model, data, q)
+        if self.nv == 1:  # pinocchio hands (6, 1) and (1, 1) back as 1-D arrays
+            M, J = np.reshape(M, (1, 1)).copy(), np.reshape(J, (6, 1))
+        pin.updateFramePlacements(model, data)
+        X = self._placements()
+        if not self._loop_constant:
+            Jl = self._cs.mbm.loop_closure(q)[1]
+            for k, i in enumerate(self.loop_rows):
+                self.r_const[i] = Jl[k]
+        return _partition_at.get()(J, X, *self._args, self.r_const, self.support, M, rows, v,
+                                   rtol, res)
 
     def evaluate_many(self, Q, chunk: int = 64, *, before=None, c_normal=None,
                       c_radius=None) -> tuple[np.ndarray, np.ndarray]:

@@ -143,6 +143,16 @@ class ConstraintSet:
         M, A = plan.evaluate_many(np.ascontiguousarray(q.reshape(-1, nq)))
         return M.reshape(*batch, *M.shape[1:]), A.reshape(*batch, *A.shape[1:])
 
+    def partition_at(self, q, rows, v, rtol: float, res: np.ndarray) -> int:
+        """Kinetic-energy partition of the rows ``rows`` (int64 indices into :attr:`labels`)
+        at one configuration ``q`` (nq,) with velocity ``v`` (nv,), in one compiled call
+        after the Pinocchio pass: ``res`` (4,) receives ``T, T_c, T_a`` and the rank.
+        Returns the partition's status code (0: done; otherwise the checks of
+        :func:`roverimpact.partition` failed, and :meth:`evaluate` gives the arrays to name
+        the problem)."""
+        plan = self._plan if self._plan is not None else self._row_plan()
+        return plan.partition_at(q, rows, v, rtol, res)
+
     def evaluate_members(self, family, Q, normals: Mapping[int, np.ndarray] | None = None
                          ) -> tuple[np.ndarray, np.ndarray]:
         """``(M (k, nv, nv), A (k, m, nv))`` of the members of a model family, member

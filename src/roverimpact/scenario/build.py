@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from ..energy import effective_mass, partition
-from ..exceptions import ConfigError, InputError
+from ..energy import RTOL, effective_mass, partition
+from ..exceptions import ConfigError, InputError, ModelError
 from ..unilateral import active_set
 from .schema import (
     BaseSpec,
@@ -144,6 +144,7 @@ class ImpactSetup:
     scenario: Scenario | None = field(default=None, repr=False)
     _cs: Any = field(default=None, repr=False, compare=False)
     _active: Any = field(default=None, repr=False, compare=False)
+    _active_rows: Any = field(default=None, repr=False, compare=False)
     _heading: Any = field(default=None, repr=False, compare=False)
 
     def partition(self) -> ImpactEnergy:
@@ -167,6 +168,41 @@ class ImpactSetup:
         q = self.q if q is None else np.asarray(q, dtype=float)
         M, A_all = self._cs.evaluate(q)
         return M, A_all[..., self._active, :]
+
+    def T_c_at(self, q) -> float:
+        r"""T_c^- [J] of this setup's active rows and velocity ``v`` at one configuration
+        ``q`` (nq,): ``partition(*self.evaluate(q), self.v).T_c`` (to rounding) in one
+        Pinocchio pass and one compiled call, with no ``M``, ``A`` or result object made
+        in Python: for loops over single configurations (the 3-D rover in 7.4 us against
+        11.7 us, ``benchmarks/bench_models.py``; many configurations at once are faster
+        batched, through :meth:`evaluate`). Its first call compiles that kernel (about
+        2 s on a fresh install).
+
+        Raises
+        ------
+        ModelError
+            ``q`` is not one configuration of the model.
+        InputError
+            ``q`` holds NaN or inf; what :func:`roverimpact.partition` raises for ``M``,
+            ``A`` and ``v`` at ``q`` (a mass matrix that is not positive definite, ...).
+        """
+        q = np.asarray(q, dtype=float)
+        nq = self.model.model.nq
+        if q.shape != (nq,):
+            raise ModelError(f"q must have shape ({nq},) for model {self.model.name!r} "
+                             f"(T_c_at takes one configuration; evaluate() takes a batch), "
+                             f"got {q.shape}")
+        rows = self._active_rows
+        if rows is None:
+            rows = np.ascontiguousarray(self._active, dtype=np.int64)
+            object.__setattr__(self, "_active_rows", rows)
+        res = np.empty(4)
+        if self._cs.partition_at(q, rows, self.v, RTOL, res):
+            if not np.isfinite(q).all():
+                raise InputError(f"q contains NaN or inf: {q}")
+            M, A = self.evaluate(q)  # the same arrays: partition names the problem
+            return float(partition(M, A, self.v, want_velocities=False).T_c)
+        return float(res[1])
 
     @classmethod
     def from_scenario(cls, scenario: Scenario, *, base_dir: str | Path | None = None,
@@ -462,8 +498,6 @@ def configuration(mbm, spec: ConfigurationSpec, q_nominal=None) -> np.ndarray:
 
 def _as_config_error(fn, *args, **kwargs):
     """A joint the scenario names but the model lacks is the scenario's error."""
-    from ..exceptions import ModelError
-
     try:
         return fn(*args, **kwargs)
     except ModelError as exc:
