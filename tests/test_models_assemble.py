@@ -98,8 +98,10 @@ def test_compiled_wheel_row_matches_finite_differences():
     assert A[0] @ v == pytest.approx(n @ fd, rel=1e-6, abs=1e-9)
 
 
-def test_nonlinear_loop_closure_is_recomputed():
-    """A loop closure whose Jacobian depends on q is evaluated at every call."""
+def _custom_loop_rover():
+    """rover2d (rocker) with a loop closure whose Jacobian depends on q: its row is
+    cos(q_j) on joint j's rate. Returns the model, its Pinocchio model, joint j and the
+    rover2d it came from."""
     base = rover2d(suspension="rocker")
     model = base.model
     j = model.joints[1]
@@ -111,6 +113,12 @@ def test_nonlinear_loop_closure_is_recomputed():
 
     mbm = MultibodyModel(model=model, name="x", wheels=base.wheels, loop_closure=loop,
                          loop_names=["custom"], params=base.params)
+    return mbm, model, j, base
+
+
+def test_nonlinear_loop_closure_is_recomputed():
+    """A loop closure whose Jacobian depends on q is evaluated at every call."""
+    mbm, model, j, _ = _custom_loop_rover()
     cs = ConstraintSet(mbm, [LoopClosure(("custom",))])
     for a in (0.1, 0.7):
         q = pin.neutral(model)
@@ -272,17 +280,7 @@ def test_one_dof_pendulum_single_and_batched(tmp_path):
 
 def test_nonlinear_loop_closure_batched():
     """Batched evaluation recomputes a q-dependent loop closure for every item."""
-    base = rover2d(suspension="rocker")
-    model = base.model
-    j = model.joints[1]
-
-    def loop(q):
-        J = np.zeros((1, model.nv))
-        J[0, j.idx_v] = np.cos(q[j.idx_q])
-        return np.zeros(1), J
-
-    mbm = MultibodyModel(model=model, name="x", wheels=base.wheels, loop_closure=loop,
-                         loop_names=["custom"], params=base.params)
+    mbm, model, j, base = _custom_loop_rover()
     cs = ConstraintSet(mbm, [LoopClosure(("custom",)), GroundContact(base.wheels[0])])
     Q = np.repeat(pin.neutral(model)[None], 3, axis=0)
     Q[:, j.idx_q] = (0.1, 0.7, -0.3)
@@ -342,17 +340,7 @@ def test_partition_at_recomputes_a_nonlinear_loop_and_takes_one_dof(tmp_path):
     from roverimpact import partition
     from roverimpact.models import load_robot
 
-    base = rover2d(suspension="rocker")
-    model = base.model
-    j = model.joints[1]
-
-    def loop(q):
-        J = np.zeros((1, model.nv))
-        J[0, j.idx_v] = np.cos(q[j.idx_q])
-        return np.zeros(1), J
-
-    mbm = MultibodyModel(model=model, name="x", wheels=base.wheels, loop_closure=loop,
-                         loop_names=["custom"], params=base.params)
+    mbm, model, j, base = _custom_loop_rover()
     cs = ConstraintSet(mbm, [LoopClosure(("custom",)), GroundContact(base.wheels[0])])
     v = np.linspace(-1.0, 1.0, model.nv)
     rows = np.array([0, 1], dtype=np.int64)

@@ -297,12 +297,10 @@ class RowPlan:
             X[k, 9:] = H[:3, 3]
         return X
 
-    def evaluate(self, q) -> tuple[np.ndarray, np.ndarray]:
-        """``(M (nv, nv), A (m, nv))`` at ``q`` (nq,) from one Pinocchio pass.
-
-        CRBA (upper triangle of ``M``), joint Jacobians ``data.J`` and frame placements,
-        then one compiled call that mirrors ``M`` and fills every row of ``A``.
-        """
+    def _pass(self, q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One Pinocchio pass at ``q`` (nq,): ``M`` (its upper triangle, from CRBA), the
+        world joint Jacobian ``J`` and the frame placements ``X``; the rows of a nonlinear
+        loop closure updated in :attr:`r_const`."""
         model, data = self._cs.mbm.model, self._cs.data
         M = pin.crba(model, data, q)
         J = pin.computeJointJacobians(model, data, q)
@@ -314,6 +312,15 @@ class RowPlan:
             Jl = self._cs.mbm.loop_closure(q)[1]
             for k, i in enumerate(self.loop_rows):
                 self.r_const[i] = Jl[k]
+        return M, J, X
+
+    def evaluate(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """``(M (nv, nv), A (m, nv))`` at ``q`` (nq,) from one Pinocchio pass.
+
+        CRBA (upper triangle of ``M``), joint Jacobians ``data.J`` and frame placements,
+        then one compiled call that mirrors ``M`` and fills every row of ``A``.
+        """
+        M, J, X = self._pass(q)
         A = np.empty((self.m, self.nv))
         _evaluate_one.get()(J, X, *self._args, self.r_const, self.support, M, A)
         return M, A
@@ -324,17 +331,7 @@ class RowPlan:
         ``A`` at one configuration ``q`` (nq,) with velocity ``v``: one Pinocchio pass and
         one compiled call (:func:`_partition_at`). Returns the partition's status code
         (nonzero: the caller makes the error message, from :meth:`evaluate`)."""
-        model, data = self._cs.mbm.model, self._cs.data
-        M = pin.crba(model, data, q)
-        J = pin.computeJointJacobians(model, data, q)
-        if self.nv == 1:  # pinocchio hands (6, 1) and (1, 1) back as 1-D arrays
-            M, J = np.reshape(M, (1, 1)).copy(), np.reshape(J, (6, 1))
-        pin.updateFramePlacements(model, data)
-        X = self._placements()
-        if not self._loop_constant:
-            Jl = self._cs.mbm.loop_closure(q)[1]
-            for k, i in enumerate(self.loop_rows):
-                self.r_const[i] = Jl[k]
+        M, J, X = self._pass(q)
         return _partition_at.get()(J, X, *self._args, self.r_const, self.support, M, rows, v,
                                    rtol, res)
 

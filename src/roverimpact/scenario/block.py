@@ -55,7 +55,7 @@ def block_key(scenario: Scenario) -> str | None:
             or scenario.terrain is not None or scenario.contacts.loops):
         return None
     data = scenario.model_dump(include=_SETUP_TABLES)
-    data["model"]["params"] = sorted((k, None if _number(v) else v)
+    data["model"]["params"] = sorted((k, None if is_number(v) else v)
                                      for k, v in data["model"]["params"].items())
     data["velocity"]["u"] = None
     if data["obstacle"]["beta_deg"] is not None:
@@ -63,7 +63,9 @@ def block_key(scenario: Scenario) -> str | None:
     return repr(data)
 
 
-def _number(v) -> bool:
+def is_number(v) -> bool:
+    """Whether an override value is a number (not a bool): numbers of ``model.params``,
+    ``velocity.u`` and ``obstacle.beta_deg`` may differ within a block."""
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 

@@ -144,7 +144,6 @@ class ImpactSetup:
     scenario: Scenario | None = field(default=None, repr=False)
     _cs: Any = field(default=None, repr=False, compare=False)
     _active: Any = field(default=None, repr=False, compare=False)
-    _active_rows: Any = field(default=None, repr=False, compare=False)
     _heading: Any = field(default=None, repr=False, compare=False)
 
     def partition(self) -> ImpactEnergy:
@@ -192,10 +191,7 @@ class ImpactSetup:
             raise ModelError(f"q must have shape ({nq},) for model {self.model.name!r} "
                              f"(T_c_at takes one configuration; evaluate() takes a batch), "
                              f"got {q.shape}")
-        rows = self._active_rows
-        if rows is None:
-            rows = np.ascontiguousarray(self._active, dtype=np.int64)
-            object.__setattr__(self, "_active_rows", rows)
+        rows = np.ascontiguousarray(self._active, dtype=np.int64)  # no copy (flatnonzero)
         res = np.empty(4)
         if self._cs.partition_at(q, rows, self.v, RTOL, res):
             if not np.isfinite(q).all():

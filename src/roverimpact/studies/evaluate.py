@@ -57,7 +57,7 @@ import numpy as np
 from ..contact import peak_force
 from ..exceptions import RoverImpactError
 from ..scenario import ImpactSetup, Scenario, scenario_from_dict, sweep_energy
-from ..scenario.block import block_key, impact_block
+from ..scenario.block import block_key, impact_block, is_number
 from ..scenario.build import jam_total_mass, model_key, warn_jammed
 from ..simulate import SimulationConfig, simulate_scenario
 from ..simulate.engines import check_engine
@@ -511,16 +511,12 @@ def _family_key(ov: Mapping[str, Any]) -> str:
     :func:`~roverimpact.scenario.block.block_key` (they differ in numbers of
     ``model.params``, ``velocity.u`` and ``obstacle.beta_deg`` only; computed for the
     first of them)."""
-    return repr(sorted((k, None if _number(v) and (k.startswith("model.params.")
+    return repr(sorted((k, None if is_number(v) and (k.startswith("model.params.")
                                                    or k in _FAMILY_NUMBERS) else v)
                        for k, v in ov.items()))
 
 
 _FAMILY_NUMBERS = ("velocity.u", _BETA)
-
-
-def _number(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
 def _columns(rows: Sequence[Mapping[str, Any]]) -> dict[str, np.ndarray]:
