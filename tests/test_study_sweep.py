@@ -385,6 +385,33 @@ def test_a_full_disk_names_the_file_and_leaves_no_temporary(tmp_path, monkeypatc
     assert len(res.table) == 18 and not list((tmp_path / "r").rglob("*.tmp"))
 
 
+def test_a_full_disk_while_writing_the_table_names_it_and_keeps_the_chunks(tmp_path,
+                                                                           monkeypatch):
+    """The results table is written by one stream of the chunk files (serial runs at the
+    end, Dask runs as chunks come): a full disk there names the table, leaves no
+    temporary, and the chunks stay for --resume."""
+    import errno
+
+    import pyarrow.parquet as pq
+
+    real = pq.ParquetWriter.write_table
+
+    def full_disk(self, *a, **kw):
+        if "results.parquet" in str(self.where):  # the table's temporary file, not a chunk
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(self, *a, **kw)
+
+    monkeypatch.setattr(pq.ParquetWriter, "write_table", full_disk)
+    with pytest.raises(OSError, match=r"No space left on device: .*results\.parquet"):
+        run_study(_study(chunk_size=4), tmp_path / "r")
+    assert not list((tmp_path / "r").rglob("*.tmp"))
+    assert len(list((tmp_path / "r" / "chunks").glob("*.parquet"))) == 5
+    monkeypatch.setattr(pq.ParquetWriter, "write_table", real)
+    ev = CountingRigidBody()
+    res = run_study(_study(chunk_size=4), tmp_path / "r", evaluator=ev, resume=True)
+    assert ev.n == 0 and len(res.table) == 18
+
+
 def test_failed_simulations_are_counted_and_make_the_exit_code_non_zero(tmp_path, capsys):
     """A study whose simulations cannot reach the obstacle (t_max too short): the CLI
     says how many failed and why, exits 1, and 0 with --allow-failures."""

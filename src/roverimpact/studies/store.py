@@ -218,21 +218,6 @@ def assemble(out_dir: Path, chunks: list[list[Case]], fresh: dict) -> pd.DataFra
     return table
 
 
-def _same_schemas(paths: list[Path]):
-    """The schema shared by every chunk file (metadata aside), or None if they differ
-    (e.g. an integer parameter column in one chunk, float in another)."""
-    import pyarrow.parquet as pq
-
-    first = None
-    for path in paths:
-        schema = pq.read_schema(path)
-        if first is None:
-            first = schema
-        elif not schema.remove_metadata().equals(first.remove_metadata()):
-            return None
-    return first
-
-
 def _chunk_table(paths: list[Path], chunks, k: int, schema):
     """Chunk ``k``'s rows (a pyarrow Table of ``schema``), in case order; they must be the
     chunk's cases (checked)."""
@@ -290,7 +275,18 @@ class ResultsStream:
         self.advance()
 
     def advance(self) -> None:
-        """Append the ready chunks, in order (stops at the first one not ready)."""
+        """Append the ready chunks, in order (stops at the first one not ready). A failing
+        disk: as :func:`_atomic`, no temporary is left and the error names the table."""
+        try:
+            self._advance()
+        except OSError as exc:
+            self.abandon()
+            raise OSError(exc.errno, exc.strerror or str(exc), str(self.path)) from None
+        except BaseException:
+            self.abandon()
+            raise
+
+    def _advance(self) -> None:
         import pyarrow.parquet as pq
 
         while not self._stopped and self._next < len(self._paths):
@@ -313,15 +309,18 @@ class ResultsStream:
         """Append the remaining chunks (every chunk is complete now) and put the table in
         place; the number of rows, or None if the stream stopped (then nothing is
         written)."""
+        self._ready.update(range(len(self._paths)))
+        self.advance()
         try:
-            self._ready.update(range(len(self._paths)))
-            self.advance()
             if self._stopped or self._next < len(self._paths):
                 self.abandon()
                 return None
             self._writer.close()
             self._writer = None
             os.replace(self._tmp, self.path)
+        except OSError as exc:
+            self.abandon()
+            raise OSError(exc.errno, exc.strerror or str(exc), str(self.path)) from None
         except BaseException:
             self.abandon()
             raise
@@ -346,38 +345,28 @@ def write_results(out_dir: Path, chunks, path: Path, csv: Path | None = None, *,
     must be the chunk's cases in order (checked). Returns the number of rows.
 
     ``stream``: a :class:`ResultsStream` that has written the table as far as the chunks
-    came; it is finished here (or, if it stopped, the table is written as without it).
+    came (a Dask run); it is finished here. Without one, a stream over the finished chunk
+    files writes the table now.
 
     Chunk files of different column types (which :func:`assemble` unifies as
-    ``pandas.concat`` does) fall back to :func:`assemble` (in memory): the table is the
-    same either way.
+    ``pandas.concat`` does) stop the stream and fall back to :func:`assemble` (in
+    memory): the table is the same either way.
     """
     import pyarrow.parquet as pq
 
     paths = [chunk_path(out_dir, k) for k in range(len(chunks))]
-    n = stream.finish() if stream is not None else None
-    if n is not None:
-        schema = stream.schema
-    else:
-        schema = _same_schemas(paths) if paths else None
-        if schema is None:
-            table = assemble(out_dir, chunks, {})
-            atomic_parquet(table, path)
-            if csv is not None:
-                atomic_write_bytes(csv, table.to_csv(index=False).encode())
-            return len(table)
-        n = 0
-
-        def write_parquet(tmp: Path) -> None:
-            nonlocal n
-            with pq.ParquetWriter(tmp, schema) as writer:
-                for k in range(len(paths)):
-                    t = _chunk_table(paths, chunks, k, schema)
-                    writer.write_table(t)
-                    n += t.num_rows
-
-        _atomic(path, write_parquet)
+    if stream is None:
+        stream = ResultsStream(out_dir, chunks, path, done=range(len(paths)))
+    n = stream.finish()
+    if n is None:
+        table = assemble(out_dir, chunks, {})
+        atomic_parquet(table, path)
+        if csv is not None:
+            atomic_write_bytes(csv, table.to_csv(index=False).encode())
+        return len(table)
     if csv is not None:
+        schema = stream.schema
+
         def write_csv(tmp: Path) -> None:
             with open(tmp, "w", encoding="utf-8", newline="") as f:
                 for k, p in enumerate(paths):
