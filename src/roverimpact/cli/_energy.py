@@ -29,10 +29,14 @@ def energy_cmd(
     as_json: bool = typer.Option(False, "--json", help="Print machine-readable JSON."),
 ) -> None:
     """T, T_c^-, T_a, effective mass along the impact normal, approach speed, peak force."""
-    compile_ahead()
+    from .._kernels.partition import partition_kernel
+    from ..models._assemble import _evaluate_one
+
+    compile_ahead(_evaluate_one)  # needed first: in the background on a fresh install
     from ..scenario import ImpactSetup, load_scenario
 
     sc = load_scenario(file)
+    compile_ahead(now=(partition_kernel,))  # meanwhile (a bad file stops before this)
     setup = ImpactSetup.from_scenario(sc)
     e = setup.partition()
     f_max = _peak_force(sc, e)

@@ -1,0 +1,112 @@
+"""The console script's end (``roverimpact.cli.run``) and the compile plan of ``energy``.
+
+``run`` ends the process with ``os._exit`` once the command is done (Python's teardown of
+every module costs 0.3 s after compiled kernels were loaded; benchmarks/bench_startup.py).
+What a normal exit guarantees must still hold: the exit code, every byte written to
+stdout (a file: block-buffered) by Python and by C code, the ``atexit`` handlers, and a
+running non-daemon thread is waited for.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = str(ROOT / "src")
+EXAMPLE = ROOT / "examples" / "rover2d_beta45.toml"
+
+
+def _run(code: str, tmp_path: Path, *args: str) -> tuple[int, str]:
+    """Run ``code`` with stdout to a file (block-buffered, as in ``> out.txt``: without
+    PYTHONUNBUFFERED, which would make Python's and C's stdout unbuffered)."""
+    out = tmp_path / "stdout.txt"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        p for p in (SRC, os.environ.get("PYTHONPATH")) if p))
+    env.pop("PYTHONUNBUFFERED", None)
+    with open(out, "wb") as f:
+        rc = subprocess.run([sys.executable, "-c", code, *args], stdout=f,
+                            stderr=subprocess.PIPE, env=env, cwd=tmp_path, timeout=300).returncode
+    return rc, out.read_text()
+
+
+def test_run_keeps_exit_code_output_and_exit_handlers(tmp_path):
+    marker = tmp_path / "atexit.txt"
+    code = f"""
+import atexit, ctypes, sys
+from pathlib import Path
+atexit.register(lambda: Path({str(marker)!r}).write_text("ran"))
+print("python line")
+ctypes.CDLL(None).printf(b"C line\\n")        # C stdio, buffered when stdout is a file
+sys.argv = ["roverimpact", "energy", sys.argv[1]]
+from roverimpact.cli import run
+run()
+"""
+    rc, out = _run(code, tmp_path, str(EXAMPLE))
+    assert rc == 0
+    assert "python line" in out and "C line" in out
+    assert "T_c^- (effective)" in out and "active rows / rank" in out  # the whole table
+    assert marker.read_text() == "ran"
+    # a failing command keeps its code (2: bad input) and its message
+    rc, out = _run(code, tmp_path, str(tmp_path / "missing.toml"))
+    assert rc == 2 and "python line" in out
+
+
+def test_run_waits_for_a_running_thread(tmp_path):
+    """A non-daemon thread still working when the command returns is waited for (the
+    usual exit), not killed."""
+    marker = tmp_path / "thread.txt"
+    code = f"""
+import sys, threading, time
+from pathlib import Path
+def work():
+    time.sleep(0.5)
+    Path({str(marker)!r}).write_text("done")
+threading.Thread(target=work).start()
+sys.argv = ["roverimpact", "--version"]
+from roverimpact.cli import run
+run()
+"""
+    rc, out = _run(code, tmp_path)
+    assert rc == 0 and out.strip()
+    assert marker.read_text() == "done"
+
+
+def test_python_m_runs_the_cli(tmp_path):
+    rc, out = _run("import runpy, sys; sys.argv = ['roverimpact', '--version']; "
+                   "runpy.run_module('roverimpact.cli', run_name='__main__')", tmp_path)
+    assert rc == 0 and out.strip()
+
+
+def test_energy_compiles_the_partition_here_and_the_rows_in_the_background(monkeypatch):
+    """On a fresh install ``energy`` sends the row assembly (needed first, the shorter
+    compile) to a second process and compiles the partition kernel itself meanwhile, after
+    the scenario file has been read: a bad file fails before any compile."""
+    from roverimpact._kernels import _jit
+    from roverimpact.cli import main
+
+    sent, got = [], []
+    monkeypatch.setattr(_jit, "compile_in_background",
+                        lambda *ks: sent.extend(k.__name__ for k in ks) or [])
+    real_get = _jit.Kernel.get
+    monkeypatch.setattr(_jit.Kernel, "get",
+                        lambda self: got.append(self.__name__) or real_get(self))
+    assert main(["energy", str(EXAMPLE)]) == 0
+    assert sent == ["_evaluate_one"]
+    assert got.index("partition_kernel") < got.index("_evaluate_one")
+
+    sent.clear()
+    got.clear()
+    assert main(["energy", str(ROOT / "no-such-file.toml")]) == 2
+    assert "partition_kernel" not in got
+
+
+def test_console_script_entry_is_run():
+    """pyproject's script is ``roverimpact.cli:run`` (the fast end), not ``main``."""
+    import tomllib
+
+    with open(ROOT / "pyproject.toml", "rb") as f:
+        scripts = tomllib.load(f)["project"]["scripts"]
+    assert scripts["roverimpact"] == "roverimpact.cli:run"
