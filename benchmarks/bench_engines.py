@@ -25,7 +25,7 @@ import numpy as np
 
 from roverimpact.models import rocker_bogie, rover2d
 from roverimpact.simulate import SimulationConfig, initial_state, simulate_impact
-from roverimpact.simulate.engines import simulate_impact_mujoco
+from roverimpact.simulate.engines import simulate_impact_mujoco, simulate_impact_mujoco_laws
 
 KV = {"name": "kelvin-voigt", "k": 1e6, "c": 2000.0, "e": None, "n": None}
 HC = {"name": "hunt-crossley", "k": 1e7, "e": 0.5}
@@ -57,6 +57,10 @@ def case(name, mbm, law, repeat):
           f"{r_mj.stats['steps']} steps of {1e6 * r_mj.stats['timestep']:.2f} us")
     print(f"  time own/mujoco = {t_own / t_mj:5.2f}x   "
           f"F_max mujoco/own - 1 = {r_mj.F_max_total / r_own.F_max_total - 1:+.2%}")
+    t_ml, r_ml = best_of(lambda: simulate_impact_mujoco_laws(mbm, cfg, q0=q0, v0=v0), repeat)
+    print(f"  mujoco_laws (the laws applied as forces) {1e3 * t_ml:8.2f} ms   "
+          f"F_max = {r_ml.F_max_total:9.2f} N   {r_ml.stats['steps']} steps   "
+          f"time mujoco_laws/mujoco = {t_ml / t_mj:5.2f}x")
 
 
 _KV = {k: v for k, v in KV.items() if v is not None}

@@ -7,7 +7,8 @@ Prints every figure quoted in the section "MuJoCo as a second engine":
    contact (k = 1e6 N/m, c = 2000 N s/m) on the ground and the obstacle, beta = 30, 60,
    90 deg: F_max of both engines (the agreement tests);
 3. the default Hunt-Crossley obstacle (k = 1e7, e = 0.5) through MuJoCo's equivalent
-   Kelvin-Voigt (an approximation);
+   Kelvin-Voigt (an approximation), and the law itself applied in MuJoCo (engine
+   ``mujoco_laws``);
 4. friction mu = 0.3 (an approximation: capped viscous slope in MuJoCo's cone).
 
     python examples/mujoco_engine.py
@@ -22,7 +23,7 @@ from roverimpact.contact import get_law, predict
 from roverimpact.models import rocker_bogie, rover2d
 from roverimpact.models.base import MultibodyModel, Wheel
 from roverimpact.simulate import SimulationConfig, initial_state, simulate_impact
-from roverimpact.simulate.engines import simulate_impact_mujoco
+from roverimpact.simulate.engines import simulate_impact_mujoco, simulate_impact_mujoco_laws
 
 KV = {"name": "kelvin-voigt", "k": 1e6, "c": 2000.0, "e": None, "n": None}
 
@@ -72,7 +73,12 @@ def main():
         for beta in (30.0, 45.0, 60.0, 90.0):
             cfg = SimulationConfig(speed=0.3, beta_deg=beta, obstacle={"k": 1e7, "e": 0.5},
                                    t_after=0.05)
-            row(f"{name}, beta = {beta:.0f}", *both(mbm, cfg))
+            r_own, r_mj = both(mbm, cfg)
+            row(f"{name}, beta = {beta:.0f}", r_own, r_mj)
+            q0, v0 = initial_state(mbm, cfg)
+            r_laws = simulate_impact_mujoco_laws(mbm, cfg, q0=q0, v0=v0)
+            print(f"  {'':<26} MuJoCo with the law itself {r_laws.F_max_total:8.1f} N   "
+                  f"{r_laws.F_max_total / r_own.F_max_total - 1:+.2%}")
 
     print("4. friction mu = 0.3, Kelvin-Voigt, beta = 45 and 90")
     for name, mbm in (("rover2d rocker", rover2d(suspension="rocker")),

@@ -19,7 +19,8 @@ def simulate_cmd(
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Write force_vs_time.png."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     engine: str = typer.Option("own", "--engine", help="Simulator: own (roverimpact's, the "
-                               "reference) or mujoco (MuJoCo, same scenario)."),
+                               "reference), mujoco (MuJoCo, its soft contact) or mujoco_laws "
+                               "(MuJoCo's dynamics, the scenario's contact laws)."),
 ) -> None:
     """Drive the rover into the obstacle with compliant contact; report F_max and T_c^-."""
     from ..scenario import load_scenario
@@ -29,6 +30,7 @@ def simulate_cmd(
     from ..simulate.run import build_system
 
     engine = engine_name(engine)
+    in_mujoco = engine.startswith("mujoco")
     if fmt not in ("parquet", "csv"):
         raise typer.BadParameter("use parquet or csv", param_hint="--format")
     check_output(outdir, folder=True)
@@ -53,12 +55,12 @@ def simulate_cmd(
         plot_force_history(result, outdir / "force_vs_time.png", law=law,
                            title=f"{model.name}: beta = {cfg.beta_deg:g} deg, "
                                  f"u = {cfg.speed:g} m/s"
-                                 + (" (MuJoCo)" if engine == "mujoco" else ""))
+                                 + (" (MuJoCo)" if in_mujoco else ""))
     if as_json:
         print_json(summary)
         return
     t = new_table(f"Compliant impact of {model.name} ({file.name}"
-                  + (", MuJoCo)" if engine == "mujoco" else ")"), "quantity", "value")
+                  + (", MuJoCo)" if in_mujoco else ")"), "quantity", "value")
     t.add_row("first contact", result.contact_wheel)
     t.add_row("F_max (sum of obstacle contacts)", f"{result.F_max_total:.6g} N")
     for k, v in result.F_max.items():
@@ -73,8 +75,11 @@ def simulate_cmd(
     t.add_row("m_eff (obstacle normal)", f"{result.m_eff:.6g} kg")
     t.add_row("T before / after", f"{result.T_minus:.6g} / {result.T_plus:.6g} J")
     st = result.stats
-    if engine == "mujoco":
+    if in_mujoco:
         t.add_row("engine", f"MuJoCo, {st['steps']} steps of {1e6 * st['timestep']:.3g} us")
+    if engine == "mujoco_laws":
+        t.add_row("contact laws in MuJoCo", "the scenario's, applied as forces")
+    elif engine == "mujoco":
         mp = st["mapping"]
         exact = str(mp["obstacle"]).startswith("kelvin-voigt")
         t.add_row("obstacle law in MuJoCo", f"Kelvin-Voigt k = {mp['obstacle_k']:.4g} N/m, "

@@ -76,7 +76,8 @@ def force_column(table: pd.DataFrame) -> str | None:
 
 
 #: Engine names as the figures and tables print them.
-ENGINE_LABELS = {"own": "own simulator", "mujoco": "MuJoCo"}
+ENGINE_LABELS = {"own": "own simulator", "mujoco": "MuJoCo",
+                 "mujoco_laws": "MuJoCo with the scenario's laws"}
 #: Style of further engines' peak forces (marker, line, colour), in engine order.
 _EXTRA_STYLES = (("^", ":", "tab:purple"), ("v", "-.", "tab:brown"))
 

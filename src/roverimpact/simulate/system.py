@@ -185,6 +185,11 @@ class ContactSystem:
         c = self.wheel_centres(q)
         return self._gaps(c)
 
+    def gaps_of_centres(self, c) -> np.ndarray:
+        """:meth:`gaps` of wheel spheres at centres ``c`` (nw, 3) given by another engine
+        (planes only, no terrain)."""
+        return self._gaps(np.asarray(c, dtype=float))
+
     def _gaps(self, c):
         g = self.N @ c.T - self.offsets[:, None] - self.radii[None, :]   # (np, nw)
         if not self.bounded:

@@ -2,7 +2,9 @@
 
 * :func:`simulate_impact_mujoco` -- MuJoCo (``pip install mujoco``): the rover exported by
   :func:`roverimpact.models.export_mjcf.export_mjcf`, MuJoCo's own soft contact with
-  solref/solimp set from the scenario's contact law. Same
+  solref/solimp set from the scenario's contact law (engine ``"mujoco"``), or the
+  scenario's laws themselves applied as forces, MuJoCo computing the dynamics
+  (:func:`simulate_impact_mujoco_laws`, engine ``"mujoco_laws"``). Same
   :class:`~roverimpact.simulate.SimulationConfig`, same
   :class:`~roverimpact.simulate.SimulationResult`. See docs/simulate.md, "MuJoCo as a
   second engine".
@@ -26,29 +28,34 @@ from .mujoco import (
     equivalent_kelvin_voigt,
     linear_contact,
     simulate_impact_mujoco,
+    simulate_impact_mujoco_laws,
 )
 
 __all__ = ["ENGINES", "ENGINE_NAMES", "LinearContact", "check_engine", "engine_name",
            "equivalent_kelvin_voigt", "get_engine", "linear_contact", "simulate_impact_mujoco",
-           "simulate_scenario"]
+           "simulate_impact_mujoco_laws", "simulate_scenario"]
 
 #: The simulators a scenario can run in: ``"own"`` (:func:`roverimpact.simulate.simulate_impact`,
-#: the reference) and ``"mujoco"`` (:func:`simulate_impact_mujoco`).
+#: the reference), ``"mujoco"`` (:func:`simulate_impact_mujoco`: MuJoCo's soft contact) and
+#: ``"mujoco_laws"`` (:func:`simulate_impact_mujoco_laws`: MuJoCo's dynamics, the
+#: scenario's laws).
 ENGINE_NAMES = tuple(ENGINES)
 
 
 def engine_name(name) -> str:
-    """``name`` checked against :data:`ENGINE_NAMES` (case-insensitive).
+    """``name`` checked against :data:`ENGINE_NAMES` (case-insensitive, ``-`` as ``_``).
 
     >>> engine_name("MuJoCo")
     'mujoco'
+    >>> engine_name("mujoco-laws")
+    'mujoco_laws'
 
     Raises
     ------
     ConfigError
         Not a string, or an unknown engine; the message lists the known ones.
     """
-    key = name.strip().lower() if isinstance(name, str) else None
+    key = name.strip().lower().replace("-", "_") if isinstance(name, str) else None
     if key not in ENGINES:
         raise ConfigError(f"unknown simulation engine {name!r}: choose one of "
                           f"{', '.join(ENGINE_NAMES)}")
@@ -71,11 +78,16 @@ def check_engine(name: str, mbm, config, *, terrain: bool = False) -> None:
     through the same Pinocchio model (its inertias and joints; wheels as spheres, as in
     the own engine).
     """
-    if engine_name(name) != "mujoco":
+    name = engine_name(name)
+    if name == "own":
         return
     if terrain:
         raise ConfigError("the MuJoCo engine drives on the plane z = 0 only; a scenario with "
                           "[terrain] runs in the own engine (engine 'own')")
+    if name == "mujoco_laws" and getattr(config, "mu", 0.0) > 0.0:
+        raise ConfigError(f"engine 'mujoco_laws' applies frictionless contact forces: it "
+                          f"needs mu = 0, got mu = {config.mu} (engine 'mujoco' approximates "
+                          "friction, 'own' models it)")
     from ...models.export_mjcf import mjcf_element
 
     try:

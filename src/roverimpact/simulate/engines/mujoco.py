@@ -130,7 +130,7 @@ from ..run import (
 )
 
 __all__ = ["ENGINES", "LinearContact", "equivalent_kelvin_voigt", "linear_contact",
-           "simulate_impact_mujoco"]
+           "simulate_impact_mujoco", "simulate_impact_mujoco_laws"]
 
 #: Constant impedance d of every contact (MuJoCo's minimum, mjMINIMP).
 IMPEDANCE = 1.0e-4
@@ -237,6 +237,13 @@ def linear_contact(law, *, delta0: float | None = None, v_i: float = 1.0,
                          f"(load {f0:.4g} N)")
 
 
+def _cross(a, b):
+    """a x b over the last axis (numpy's cross costs 30 us a call; this runs per step)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 def _obstacle_frame(beta: float):
     """Quaternion (w, x, y, z) of the rotation about y by -beta: local z = the face normal
     n = (-sin beta, 0, cos beta), local x = up the face (cos beta, 0, sin beta)."""
@@ -266,7 +273,7 @@ def _max_rate(M, rows) -> float:
 
 def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *, q0=None,
                            v0=None, timestep: float | None = None,
-                           steps_per_mode: int = 100) -> SimulationResult:
+                           steps_per_mode: int = 100, contact: str = "soft") -> SimulationResult:
     r"""Run the impact of :func:`roverimpact.simulate.simulate_impact` in MuJoCo.
 
     Parameters
@@ -287,6 +294,14 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         docstring.
     steps_per_mode : int
         N of the timestep rule (steps per half period of the fastest contact mode).
+    contact : {"soft", "laws"}
+        ``"soft"`` (default): MuJoCo's own soft contact, the laws mapped onto
+        spring-dampers (module docstring). ``"laws"``: the scenario's contact laws
+        themselves (Hunt-Crossley, Hertz, ... on the obstacle and the ground), evaluated
+        before every step from MuJoCo's geometry (gap and rate of each wheel sphere) and
+        applied to the wheel bodies at the contact point (``xfrc_applied``, between
+        ``mj_step1`` and ``mj_step2``); MuJoCo then computes only the dynamics and
+        integrates. Frictionless only (``mu = 0``).
 
     Returns
     -------
@@ -294,7 +309,8 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         ``F_max``, ``F_max_total``, ``t_peak``, ``impulse``, ``contact_duration``,
         ``separated``, the pre-impact state and its ``T_c_minus`` (Pinocchio coordinates),
         the history (``t``, ``q_i``, ``v_i``, ``<plane>_<wheel>_fn|ft|delta`` per step) and
-        ``stats`` (``engine = "mujoco"``, ``timestep``, ``steps``, ``mapping``).
+        ``stats`` (``engine = "mujoco"``, ``contact``, ``timestep``, ``steps``,
+        ``mapping``).
 
     Raises
     ------
@@ -310,6 +326,13 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         raise ConfigError(f"steps_per_mode must be an integer >= 4, got {steps_per_mode!r}")
     if timestep is not None and not (math.isfinite(timestep) and timestep > 0):
         raise ConfigError(f"timestep must be a finite number > 0 s, got {timestep!r}")
+    if contact not in ("soft", "laws"):
+        raise ConfigError(f"contact must be 'soft' (MuJoCo's contact) or 'laws' (the "
+                          f"scenario's laws applied as forces), got {contact!r}")
+    laws_mode = contact == "laws"
+    if laws_mode and config.mu > 0.0:
+        raise ConfigError("contact='laws' applies frictionless contact forces: it needs "
+                          f"mu = 0, got mu = {config.mu}")
     sys = build_system(mbm, config)            # validates laws, springs, wheels
     model = sys.model
     nw = len(mbm.wheels)
@@ -406,18 +429,22 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
     imp = fmt_floats([IMPEDANCE, IMPEDANCE, 0.001, 0.5, 2.0])
     contact_el = ET.SubElement(root, "contact")
     pairs = []                                 # (plane index, wheel, pair name)
+    # (with contact="laws" the pairs are only the rows of the timestep rule: MuJoCo has
+    # no contact, the laws' forces are applied)
     for w, wn in enumerate(names_w):
         if has_ground:
-            ET.SubElement(contact_el, "pair", name=f"ground_{wn}", geom1="ground",
-                          geom2=layout.wheel_geoms[wn], condim=condim, friction=friction,
-                          solimp=imp, solref="-1 -1", margin=fmt_floats(-ground_map[w].offset),
-                          gap="0")
+            if not laws_mode:
+                ET.SubElement(contact_el, "pair", name=f"ground_{wn}", geom1="ground",
+                              geom2=layout.wheel_geoms[wn], condim=condim, friction=friction,
+                              solimp=imp, solref="-1 -1",
+                              margin=fmt_floats(-ground_map[w].offset), gap="0")
             pairs.append((0, w, f"ground_{wn}"))
     for w, wn in enumerate(names_w):
         if touch[w]:
-            ET.SubElement(contact_el, "pair", name=f"obstacle_{wn}", geom1="obstacle",
-                          geom2=layout.wheel_geoms[wn], condim=condim, friction=friction,
-                          solimp=imp, solref="-1 -1", margin="0", gap="0")
+            if not laws_mode:
+                ET.SubElement(contact_el, "pair", name=f"obstacle_{wn}", geom1="obstacle",
+                              geom2=layout.wheel_geoms[wn], condim=condim, friction=friction,
+                              solimp=imp, solref="-1 -1", margin="0", gap="0")
             pairs.append((io, w, f"obstacle_{wn}"))
     xml = ET.tostring(root, encoding="unicode")
     try:
@@ -435,7 +462,8 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         if has_ground else {}
     plane_geom[io] = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "obstacle")
     # MuJoCo sorts the pairs (by body): address them by name
-    pair_id = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_PAIR, nm) for _pl, _w, nm in pairs]
+    pair_id = [-1 if laws_mode else mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_PAIR, nm)
+               for _pl, _w, nm in pairs]
     for pl, w, _nm in pairs:
         g1, g2 = plane_geom[pl], gid[w]
         pair_of[g1, g2] = pair_of[g2, g1] = pl * nw + w
@@ -471,6 +499,8 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         for k_, (pl, w, _nm) in enumerate(pairs):
             lc = obst_lc if pl == io else ground_map[w]
             p = pair_id[k_]
+            if p < 0:      # contact="laws": no MuJoCo pair
+                continue
             # f = -(s r + b r' + d a0) / (d A + (1 - d) A~): scale by that denominator,
             # with the contact's own A_ii at this state (the d A term is 0.1 % for a
             # pendulum tip whose A_ii is 13 A~)
@@ -516,14 +546,56 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
     # (mj_step runs mj_forward on that state: contacts and efc_force belong to it)
     T_rec, QP, QV, XP, CON = [], [], [], [], []
     friction_rows = condim == "3"
+    wheel_body = m.geom_bodyid[gid]
+    wheel_root = m.body_rootid[wheel_body]
+
+    def applied_forces() -> tuple[np.ndarray, bool]:
+        """contact="laws": normal forces (planes, wheels) of the laws at MuJoCo's current
+        state (after mj_step1), applied to the wheel bodies at the contact points; and
+        whether a wheel is inside the obstacle face."""
+        c = d.geom_xpos[gid]
+        # velocity of the sphere centres from MuJoCo's com-based body velocities (as
+        # mj_objectVelocity): v = v_o + w x (c - o), o the subtree com of the body's root
+        cvel = d.cvel[wheel_body]
+        vc = cvel[:, 3:] + _cross(cvel[:, :3], c - d.subtree_com[wheel_root])
+        gap = sys.gaps_of_centres(c)
+        delta = np.where(np.isfinite(gap), -gap, -1.0)
+        rate = -(sys.N @ vc.T)           # a sphere's contact point moves along n as its centre
+        f_n = np.zeros((npl, nw))
+        on = delta > 0.0
+        for k_ in np.flatnonzero(on.any(axis=1)):
+            law = sys.planes[k_].law
+            f_n[k_, on[k_]] = np.maximum(np.asarray(
+                law.force(delta[k_][on[k_]], rate[k_][on[k_]], sys.planes[k_].v_i), float), 0.0)
+        # force f n at the contact point c - r n: xfrc_applied takes it at the body's com
+        F = f_n[:, :, None] * sys.N[:, None, :]                       # (planes, wheels, 3)
+        arm = (c - d.xipos[wheel_body])[None] - radii[None, :, None] * sys.N[:, None, :]
+        wrench = np.concatenate([F.sum(axis=0), _cross(arm, F).sum(axis=0)], axis=1)
+        d.xfrc_applied[wheel_body] = 0.0
+        np.add.at(d.xfrc_applied, wheel_body, wrench)
+        return f_n, bool(on[io].any())
+
+    def advance():
+        """One MuJoCo step from the current state; contact="laws": the laws' forces and
+        whether the obstacle is touched (:func:`applied_forces`)."""
+        if not laws_mode:
+            mujoco.mj_step(m, d)
+            return None
+        mujoco.mj_step1(m, d)
+        forces = applied_forces()
+        mujoco.mj_step2(m, d)
+        return forces
 
     def step_and_record() -> bool:
-        """One mj_step; True if the recorded state has an obstacle contact."""
+        """One step; True if the recorded state has an obstacle contact."""
         T_rec.append(d.time)
         QP.append(d.qpos.copy())
         QV.append(d.qvel.copy())
-        mujoco.mj_step(m, d)
+        forces = advance()
         XP.append(d.geom_xpos.copy())
+        if laws_mode:                          # touching: inside the face (a damper may
+            CON.append(forces[0])              # have brought the force to 0 before)
+            return forces[1]
         nc = d.ncon
         if not nc:
             CON.append(None)
@@ -576,7 +648,7 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         tau = lo + (hi - lo) * g_lo / (g_lo - g_hi) if g_lo != g_hi else hi
         d.qpos[:], d.qvel[:], d.time = qpos_n, qvel_n, t_n
         m.opt.timestep = max(tau, 1e-15)
-        mujoco.mj_step(m, d)
+        advance()
         mujoco.mj_kinematics(m, d)
         g = float(np.min(obstacle_gaps(d.geom_xpos)))
         if abs(g) < 1e-10:
@@ -636,6 +708,9 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
     FTa = np.zeros((nrec, npl * nw))
     for i, con in enumerate(CON):
         if con is None:
+            continue
+        if laws_mode:
+            FNa[i] = con.reshape(-1)
             continue
         geom, fn, ft = con
         idx = pair_of[geom[:, 0], geom[:, 1]]
@@ -715,7 +790,12 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
             data[f"{pn}_{wn}_delta"] = np.where(np.isfinite(gpw), np.maximum(-gpw, 0.0), 0.0)
     history = pd.DataFrame(data)
     mapping = {"obstacle": obst_map.note, "obstacle_k": obst_map.k, "obstacle_c": obst_map.c}
-    if has_ground:
+    if laws_mode:
+        mapping = {"obstacle": f"{ol.name}: the law itself, applied as a force",
+                   "ground": (f"{sys.planes[0].law.name}: the law itself, applied as a force"
+                              if has_ground else None),
+                   "timestep rule": "the spring-dampers of contact='soft'"}
+    elif has_ground:
         mapping["ground"] = ground_map[0].note
         mapping["ground_k"] = [gm.k for gm in ground_map]
         mapping["ground_c"] = [gm.c for gm in ground_map]
@@ -725,13 +805,26 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         T_minus=T_minus, T_plus=T_plus, E_minus=E_minus, E_plus=E_plus,
         q_minus=q_minus, v_minus=v_minus, q_plus=q_plus, v_plus=v_plus,
         T_c_minus=T_c, m_eff=m_eff, v_n=v_n, contact_wheel=names_w[wheel], A_rows=labels,
-        stats={"engine": "mujoco", "timestep": h, "timestep_approach": h_approach,
+        stats={"engine": "mujoco", "contact": contact, "timestep": h,
+               "timestep_approach": h_approach,
                "steps": len(T), "t_contact": t_c, "cone": cone if condim == "3" else
-               "frictionless (condim 1)", "force_source": "efc_force (normal row)",
+               "frictionless (condim 1)",
+               "force_source": ("the laws at MuJoCo's state (xfrc_applied)" if laws_mode
+                                else "efc_force (normal row)"),
                "impedance": IMPEDANCE, "mapping": mapping,
                "friction_slope_scale": fric_scale if config.mu > 0 else None},
     )
 
 
+def simulate_impact_mujoco_laws(mbm, config: SimulationConfig | dict | None = None, *,
+                                q0=None, v0=None, timestep: float | None = None,
+                                steps_per_mode: int = 100) -> SimulationResult:
+    """:func:`simulate_impact_mujoco` with ``contact="laws"``: MuJoCo's dynamics and
+    integrator, the scenario's own contact laws (engine ``"mujoco_laws"``)."""
+    return simulate_impact_mujoco(mbm, config, q0=q0, v0=v0, timestep=timestep,
+                                  steps_per_mode=steps_per_mode, contact="laws")
+
+
 #: Engines by name (``roverimpact simulate --engine NAME``, ``simulate = "NAME"``).
-ENGINES = {"own": simulate_impact, "mujoco": simulate_impact_mujoco}
+ENGINES = {"own": simulate_impact, "mujoco": simulate_impact_mujoco,
+           "mujoco_laws": simulate_impact_mujoco_laws}
