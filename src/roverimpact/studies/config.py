@@ -4,7 +4,8 @@ A study file is TOML, validated by :class:`Study` (pydantic v2, unknown keys rej
 
     name = "beta sweep"
     simulate = false              # also run the compliant-contact simulator (F_max):
-                                  # true / "own", "mujoco", or ["own", "mujoco"]
+                                  # true / "own", "mujoco", "mujoco_laws",
+                                  # or a list such as ["own", "mujoco"]
     x = "obstacle.beta_deg"       # parameter on the x axis of the figures (optional)
 
     [base]                        # a scenario, same keys as a scenario file
@@ -102,7 +103,8 @@ class Study(StrictModel):
         Seeded random sample.
     simulate : bool, str or list of str
         Also run a compliant-contact simulator (F_max, contact duration): ``true`` or
-        ``"own"`` (roverimpact's simulator), ``"mujoco"``, or a list of engines such as
+        ``"own"`` (roverimpact's simulator), ``"mujoco"``, ``"mujoco_laws"``
+        (:data:`roverimpact.simulate.engines.ENGINE_NAMES`), or a list of engines such as
         ``["own", "mujoco"]``: the first gives ``F_max`` (the study's reference), each
         further one ``F_max_<engine>`` (:meth:`engines`).
     x : str, optional
