@@ -16,7 +16,10 @@ Each workload runs three ways, wall time from the call to the finished table:
   session share one (``reproduce``), start-up excluded.
 
 The load average is printed before each run: on a shared machine other jobs take cores
-and the speed-up cannot exceed ``cores - load``.
+and the speed-up cannot exceed ``cores - load``. With forked workers (Linux, the default:
+:func:`roverimpact.studies.executors.worker_start_method`) the script also times every
+chunk's computation and prints the mean per chunk serially and on the running cluster:
+their ratio is what two processes computing at once cost each other on this machine.
 """
 
 from __future__ import annotations
@@ -58,7 +61,39 @@ def load() -> str:
         return "load ?"
 
 
+CHUNK_LOG = os.path.join(tempfile.gettempdir(), f"bench_dask_chunks_{os.getpid()}.log")
+
+
+def time_chunks() -> None:
+    """Log the time of every chunk's computation (``compute_chunk``), in this process and
+    in the workers forked from it after this call."""
+    import roverimpact.studies.executors as ex
+
+    compute = ex.compute_chunk
+
+    def timed_compute(*args, **kw):
+        t = time.perf_counter()
+        out = compute(*args, **kw)
+        with open(CHUNK_LOG, "a") as f:
+            f.write(f"{time.perf_counter() - t}\n")
+        return out
+
+    ex.compute_chunk = timed_compute
+
+
+def chunk_times() -> list[float]:
+    """The chunk times logged since the last call (and clear the log)."""
+    try:
+        with open(CHUNK_LOG) as f:
+            out = [float(x) for x in f]
+        os.remove(CHUNK_LOG)
+    except FileNotFoundError:
+        out = []
+    return out
+
+
 def timed(study: dict, tmp: str, tag: str, **kw) -> tuple[float, str, np.ndarray]:
+    chunk_times()
     before = load()
     t0 = time.perf_counter()
     res = run_study(study, f"{tmp}/{tag}", **kw)
@@ -74,14 +109,43 @@ def compare(name: str, study: dict, workers: int, address: str) -> None:
                 else {**study, "random": {**study["random"], "n": 2}})
         run_study(warm, f"{tmp}/warm")                  # imports and compiled kernels
         ts, es, Ts = timed(study, tmp, "serial")
+        cs = chunk_times()
         tw, ew, Tw = timed(study, tmp, "workers", workers=workers)
         tr, er, Tr = timed(study, tmp, "running", scheduler=address)
+        cr = chunk_times()
     same = np.array_equal(Ts, Tw, equal_nan=True) and np.array_equal(Ts, Tr, equal_nan=True)
     print(f"{name}:")
     print(f"  serial                        {ts:8.2f} s   {es}")
     print(f"  workers={workers} (cluster started) {tw:8.2f} s   {ts / tw:5.2f}x   {ew}")
     print(f"  running cluster               {tr:8.2f} s   {ts / tr:5.2f}x   {er}")
     print(f"  T_c^- identical in the three runs: {same}")
+    if cs and cr:
+        print(f"  computing a chunk: {np.mean(cs):.3f} s serially, {np.mean(cr):.3f} s on the "
+              f"running cluster ({np.mean(cr) / np.mean(cs):.2f}x; {len(cr)} chunks)")
+
+
+def parquet_encoding(n: int = 50_000) -> None:
+    """One chunk of the indicator sweep (n rows) encoded with pyarrow's default options and
+    with the studies' ``PARQUET_WRITE``: size and best of 5 encoding times."""
+    import io
+
+    import pyarrow.parquet as pq
+
+    from roverimpact.studies.store import PARQUET_WRITE
+
+    with tempfile.TemporaryDirectory() as tmp:
+        table = run_study(indicator_study(n), f"{tmp}/p").table
+    t = __import__("pyarrow").Table.from_pandas(table, preserve_index=False)
+    print(f"Parquet encoding of a {n:,}-row chunk ({t.num_columns} columns):")
+    for label, opts in (("pyarrow default", {}), (f"PARQUET_WRITE {PARQUET_WRITE}", PARQUET_WRITE)):
+        best, size = float("inf"), 0
+        for _ in range(5):
+            buf = io.BytesIO()
+            t0 = time.perf_counter()
+            pq.write_table(t, buf, **opts)
+            best = min(best, time.perf_counter() - t0)
+            size = len(buf.getvalue())
+        print(f"  {label:<45} {1e3 * best:7.1f} ms   {size / 1e6:6.2f} MB")
 
 
 def main() -> None:
@@ -90,8 +154,10 @@ def main() -> None:
     ap.add_argument("--n-sim", type=int, default=200)
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args()
-    from roverimpact.studies.executors import local_cluster
+    from roverimpact.studies.executors import local_cluster, worker_start_method
 
+    if worker_start_method() == "fork":
+        time_chunks()                 # before the workers fork: they inherit the timing
     print(f"{os.cpu_count()} cores, {load()}")
     with local_cluster(args.workers) as address:      # as --workers starts one
         if args.n_indicator:
@@ -100,6 +166,7 @@ def main() -> None:
         if args.n_sim:
             compare(f"simulated sweep, 2-D rover, {args.n_sim} random cases",
                     simulated_study(args.n_sim), args.workers, address)
+    parquet_encoding()
 
 
 if __name__ == "__main__":

@@ -452,3 +452,49 @@ def test_local_cluster_workers_keep_glibc_adaptive_malloc(monkeypatch):
         env = next(iter(client.run(lambda: dict(os.environ)).values()))
     assert "MALLOC_TRIM_THRESHOLD_" not in env
     assert env.get("OMP_NUM_THREADS") == "1"
+
+
+def _worker_state():
+    """In a worker: its BLAS threads, and whether it has a module only its parent loaded."""
+    import sys
+
+    from threadpoolctl import threadpool_info
+
+    blas = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+    return blas, "roverimpact.report.html" in sys.modules
+
+
+@pytest.mark.parametrize("method", ["fork", "spawn"])
+def test_local_cluster_start_method_and_one_blas_thread(monkeypatch, method):
+    """On Linux the workers are forked: they have what the command loaded (a module no
+    worker imports by itself), and numpy's BLAS at one thread like a spawned worker's;
+    ROVERIMPACT_WORKER_START=spawn starts fresh processes. The command's own BLAS pool is
+    what it was."""
+    pytest.importorskip("dask.distributed")
+    pytest.importorskip("threadpoolctl")
+    if method == "fork" and not sys.platform.startswith("linux"):
+        pytest.skip("fork: Linux only")
+    from dask.distributed import Client
+    from threadpoolctl import threadpool_info
+
+    import roverimpact.report.html  # noqa: F401  (loaded here, never by a worker)
+    from roverimpact.studies.executors import local_cluster, worker_start_method
+
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", method)
+    assert worker_start_method() == method
+    before = [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
+    with local_cluster(1) as address, Client(address) as client:
+        blas, inherited = next(iter(client.run(_worker_state).values()))
+    assert blas and all(n == 1 for n in blas)
+    assert inherited == (method == "fork")
+    assert [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"] == before
+
+
+def test_worker_start_method_default_and_bad_value(monkeypatch):
+    from roverimpact.studies.executors import worker_start_method
+
+    monkeypatch.delenv("ROVERIMPACT_WORKER_START", raising=False)
+    assert worker_start_method() == ("fork" if sys.platform.startswith("linux") else "spawn")
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", "threads")
+    with pytest.raises(ConfigError, match="ROVERIMPACT_WORKER_START must be one of"):
+        worker_start_method()

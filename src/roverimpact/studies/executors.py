@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import socket
+import sys
 from collections.abc import Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 from urllib.parse import urlparse
@@ -20,9 +22,11 @@ import pandas as pd
 
 from ..exceptions import ConfigError, RoverImpactError
 from .config import Case, flatten
+from .store import PARQUET_WRITE
 
 __all__ = [
     "CLUSTER_START_S",
+    "START_METHODS",
     "WORKER_ENVIRON",
     "ChunkFile",
     "LazyCluster",
@@ -33,13 +37,16 @@ __all__ = [
     "need_dask",
     "run_dask",
     "run_serial",
+    "worker_start_method",
     "worth_a_cluster",
 ]
 
-#: Wall time [s] a local cluster costs before and after the work: start, the workers'
-#: first import of roverimpact and its kernels, close (measured 5.3 s on the 2-core
-#: machine, 2 workers: 3.8 s start, 0.6 s import, 0.9 s close; rounded up)
-CLUSTER_START_S = 6.0
+#: Wall time [s] a local cluster costs before and after the work (start, the workers'
+#: first import of roverimpact and its kernels, close), by how its workers start
+#: (:func:`worker_start_method`). Measured on the 2-core machine, 2 workers: spawned
+#: 5.3 s (3.8 s start, 0.6 s import, 0.9 s close), forked 0.42-0.44 s (0.09 s start,
+#: 0.3 s first tasks, 0.04 s close); rounded up for a loaded machine.
+CLUSTER_START_S = {"fork": 1.5, "forkserver": 6.0, "spawn": 6.0}
 #: the same once a shared cluster runs (tasks shipped, results gathered)
 CLUSTER_RUNNING_S = 0.5
 
@@ -124,7 +131,7 @@ def compute_chunk_file(evaluator, base, normalized_base, cases, params, simulate
     :func:`~.store.atomic_parquet` writes)."""
     df = compute_chunk(evaluator, base, normalized_base, cases, params, simulate)
     buf = io.BytesIO()
-    df.to_parquet(buf, index=False)
+    df.to_parquet(buf, index=False, **PARQUET_WRITE)
     return ChunkFile(len(df), buf.getvalue())
 
 
@@ -132,6 +139,33 @@ def compute_chunk_file(evaluator, base, normalized_base, cases, params, simulate
 #: ``MALLOC_TRIM_THRESHOLD_`` unset (None unsets a pre-spawn variable), the one-thread
 #: numpy settings kept
 WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+
+#: Start methods of local workers (:func:`worker_start_method`).
+START_METHODS = ("fork", "forkserver", "spawn")
+
+
+def worker_start_method() -> str:
+    """How local clusters start their worker processes: ``"fork"`` on Linux, ``"spawn"``
+    elsewhere; ``ROVERIMPACT_WORKER_START=spawn`` (or ``forkserver``, ``fork``) overrides.
+
+    Dask spawns by default: every worker starts a fresh Python that imports numpy,
+    Pinocchio, Dask and roverimpact and loads numba's cached kernels, 3.5-4.5 s on 2 busy
+    cores. A forked worker inherits all of that from the command, which has loaded it
+    for its first chunk: 0.4 s. ``fork`` is Python's own default on Linux before 3.14;
+    macOS (where system libraries are not fork-safe) and Windows spawn.
+
+    Raises
+    ------
+    ConfigError
+        ``ROVERIMPACT_WORKER_START`` names another method.
+    """
+    env = os.environ.get("ROVERIMPACT_WORKER_START", "").strip().lower()
+    if env:
+        if env not in START_METHODS:
+            raise ConfigError(f"ROVERIMPACT_WORKER_START must be one of "
+                              f"{', '.join(START_METHODS)}, got {env!r}")
+        return env
+    return "fork" if sys.platform.startswith("linux") else "spawn"
 
 
 @contextmanager
@@ -144,7 +178,9 @@ def local_cluster(workers: int):
     (:data:`WORKER_ENVIRON`): setting it turns off glibc's adaptive mmap threshold, and
     this package's many short-lived numpy arrays then cost page faults: a traverse path
     took 1.2-1.4x the CPU time in a process with that setting
-    (``benchmarks/bench_traverse.py`` prints the comparison).
+    (``benchmarks/bench_traverse.py`` prints the comparison). On Linux they are forked
+    from this process (:func:`worker_start_method`: 0.4 s against 3.5-4.5 s to spawn),
+    with numpy's BLAS at one thread.
     """
     if workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
@@ -152,13 +188,30 @@ def local_cluster(workers: int):
     import dask
     from dask.distributed import LocalCluster
 
-    with dask.config.set(WORKER_ENVIRON):
+    method = worker_start_method()
+    with dask.config.set({**WORKER_ENVIRON,
+                          "distributed.worker.multiprocessing-method": method}), \
+            _one_blas_thread(method):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                dashboard_address=None)
     try:
         yield cluster.scheduler_address
     finally:
         cluster.close()
+
+
+def _one_blas_thread(method: str):
+    """While forking workers: numpy's BLAS limited to one thread, as a spawned worker's
+    ``OMP_NUM_THREADS=1`` does (a forked worker keeps the pool its parent has, and the
+    variable is read only when the library loads). The command's own pool is restored
+    after. threadpoolctl comes with the ``dask`` extra; without it, nothing is limited."""
+    if method != "fork":
+        return nullcontext()
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - dask installed without the extra
+        return nullcontext()
+    return threadpool_limits(limits=1)
 
 
 class LazyCluster:
@@ -197,14 +250,15 @@ class LazyCluster:
 def worth_a_cluster(serial_s: float, workers: int, running: bool) -> bool:
     """Whether ``workers`` processes finish work of ``serial_s`` seconds (serial
     estimate) sooner than this process: ``overhead + serial_s / workers < serial_s``,
-    overhead :data:`CLUSTER_START_S` (or :data:`CLUSTER_RUNNING_S` for a running one).
+    overhead :data:`CLUSTER_START_S` of the :func:`worker_start_method` (or
+    :data:`CLUSTER_RUNNING_S` for a running one).
 
     >>> worth_a_cluster(3.0, 2, running=False), worth_a_cluster(60.0, 2, running=False)
     (False, True)
     """
     if workers < 2:
         return False
-    overhead = CLUSTER_RUNNING_S if running else CLUSTER_START_S
+    overhead = CLUSTER_RUNNING_S if running else CLUSTER_START_S[worker_start_method()]
     return overhead + serial_s / workers < serial_s
 
 
