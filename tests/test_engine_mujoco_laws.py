@@ -14,8 +14,6 @@ evaluated before every step from MuJoCo's geometry and applied as forces. Refere
 
 from __future__ import annotations
 
-import numpy as np
-import pinocchio as pin
 import pytest
 
 pytest.importorskip("mujoco")
@@ -24,7 +22,6 @@ from roverimpact._io import read_toml
 from roverimpact.contact import get_law, predict
 from roverimpact.exceptions import ConfigError
 from roverimpact.models import rocker_bogie, rover2d
-from roverimpact.models.base import MultibodyModel, Wheel
 from roverimpact.simulate import SimulationConfig, initial_state, simulate_impact
 from roverimpact.simulate.engines import (
     check_engine,
@@ -37,18 +34,9 @@ from roverimpact.studies.config import apply_overrides
 from roverimpact.studies.evaluate import evaluate_case
 from roverimpact.studies.reproduce import builtin_study_path
 
+from .test_engine_mujoco import slider
+
 HC = {"k": 1e7, "e": 0.5}
-
-
-def slider(mass=4.0, radius=0.05):
-    model = pin.Model()
-    model.name = "slider"
-    j = model.addJoint(0, pin.JointModelPX(), pin.SE3.Identity(), "x")
-    model.appendBodyToJoint(j, pin.Inertia(mass, np.zeros(3), 0.01 * np.eye(3)),
-                            pin.SE3.Identity())
-    model.addFrame(pin.Frame("ball", j, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
-    return MultibodyModel(model=model, name="slider", wheels=[Wheel("ball", "ball", radius)],
-                          params={"q_nominal": [0.0]})
 
 
 @pytest.mark.parametrize("law", [{"k": 1e7, "e": 0.5}, {"k": 1e7, "e": 0.9},
