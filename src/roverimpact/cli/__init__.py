@@ -97,13 +97,13 @@ def run() -> None:
     """Entry point of the ``roverimpact`` console script: :func:`main`, then the process ends
     without the interpreter's teardown.
 
-    Python's shutdown frees every module object one by one: 0.3 s after a command that
-    loaded numba's compiled kernels (``roverimpact energy``: 1.06 s warm, 0.75 s without;
-    benchmarks/bench_startup.py). The command's files are closed by then (the package
-    writes through context managers and atomic replaces), so the end is: the exit
-    handlers (``atexit``: logging, Dask, multiprocessing), the standard streams (Python's and C's)
-    flushed, ``os._exit``. With another non-daemon thread still running (which Python would wait
-    for) the process exits the usual way.
+    Python's shutdown frees every module object one by one, about 0.3 s after a command
+    that loaded numba's compiled kernels (warm ``roverimpact energy`` went from 0.86 to
+    0.66-0.71 s with this end; benchmarks/bench_startup.py). The command's files are
+    closed by then (the package writes through context managers and atomic replaces), so
+    the end is: the exit handlers (``atexit``: logging, Dask, multiprocessing), the
+    standard streams (Python's and C's) flushed, ``os._exit``. With another non-daemon
+    thread still running (which Python would wait for) the process exits the usual way.
     """
     code = main()
     if any(t is not threading.main_thread() and not t.daemon and t.is_alive()
