@@ -109,3 +109,41 @@ def test_names_and_bad_input():
     with pytest.raises(ConfigError, match="terrain"):
         check_engine("mujoco_laws", rv, SimulationConfig(), terrain=True)
     check_engine("mujoco_laws", rv, SimulationConfig())          # frictionless: accepted
+
+
+# ------------------------------------------------------------------- command line
+def test_simulate_cli_with_the_laws_in_mujoco(tmp_path, capsys):
+    """``roverimpact simulate FILE --engine mujoco-laws``: the example scenario without its
+    friction (Hunt-Crossley obstacle and ground) agrees with the own engine within 0.5 %;
+    the table says how the contact was run; the example as it is (mu = 0.3): one error
+    line, exit 2, nothing written."""
+    import json
+    from pathlib import Path
+
+    from roverimpact.cli import main
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "simulate_rover2d.toml"
+    text = example.read_text()
+    assert "mu = 0.3" in text
+    frictionless = tmp_path / "mu0.toml"
+    frictionless.write_text(text.replace("mu = 0.3", "mu = 0.0", 1))
+    F = {}
+    for engine in ("own", "mujoco-laws"):
+        assert main(["simulate", str(frictionless), "-o", str(tmp_path / engine), "--json",
+                     "--no-plot", "--engine", engine]) == 0
+        summary = json.loads(capsys.readouterr().out)
+        F[engine] = summary["F_max_total"]
+    assert summary["engine"] == "mujoco_laws" and summary["stats"]["contact"] == "laws"
+    assert F["mujoco-laws"] == pytest.approx(F["own"], rel=5e-3)
+    assert main(["simulate", str(frictionless), "-o", str(tmp_path / "t"), "--no-plot",
+                 "--engine", "mujoco_laws"]) == 0
+    out = capsys.readouterr().out
+    assert "the scenario's, applied as forces" in out
+    assert max(map(len, out.splitlines())) <= 80
+
+    out_dir = tmp_path / "refused"
+    assert main(["simulate", str(example), "-o", str(out_dir), "--engine", "mujoco_laws"]) == 2
+    err = capsys.readouterr().err
+    assert "needs mu = 0" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+    assert not out_dir.exists()
