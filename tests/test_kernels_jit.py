@@ -119,3 +119,31 @@ def test_build_settings_are_scoped_and_required_kernels_come_first(monkeypatch):
     assert first.compiled and lanes_like.compiled
     # the real lane kernel is declared that way
     assert LANES._slp and not LANES._loop_vectorize and partition_kernel in LANES._requires
+
+
+def test_every_kernel_can_be_found_from_its_home():
+    """:func:`compile_in_background` imports ``Kernel.home`` in another process and calls
+    ``.get()`` on it: every kernel's home must name the kernel object itself (not its
+    Python function, which has no ``get``)."""
+    import importlib
+    import pkgutil
+
+    import roverimpact
+    from roverimpact._kernels._jit import Kernel
+
+    found = []
+    for info in pkgutil.walk_packages(roverimpact.__path__, "roverimpact."):
+        if ".cli" in info.name or info.name.endswith("__main__"):
+            continue
+        mod = importlib.import_module(info.name)
+        for name, obj in vars(mod).items():
+            if isinstance(obj, Kernel) and obj.py_func.__module__ == mod.__name__:
+                module, attr = obj.home.split(":")
+                assert getattr(importlib.import_module(module), attr) is obj, (name, obj.home)
+                found.append(obj.home)
+    assert {"roverimpact._kernels.partition:partition_kernel",
+            "roverimpact._kernels.lemke:impact_kernel",
+            "roverimpact._kernels.reduced:rk4_peaks",
+            "roverimpact._kernels.reduced:stiff_peaks",
+            "roverimpact.models._assemble:_evaluate_one"} <= set(found)
+

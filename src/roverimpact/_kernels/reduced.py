@@ -353,11 +353,13 @@ rk4_peaks = Kernel(
     _rk4_peaks,
     types.void(ro(f8, 3), ro(f8, 2), *_LAW, ro(f8, 2), ro(f8, 2), i8, f8, ro(f8, 1),
                rw(f8, 2)),
+    home=f"{__name__}:rk4_peaks",
 )
 stiff_peaks = Kernel(
     _stiff_peaks,
     types.void(ro(f8, 3), ro(f8, 2), *_LAW, ro(f8, 2), ro(f8, 2), i8, f8, ro(f8, 1),
                ro(f8, 1), f8, rw(f8, 2)),
+    home=f"{__name__}:stiff_peaks",
 )
 
 __all__ = ["rk4_peaks", "stiff_peaks"]

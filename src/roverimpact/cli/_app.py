@@ -163,8 +163,9 @@ def compile_ahead(*later, now=()) -> None:
     the longer ones: ``roverimpact energy`` sends the row assembly (1.3 s of compile,
     needed first) and compiles the partition kernel (2.1 s) here; the other way round it
     waited 1.4 s for the second process. With :func:`roverimpact.cli.run`'s end, a cold
-    ``energy`` went from 3.5-3.7 to 2.8-2.95 s (benchmarks/bench_startup.py). A warm
-    cache starts nothing and ``now`` only loads.
+    ``energy`` went from 3.5-3.7 to 2.8-2.95 s (benchmarks/bench_startup.py).
+    ``reproduce`` sends Lemke's impact kernel (6 s) and compiles the partition and
+    Runge-Kutta kernels here. A warm cache starts nothing and ``now`` only loads.
     """
     from .._kernels._jit import compile_in_background
 

@@ -215,9 +215,16 @@ def reproduce_cmd(
 
     if out is None:
         out = Path("roverimpact-results-quick" if quick else "roverimpact-results")
-    if workers is None and scheduler is None:  # (Dask workers compile their own)
-        compile_ahead()
+    here = workers is None and scheduler is None  # (Dask workers compile their own)
+    if here:  # the longest compile (Lemke's impact kernel) in the background, the rest here
+        from .._kernels.lemke import impact_kernel
+        from .._kernels.partition import partition_kernel
+        from .._kernels.reduced import rk4_peaks
+
+        compile_ahead(impact_kernel)
     with progress_bar("reproduce", to_stderr=as_json) as update:
+        if here:
+            compile_ahead(now=(partition_kernel, rk4_peaks))
         res = reproduce(out, quick=quick, overwrite=overwrite, workers=workers,
                         scheduler=scheduler, n_boot=n_boot,
                         progress=lambda name, d, t: update(d, t),
