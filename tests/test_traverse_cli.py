@@ -234,3 +234,34 @@ def test_least_risk_suspension_per_segment(tmp_path):
     rep = evaluate_setting(prob, {"chassis_com_above_pivot": row["set_chassis_com_above_pivot"]})
     assert rep.objective == pytest.approx(row["T_c_flat_best"], rel=1e-9)
     assert load_traverse(tmp_path / "o" / "traverse.toml") == cfg
+
+
+@pytest.mark.parametrize("model, workers, sent, here", [
+    ("weight", None, ["impact_kernel", "stiff_peaks"], ["LANES", "rk4_peaks"]),
+    ("closed-form", None, ["impact_kernel"], ["LANES"]),
+    ("weight", 2, [], []),
+])
+def test_traverse_compile_plan(tmp_path, monkeypatch, model, workers, sent, here):
+    """On a fresh install the command compiles on two cores: Lemke's kernel (and the stiff
+    pair when the weight model needs forces) in a second process, the lane partition (and
+    the Runge-Kutta kernel) here; nothing when Dask workers compute; a bad file fails
+    before any of it."""
+    from roverimpact._kernels import _jit
+    from roverimpact.cli import _traverse
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "traverse_rocky.toml"
+    text = example.read_text().replace("[limits]", f'[limits]\nmodel = "{model}"', 1)
+    cfg = tmp_path / "t.toml"
+    cfg.write_text(text)
+    got = []
+    monkeypatch.setattr(_jit, "compile_in_background",
+                        lambda *ks: got.extend(k.home.split(":")[1] for k in ks) or [])
+    now = _traverse._compile_plan(cfg, workers, None)
+    assert got == sent
+    assert [k.home.split(":")[1] for k in now] == here
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("[limits]", "[limits]\nspeedy = 1", 1))
+    got.clear()
+    with pytest.raises(ConfigError):
+        _traverse._compile_plan(bad, None, None)
+    assert got == []

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, bold, console, new_table, print_json, progress_bar
+from ._app import app, bold, compile_ahead, console, new_table, print_json, progress_bar
 
 
 def _f(x, fmt="{:.4g}") -> str:
@@ -24,6 +24,29 @@ def _print_summary(table) -> None:
         tab.add_row(*[str(row[c]) if isinstance(row[c], str) else _f(float(row[c]))
                       for c in cols])
     console.print(tab)
+
+
+def _compile_plan(config: Path, workers, scheduler) -> tuple:
+    """On a fresh install, for a traverse run in this process: Lemke's impact kernel (6 s
+    of compile) and the stiff Runge-Kutta pair (4.6 s) go to a second process, and the
+    kernels returned (the lane-parallel partition, 8.6 s with the one-item kernel it
+    requires, and the Runge-Kutta kernel) are compiled here before the work
+    (``compile_ahead``): a first ``roverimpact traverse examples/traverse_rocky.toml``
+    took 31-33 s in one process, 22.4 s so (benchmarks/bench_startup.py --full). The file
+    is read first, so a bad one fails before any compile."""
+    from .._kernels.lanes_jit import LANES
+    from .._kernels.lemke import impact_kernel
+    from .._kernels.reduced import rk4_peaks, stiff_peaks
+    from ..traverse.schema import load_traverse
+
+    cfg = load_traverse(config)
+    workers = workers if workers is not None else cfg.run.workers
+    scheduler = scheduler if scheduler is not None else cfg.run.scheduler
+    if workers is not None or scheduler is not None:
+        return ()                      # the workers compute (forked ones inherit these)
+    forces = cfg.limits.F_allow is not None and cfg.limits.model == "weight"
+    compile_ahead(impact_kernel, *((stiff_peaks,) if forces else ()))
+    return (LANES, *((rk4_peaks,) if forces else ()))
 
 
 @app.command("traverse")
@@ -49,7 +72,9 @@ def traverse_cmd(
     from ..report.traverse import summary, traverse_report
     from ..traverse.run import run_traverse
 
+    now = _compile_plan(config, workers, scheduler)
     with progress_bar(config.stem, unit="stations", to_stderr=as_json) as update:
+        compile_ahead(now=now)
         res = run_traverse(config, out, workers=workers, scheduler=scheduler, csv=csv,
                            progress=update)
     path = traverse_report(out, config=res.config) if report else None
