@@ -11,8 +11,9 @@ Times whole processes and prints each against bare Python measured in the same r
   compile of the partition kernel forced and switched off, see
   ``roverimpact._kernels._jit.compile_in_background``) and ``reproduce --quick``;
   ``--full`` adds the full ``roverimpact reproduce`` cold and warm (target: under 20 s
-  cold; one run each, about a minute) and ``roverimpact traverse
-  examples/traverse_rocky.toml`` cold and warm (one run each, about 40 s);
+  cold; one run each, about a minute), ``roverimpact sweep
+  examples/study_rover2d_beta_h.toml`` and ``roverimpact traverse
+  examples/traverse_rocky.toml`` cold and warm (one run each, about a minute);
 - ``--kernels``: the compile time of each compiled kernel alone (a fresh process and an
   empty cache per kernel, after a trivial compile that pays numba's one-off set-up) and
   the time to load it from the cache it wrote. A kernel's time includes the functions it
@@ -130,6 +131,8 @@ def main() -> None:
     quick = [exe, "reproduce", "--quick", "--overwrite", "-o", f"{out}/quick"]
     full = [exe, "reproduce", "-o", f"{out}/full"]
     traverse = [exe, "traverse", "examples/traverse_rocky.toml", "-o", f"{out}/traverse"]
+    sweep = [exe, "sweep", "examples/study_rover2d_beta_h.toml", "-o", f"{out}/sweep",
+             "--overwrite", "--no-report"]
     py = [sys.executable, "-c", "pass"]
     _run(py, _env())
     base = statistics.median([_run(py, _env()) for _ in range(max(args.n, 5))])
@@ -153,6 +156,10 @@ def main() -> None:
             _row("reproduce, full (cold: empty cache)", [_run(full, _env(cache))], base)
             shutil.rmtree(f"{out}/full")
             _row("reproduce, full (warm cache)", [_run(full, _env(cache))], base)
+        with tempfile.TemporaryDirectory() as cache:
+            _row("sweep rover2d_beta_h (cold: empty cache)", [_run(sweep, _env(cache))],
+                 base)
+            _row("sweep rover2d_beta_h (warm cache)", [_run(sweep, _env(cache))], base)
         with tempfile.TemporaryDirectory() as cache:
             _row("traverse traverse_rocky (cold: empty cache)", [_run(traverse, _env(cache))],
                  base)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import socket
+import textwrap
 from pathlib import Path
 
 import pandas as pd
@@ -157,3 +158,45 @@ def test_example_study_files_are_valid():
     for f in files:
         prep = prepare_study(f)
         assert prep.cases and prep.study.n_cases() == len(prep.cases)
+
+
+@pytest.mark.parametrize("simulate, workers, here", [
+    (True, None, ["partition_kernel", "rk4_peaks"]),
+    (False, None, ["partition_kernel"]),
+    (True, 2, None),
+])
+def test_sweep_compile_plan(tmp_path, monkeypatch, simulate, workers, here):
+    """On a fresh install ``sweep`` sends Lemke's impact kernel to a second process and
+    compiles the partition (and, when the study simulates, the Runge-Kutta kernel of the
+    refined prediction) here; nothing when Dask workers compute; a bad file fails before
+    any of it."""
+    from roverimpact._kernels import _jit
+    from roverimpact.cli import _study
+
+    text = textwrap.dedent(f"""
+        name = "plan"
+        simulate = {str(simulate).lower()}
+        [base]
+        model = {{ name = "rover2d" }}
+        velocity = {{ u = 0.3 }}
+        obstacle = {{ wheel = "front", beta_deg = 60.0 }}
+        [grid]
+        "obstacle.beta_deg" = [30.0, 60.0]
+    """)
+    study = tmp_path / "s.toml"
+    study.write_text(text)
+    sent = []
+    monkeypatch.setattr(_jit, "compile_in_background",
+                        lambda *ks: sent.extend(k.home.split(":")[1] for k in ks) or [])
+    now = _study._compile_plan(study, workers, None)
+    if here is None:
+        assert now == () and sent == []
+    else:
+        assert sent == ["impact_kernel"]
+        assert [k.home.split(":")[1] for k in now] == here
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace('name = "plan"', 'name = "plan"\nspeedy = 1'))
+    sent.clear()
+    with pytest.raises(ConfigError):
+        _study._compile_plan(bad, None, None)
+    assert sent == []

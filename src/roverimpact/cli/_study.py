@@ -111,6 +111,26 @@ def _stats_json(sections) -> list[dict]:
     return out
 
 
+def _compile_plan(study: Path, workers, scheduler) -> tuple:
+    """On a fresh install, for a study run in this process: Lemke's impact kernel (the
+    active set; 6-7 s of compile) goes to a second process, and the kernels returned (the
+    partition, and the Runge-Kutta kernel of the refined prediction when the study
+    simulates) are compiled here before the work (``compile_ahead``): a first
+    ``roverimpact sweep examples/study_rover2d_beta_h.toml`` took 13.7 s in one process,
+    8.8 s so (benchmarks/bench_startup.py --full). The file is read first, so a bad one
+    fails before any compile."""
+    from .._kernels.lemke import impact_kernel
+    from .._kernels.partition import partition_kernel
+    from .._kernels.reduced import rk4_peaks
+    from ..studies.config import load_study
+
+    spec, _text = load_study(study)
+    if workers is not None or scheduler is not None:
+        return ()                      # the workers compute (forked ones inherit these)
+    compile_ahead(impact_kernel)
+    return (partition_kernel, *((rk4_peaks,) if spec.simulate else ()))
+
+
 @app.command("sweep")
 def sweep_cmd(
     study: Path = typer.Argument(..., help="Study file (TOML): base scenario + grid/cases/random."),
@@ -134,7 +154,9 @@ def sweep_cmd(
     """
     from ..studies.sweep import run_study
 
+    now = _compile_plan(study, workers, scheduler)
     with progress_bar(study.stem, to_stderr=as_json) as update:
+        compile_ahead(now=now)
         res = run_study(study, out, resume=resume, overwrite=overwrite, csv=csv,
                         workers=workers, scheduler=scheduler, chunk_size=chunk_size,
                         progress=update,
