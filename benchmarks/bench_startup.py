@@ -11,7 +11,8 @@ Times whole processes and prints each against bare Python measured in the same r
   compile of the partition kernel forced and switched off, see
   ``roverimpact._kernels._jit.compile_in_background``) and ``reproduce --quick``;
   ``--full`` adds the full ``roverimpact reproduce`` cold and warm (target: under 20 s
-  cold; one run each, about a minute), ``roverimpact sweep
+  cold; one run each, about a minute), ``roverimpact simulate
+  examples/simulate_rover2d.toml``, ``roverimpact sweep
   examples/study_rover2d_beta_h.toml`` and ``roverimpact traverse
   examples/traverse_rocky.toml`` cold and warm (one run each, about a minute);
 - ``--kernels``: the compile time of each compiled kernel alone (a fresh process and an
@@ -133,6 +134,8 @@ def main() -> None:
     traverse = [exe, "traverse", "examples/traverse_rocky.toml", "-o", f"{out}/traverse"]
     sweep = [exe, "sweep", "examples/study_rover2d_beta_h.toml", "-o", f"{out}/sweep",
              "--overwrite", "--no-report"]
+    simulate = [exe, "simulate", "examples/simulate_rover2d.toml", "-o", f"{out}/simulate",
+                "--no-plot"]
     py = [sys.executable, "-c", "pass"]
     _run(py, _env())
     base = statistics.median([_run(py, _env()) for _ in range(max(args.n, 5))])
@@ -156,6 +159,10 @@ def main() -> None:
             _row("reproduce, full (cold: empty cache)", [_run(full, _env(cache))], base)
             shutil.rmtree(f"{out}/full")
             _row("reproduce, full (warm cache)", [_run(full, _env(cache))], base)
+        with tempfile.TemporaryDirectory() as cache:
+            _row("simulate simulate_rover2d (cold: empty cache)",
+                 [_run(simulate, _env(cache))], base)
+            _row("simulate simulate_rover2d (warm cache)", [_run(simulate, _env(cache))], base)
         with tempfile.TemporaryDirectory() as cache:
             _row("sweep rover2d_beta_h (cold: empty cache)", [_run(sweep, _env(cache))],
                  base)

@@ -110,3 +110,20 @@ def test_console_script_entry_is_run():
     with open(ROOT / "pyproject.toml", "rb") as f:
         scripts = tomllib.load(f)["project"]["scripts"]
     assert scripts["roverimpact"] == "roverimpact.cli:run"
+
+
+def test_simulate_sends_lemke_to_the_background_and_compiles_the_partition_here(
+        monkeypatch, tmp_path):
+    from roverimpact._kernels import _jit
+    from roverimpact.cli import main
+
+    sent, got = [], []
+    monkeypatch.setattr(_jit, "compile_in_background",
+                        lambda *ks: sent.extend(k.__name__ for k in ks) or [])
+    real_get = _jit.Kernel.get
+    monkeypatch.setattr(_jit.Kernel, "get",
+                        lambda self: got.append(self.__name__) or real_get(self))
+    example = ROOT / "examples" / "simulate_rover2d.toml"
+    assert main(["simulate", str(example), "-o", str(tmp_path / "o"), "--no-plot"]) == 0
+    assert sent == ["impact_kernel"]
+    assert got[0] == "partition_kernel" and "impact_kernel" in got

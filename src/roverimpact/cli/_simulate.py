@@ -7,7 +7,19 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, check_output, console, json_text, new_table, print_json
+from ._app import app, check_output, compile_ahead, console, json_text, new_table, print_json
+
+
+def _compile_ahead() -> None:
+    """On a fresh install: Lemke's impact kernel (the active set at first contact, 6.6 s
+    of compile) in a second process, the partition kernel here at once (``compile_ahead``):
+    a first ``roverimpact simulate examples/simulate_rover2d.toml`` took 10.6 s in one
+    process, 8.0 s so (benchmarks/bench_startup.py --full)."""
+    from .._kernels.lemke import impact_kernel
+    from .._kernels.partition import partition_kernel
+
+    compile_ahead(impact_kernel)
+    compile_ahead(now=(partition_kernel,))
 
 
 @app.command("simulate")
@@ -35,6 +47,7 @@ def simulate_cmd(
         raise typer.BadParameter("use parquet or csv", param_hint="--format")
     check_output(outdir, folder=True)
     sc = load_scenario(file)
+    _compile_ahead()
     cfg = SimulationConfig.from_scenario(sc, where=str(file))
     model = scenario_model(sc)
     result = simulate_scenario(sc, model=model, where=str(file), engine=engine)
