@@ -160,18 +160,21 @@ def test_example_study_files_are_valid():
         assert prep.cases and prep.study.n_cases() == len(prep.cases)
 
 
-@pytest.mark.parametrize("simulate, workers, here", [
-    (True, None, ["partition_kernel", "rk4_peaks"]),
-    (False, None, ["partition_kernel"]),
-    (True, 2, None),
+@pytest.mark.parametrize("simulate, workers, start, here", [
+    (True, None, "fork", ["partition_kernel", "rk4_peaks"]),
+    (False, None, "fork", ["partition_kernel"]),
+    (True, 2, "fork", ["partition_kernel", "rk4_peaks"]),     # forked workers inherit them
+    (True, 2, "spawn", None),
 ])
-def test_sweep_compile_plan(tmp_path, monkeypatch, simulate, workers, here):
+def test_sweep_compile_plan(tmp_path, monkeypatch, simulate, workers, start, here):
     """On a fresh install ``sweep`` sends Lemke's impact kernel to a second process and
     compiles the partition (and, when the study simulates, the Runge-Kutta kernel of the
-    refined prediction) here; nothing when Dask workers compute; a bad file fails before
-    any of it."""
+    refined prediction) here, also before forking local workers; nothing for spawned
+    workers; a bad file fails before any of it."""
     from roverimpact._kernels import _jit
     from roverimpact.cli import _study
+
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", start)
 
     text = textwrap.dedent(f"""
         name = "plan"

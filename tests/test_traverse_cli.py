@@ -236,18 +236,23 @@ def test_least_risk_suspension_per_segment(tmp_path):
     assert load_traverse(tmp_path / "o" / "traverse.toml") == cfg
 
 
-@pytest.mark.parametrize("model, workers, sent, here", [
-    ("weight", None, ["impact_kernel", "stiff_peaks"], ["LANES", "rk4_peaks"]),
-    ("closed-form", None, ["impact_kernel"], ["LANES"]),
-    ("weight", 2, [], []),
+@pytest.mark.parametrize("model, workers, scheduler, start, sent, here", [
+    ("weight", None, None, "fork", ["impact_kernel", "stiff_peaks"], ["LANES", "rk4_peaks"]),
+    ("closed-form", None, None, "fork", ["impact_kernel"], ["LANES"]),
+    ("closed-form", 2, None, "fork", ["impact_kernel"], ["LANES", "impact_kernel"]),
+    ("weight", 2, None, "spawn", [], []),
+    ("weight", None, "tcp://127.0.0.1:1", "fork", [], []),
 ])
-def test_traverse_compile_plan(tmp_path, monkeypatch, model, workers, sent, here):
+def test_traverse_compile_plan(tmp_path, monkeypatch, model, workers, scheduler, start, sent,
+                               here):
     """On a fresh install the command compiles on two cores: Lemke's kernel (and the stiff
     pair when the weight model needs forces) in a second process, the lane partition (and
-    the Runge-Kutta kernel) here; nothing when Dask workers compute; a bad file fails
-    before any of it."""
+    the Runge-Kutta kernel) here, also before forking local workers (they inherit them);
+    nothing for spawned workers or a scheduler's; a bad file fails before any of it."""
     from roverimpact._kernels import _jit
     from roverimpact.cli import _traverse
+
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", start)
 
     example = Path(__file__).resolve().parents[1] / "examples" / "traverse_rocky.toml"
     text = example.read_text().replace("[limits]", f'[limits]\nmodel = "{model}"', 1)
@@ -256,7 +261,7 @@ def test_traverse_compile_plan(tmp_path, monkeypatch, model, workers, sent, here
     got = []
     monkeypatch.setattr(_jit, "compile_in_background",
                         lambda *ks: got.extend(k.home.split(":")[1] for k in ks) or [])
-    now = _traverse._compile_plan(cfg, workers, None)
+    now = _traverse._compile_plan(cfg, workers, scheduler)
     assert got == sent
     assert [k.home.split(":")[1] for k in now] == here
     bad = tmp_path / "bad.toml"

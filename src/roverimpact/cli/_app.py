@@ -178,6 +178,21 @@ def compile_ahead(*later, now=()) -> None:
         k.get()
 
 
+def compiles_here(workers, scheduler) -> bool:
+    """Whether a command's kernels are best compiled in this process before its work
+    (:func:`compile_ahead`): for a serial run, and for a local Dask cluster whose workers
+    are forked from this process (they inherit what it compiled,
+    :func:`roverimpact.studies.executors.worker_start_method`); not for a running
+    scheduler's or spawned workers, which compile their own."""
+    if scheduler is not None:
+        return False
+    if workers is None:
+        return True
+    from ..studies.executors import worker_start_method
+
+    return worker_start_method() == "fork"
+
+
 def new_table(title: str, *columns: str, left: tuple[str, ...] = (),
               right: tuple[str, ...] = ()) -> Table:
     """A table that stays readable in an 80-column terminal (:class:`_Table`).

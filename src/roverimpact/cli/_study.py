@@ -14,6 +14,7 @@ from ._app import (
     app,
     bold,
     compile_ahead,
+    compiles_here,
     console,
     err_console,
     new_table,
@@ -125,8 +126,8 @@ def _compile_plan(study: Path, workers, scheduler) -> tuple:
     from ..studies.config import load_study
 
     spec, _text = load_study(study)
-    if workers is not None or scheduler is not None:
-        return ()                      # the workers compute (forked ones inherit these)
+    if not compiles_here(workers, scheduler):
+        return ()
     compile_ahead(impact_kernel)
     return (partition_kernel, *((rk4_peaks,) if spec.simulate else ()))
 
@@ -237,7 +238,7 @@ def reproduce_cmd(
 
     if out is None:
         out = Path("roverimpact-results-quick" if quick else "roverimpact-results")
-    here = workers is None and scheduler is None  # (Dask workers compile their own)
+    here = compiles_here(workers, scheduler)
     if here:  # the longest compile (Lemke's impact kernel) in the background, the rest here
         from .._kernels.lemke import impact_kernel
         from .._kernels.partition import partition_kernel

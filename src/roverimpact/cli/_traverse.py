@@ -10,7 +10,16 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, bold, compile_ahead, console, new_table, print_json, progress_bar
+from ._app import (
+    app,
+    bold,
+    compile_ahead,
+    compiles_here,
+    console,
+    new_table,
+    print_json,
+    progress_bar,
+)
 
 
 def _f(x, fmt="{:.4g}") -> str:
@@ -32,8 +41,10 @@ def _compile_plan(config: Path, workers, scheduler) -> tuple:
     kernels returned (the lane-parallel partition, 8.6 s with the one-item kernel it
     requires, and the Runge-Kutta kernel) are compiled here before the work
     (``compile_ahead``): a first ``roverimpact traverse examples/traverse_rocky.toml``
-    took 31-33 s in one process, 22.4 s so (benchmarks/bench_startup.py --full). The file
-    is read first, so a bad one fails before any compile."""
+    took 31-33 s in one process, 22.4 s so (benchmarks/bench_startup.py --full). With
+    local (forked) workers, the second process's kernels are then loaded here too, so
+    that the workers inherit all of them. The file is read first, so a bad one fails
+    before any compile."""
     from .._kernels.lanes_jit import LANES
     from .._kernels.lemke import impact_kernel
     from .._kernels.reduced import rk4_peaks, stiff_peaks
@@ -42,11 +53,14 @@ def _compile_plan(config: Path, workers, scheduler) -> tuple:
     cfg = load_traverse(config)
     workers = workers if workers is not None else cfg.run.workers
     scheduler = scheduler if scheduler is not None else cfg.run.scheduler
-    if workers is not None or scheduler is not None:
-        return ()                      # the workers compute (forked ones inherit these)
+    if not compiles_here(workers, scheduler):
+        return ()
     forces = cfg.limits.F_allow is not None and cfg.limits.model == "weight"
-    compile_ahead(impact_kernel, *((stiff_peaks,) if forces else ()))
-    return (LANES, *((rk4_peaks,) if forces else ()))
+    later = (impact_kernel, *((stiff_peaks,) if forces else ()))
+    compile_ahead(*later)
+    here = (LANES, *((rk4_peaks,) if forces else ()))
+    # forked workers do all the work: have every kernel loaded here before they fork
+    return here if workers is None else (*here, *later)
 
 
 @app.command("traverse")
