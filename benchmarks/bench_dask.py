@@ -124,6 +124,40 @@ def compare(name: str, study: dict, workers: int, address: str) -> None:
               f"running cluster ({np.mean(cr) / np.mean(cs):.2f}x; {len(cr)} chunks)")
 
 
+def _first_task(_i: int = 0) -> int:
+    """What a worker's first chunk loads: the studies' evaluator and the compiled kernels."""
+    import roverimpact.studies.evaluate  # noqa: F401
+    from roverimpact._kernels.partition import partition_kernel
+
+    partition_kernel.get()
+    return os.getpid()
+
+
+def cluster_start(workers: int) -> None:
+    """Wall time of a local cluster (start, every worker's first task, close) by the way
+    its workers start (:func:`roverimpact.studies.executors.worker_start_method`)."""
+    from dask.distributed import Client
+
+    from roverimpact.studies.executors import local_cluster
+
+    _first_task()                                # this process as a study has it
+    print(f"local cluster of {workers} workers: start, first tasks, close")
+    for method in ("fork", "spawn"):
+        os.environ["ROVERIMPACT_WORKER_START"] = method
+        try:
+            t0 = time.perf_counter()
+            with local_cluster(workers) as address, Client(address) as client:
+                t1 = time.perf_counter()
+                client.gather([client.submit(_first_task, i, pure=False)
+                               for i in range(workers)])
+                t2 = time.perf_counter()
+            t3 = time.perf_counter()
+        finally:
+            del os.environ["ROVERIMPACT_WORKER_START"]
+        print(f"  {method:6s} {t3 - t0:5.2f} s  (start {t1 - t0:.2f}, first tasks "
+              f"{t2 - t1:.2f}, close {t3 - t2:.2f})")
+
+
 def parquet_encoding(n: int = 50_000) -> None:
     """One chunk of the indicator sweep (n rows) encoded with pyarrow's default options and
     with the studies' ``PARQUET_WRITE``: size and best of 5 encoding times."""
@@ -166,6 +200,7 @@ def main() -> None:
         if args.n_sim:
             compare(f"simulated sweep, 2-D rover, {args.n_sim} random cases",
                     simulated_study(args.n_sim), args.workers, address)
+    cluster_start(args.workers)
     parquet_encoding()
 
 

@@ -43,9 +43,9 @@ __all__ = [
 
 #: Wall time [s] a local cluster costs before and after the work (start, the workers'
 #: first import of roverimpact and its kernels, close), by how its workers start
-#: (:func:`worker_start_method`). Measured on the 2-core machine, 2 workers: spawned
-#: 5.3 s (3.8 s start, 0.6 s import, 0.9 s close), forked 0.42-0.44 s (0.09 s start,
-#: 0.3 s first tasks, 0.04 s close); rounded up for a loaded machine.
+#: (:func:`worker_start_method`). Measured on the 2-core machine, 2 workers
+#: (benchmarks/bench_dask.py): spawned 2.0-6.0 s, forked 0.14-0.27 s (idle machine, and
+#: at a load of 2.3); rounded up for a loaded machine.
 CLUSTER_START_S = {"fork": 1.5, "forkserver": 6.0, "spawn": 6.0}
 #: the same once a shared cluster runs (tasks shipped, results gathered)
 CLUSTER_RUNNING_S = 0.5
@@ -149,10 +149,11 @@ def worker_start_method() -> str:
     elsewhere; ``ROVERIMPACT_WORKER_START=spawn`` (or ``forkserver``, ``fork``) overrides.
 
     Dask spawns by default: every worker starts a fresh Python that imports numpy,
-    Pinocchio, Dask and roverimpact and loads numba's cached kernels, 3.5-4.5 s on 2 busy
-    cores. A forked worker inherits all of that from the command, which has loaded it
-    for its first chunk: 0.4 s. ``fork`` is Python's own default on Linux before 3.14;
-    macOS (where system libraries are not fork-safe) and Windows spawn.
+    Pinocchio, Dask and roverimpact and loads numba's cached kernels: 2.0-6.0 s for a
+    cluster of two on 2 cores. A forked worker inherits all of that from the command,
+    which has loaded it for its first chunk: 0.14-0.27 s (benchmarks/bench_dask.py).
+    ``fork`` is Python's own default on Linux before 3.14; macOS (where system libraries
+    are not fork-safe) and Windows spawn.
 
     Raises
     ------
@@ -179,7 +180,7 @@ def local_cluster(workers: int):
     this package's many short-lived numpy arrays then cost page faults: a traverse path
     took 1.2-1.4x the CPU time in a process with that setting
     (``benchmarks/bench_traverse.py`` prints the comparison). On Linux they are forked
-    from this process (:func:`worker_start_method`: 0.4 s against 3.5-4.5 s to spawn),
+    from this process (:func:`worker_start_method`: 0.14-0.27 s against 2.0-6.0 s to spawn),
     with numpy's BLAS at one thread.
     """
     if workers < 1:

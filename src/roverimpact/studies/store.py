@@ -163,8 +163,8 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
 #: pyarrow's Parquet writer options of every table the studies write (chunk files,
 #: results tables): plain encoding, no dictionary. The string columns repeat one value
 #: over a study, which snappy compresses nearly as well as a dictionary does, and the
-#: encoding takes half the time (a 50 000-row chunk of the 1e6-case benchmark: 14.3
-#: against 29.1 ms, 3.65 against 3.60 MB; benchmarks/bench_dask.py). Every chunk is
+#: encoding takes half the time (a 50 000-row chunk of the 1e6-case benchmark: 14-16
+#: against 29-31 ms, 3.65 against 3.60 MB; benchmarks/bench_dask.py). Every chunk is
 #: encoded twice: into its file, and into the results table by the submitting process.
 PARQUET_WRITE = {"use_dictionary": False}
 
