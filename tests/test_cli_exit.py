@@ -80,27 +80,19 @@ def test_python_m_runs_the_cli(tmp_path):
     assert rc == 0 and out.strip()
 
 
-def test_energy_compiles_the_partition_here_and_the_rows_in_the_background(monkeypatch):
+def test_energy_compiles_the_partition_here_and_the_rows_in_the_background(compile_plan):
     """On a fresh install ``energy`` sends the row assembly (needed first, the shorter
     compile) to a second process and compiles the partition kernel itself meanwhile, after
     the scenario file has been read: a bad file fails before any compile."""
-    from roverimpact._kernels import _jit
     from roverimpact.cli import main
 
-    sent, got = [], []
-    monkeypatch.setattr(_jit, "compile_in_background",
-                        lambda *ks: sent.extend(k.__name__ for k in ks) or [])
-    real_get = _jit.Kernel.get
-    monkeypatch.setattr(_jit.Kernel, "get",
-                        lambda self: got.append(self.__name__) or real_get(self))
     assert main(["energy", str(EXAMPLE)]) == 0
-    assert sent == ["_evaluate_one"]
-    assert got.index("partition_kernel") < got.index("_evaluate_one")
+    assert compile_plan.sent == ["_evaluate_one"]
+    assert compile_plan.got.index("partition_kernel") < compile_plan.got.index("_evaluate_one")
 
-    sent.clear()
-    got.clear()
+    compile_plan.got.clear()
     assert main(["energy", str(ROOT / "no-such-file.toml")]) == 2
-    assert "partition_kernel" not in got
+    assert "partition_kernel" not in compile_plan.got
 
 
 def test_console_script_entry_is_run():
@@ -113,17 +105,10 @@ def test_console_script_entry_is_run():
 
 
 def test_simulate_sends_lemke_to_the_background_and_compiles_the_partition_here(
-        monkeypatch, tmp_path):
-    from roverimpact._kernels import _jit
+        compile_plan, tmp_path):
     from roverimpact.cli import main
 
-    sent, got = [], []
-    monkeypatch.setattr(_jit, "compile_in_background",
-                        lambda *ks: sent.extend(k.__name__ for k in ks) or [])
-    real_get = _jit.Kernel.get
-    monkeypatch.setattr(_jit.Kernel, "get",
-                        lambda self: got.append(self.__name__) or real_get(self))
     example = ROOT / "examples" / "simulate_rover2d.toml"
     assert main(["simulate", str(example), "-o", str(tmp_path / "o"), "--no-plot"]) == 0
-    assert sent == ["impact_kernel"]
-    assert got[0] == "partition_kernel" and "impact_kernel" in got
+    assert compile_plan.sent == ["impact_kernel"]
+    assert compile_plan.got[0] == "partition_kernel" and "impact_kernel" in compile_plan.got

@@ -166,12 +166,12 @@ def test_example_study_files_are_valid():
     (True, 2, "fork", ["partition_kernel", "rk4_peaks"]),     # forked workers inherit them
     (True, 2, "spawn", None),
 ])
-def test_sweep_compile_plan(tmp_path, monkeypatch, simulate, workers, start, here):
+def test_sweep_compile_plan(tmp_path, monkeypatch, compile_plan, simulate, workers, start,
+                            here):
     """On a fresh install ``sweep`` sends Lemke's impact kernel to a second process and
     compiles the partition (and, when the study simulates, the Runge-Kutta kernel of the
     refined prediction) here, also before forking local workers; nothing for spawned
     workers; a bad file fails before any of it."""
-    from roverimpact._kernels import _jit
     from roverimpact.cli import _study
 
     monkeypatch.setenv("ROVERIMPACT_WORKER_START", start)
@@ -188,9 +188,7 @@ def test_sweep_compile_plan(tmp_path, monkeypatch, simulate, workers, start, her
     """)
     study = tmp_path / "s.toml"
     study.write_text(text)
-    sent = []
-    monkeypatch.setattr(_jit, "compile_in_background",
-                        lambda *ks: sent.extend(k.home.split(":")[1] for k in ks) or [])
+    sent = compile_plan.sent
     now = _study._compile_plan(study, workers, None)
     if here is None:
         assert now == () and sent == []

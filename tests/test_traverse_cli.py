@@ -243,13 +243,12 @@ def test_least_risk_suspension_per_segment(tmp_path):
     ("weight", 2, None, "spawn", [], []),
     ("weight", None, "tcp://127.0.0.1:1", "fork", [], []),
 ])
-def test_traverse_compile_plan(tmp_path, monkeypatch, model, workers, scheduler, start, sent,
-                               here):
+def test_traverse_compile_plan(tmp_path, monkeypatch, compile_plan, model, workers, scheduler,
+                               start, sent, here):
     """On a fresh install the command compiles on two cores: Lemke's kernel (and the stiff
     pair when the weight model needs forces) in a second process, the lane partition (and
     the Runge-Kutta kernel) here, also before forking local workers (they inherit them);
     nothing for spawned workers or a scheduler's; a bad file fails before any of it."""
-    from roverimpact._kernels import _jit
     from roverimpact.cli import _traverse
 
     monkeypatch.setenv("ROVERIMPACT_WORKER_START", start)
@@ -258,9 +257,7 @@ def test_traverse_compile_plan(tmp_path, monkeypatch, model, workers, scheduler,
     text = example.read_text().replace("[limits]", f'[limits]\nmodel = "{model}"', 1)
     cfg = tmp_path / "t.toml"
     cfg.write_text(text)
-    got = []
-    monkeypatch.setattr(_jit, "compile_in_background",
-                        lambda *ks: got.extend(k.home.split(":")[1] for k in ks) or [])
+    got = compile_plan.sent
     now = _traverse._compile_plan(cfg, workers, scheduler)
     assert got == sent
     assert [k.home.split(":")[1] for k in now] == here
