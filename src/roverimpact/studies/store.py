@@ -18,6 +18,7 @@ import functools
 import json
 import os
 import uuid
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -140,19 +141,27 @@ def _versions() -> dict[str, str]:
     return out
 
 
+@contextmanager
+def _writing(path: Path, cleanup):
+    """Around writing ``path``: on any error ``cleanup()`` (what was half written goes),
+    then the error again; an ``OSError`` (a full disk) names ``path``."""
+    try:
+        yield
+    except OSError as exc:
+        cleanup()
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
+    except BaseException:
+        cleanup()
+        raise
+
+
 def _atomic(path: Path, write) -> None:
     """``write(tmp)`` then ``os.replace(tmp, path)``; on failure (a full disk) the temp file
     is removed and the error names ``path``."""
     tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    try:
+    with _writing(path, lambda: tmp.unlink(missing_ok=True)):
         write(tmp)
         os.replace(tmp, path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def atomic_write_bytes(path: Path, data: bytes) -> None:
@@ -287,14 +296,8 @@ class ResultsStream:
     def advance(self) -> None:
         """Append the ready chunks, in order (stops at the first one not ready). A failing
         disk: as :func:`_atomic`, no temporary is left and the error names the table."""
-        try:
+        with _writing(self.path, self.abandon):
             self._advance()
-        except OSError as exc:
-            self.abandon()
-            raise OSError(exc.errno, exc.strerror or str(exc), str(self.path)) from None
-        except BaseException:
-            self.abandon()
-            raise
 
     def _advance(self) -> None:
         import pyarrow.parquet as pq
@@ -321,19 +324,13 @@ class ResultsStream:
         written)."""
         self._ready.update(range(len(self._paths)))
         self.advance()
-        try:
+        with _writing(self.path, self.abandon):
             if self._stopped or self._next < len(self._paths):
                 self.abandon()
                 return None
             self._writer.close()
             self._writer = None
             os.replace(self._tmp, self.path)
-        except OSError as exc:
-            self.abandon()
-            raise OSError(exc.errno, exc.strerror or str(exc), str(self.path)) from None
-        except BaseException:
-            self.abandon()
-            raise
         return self.n_rows
 
     def abandon(self) -> None:
