@@ -155,24 +155,20 @@ class _Table(Table):
 def compile_ahead(*later, now=()) -> None:
     """On a fresh install, have the kernels a command needs compiled on two cores.
 
-    ``later`` (the partition kernel if neither is given) are compiled in a separate
-    process, when numba's cache lacks them and the machine has a core to spare (see
+    ``later`` are compiled in a separate process, when numba's cache lacks them and the
+    machine has a core to spare (see
     :func:`roverimpact._kernels._jit.compile_in_background`); the command loads them from
     the cache when it reaches them. ``now`` are compiled (or loaded) here, at once, while
-    that process works. Give the background the kernels needed first and compile here
-    the longer ones: ``roverimpact energy`` sends the row assembly (1.3 s of compile,
-    needed first) and compiles the partition kernel (2.1 s) here; the other way round it
-    waited 1.4 s for the second process. With :func:`roverimpact.cli.run`'s end, a cold
-    ``energy`` went from 3.5-3.7 to 2.8-2.95 s (benchmarks/bench_startup.py).
-    ``reproduce`` sends Lemke's impact kernel (6 s) and compiles the partition and
-    Runge-Kutta kernels here. A warm cache starts nothing and ``now`` only loads.
+    that process works. Split them so that neither process waits long for the other:
+    ``roverimpact energy`` sends the row assembly (1.3 s of compile, needed first) and
+    compiles the partition kernel (2.1 s) here (the other way round it waited 1.4 s);
+    ``reproduce``, ``simulate``, ``sweep`` and ``traverse`` send Lemke's impact kernel
+    (6-7 s, the longest) and compile the others here. A cold ``energy`` went from
+    3.5-3.7 to 2.8-2.95 s with :func:`roverimpact.cli.run`'s end
+    (benchmarks/bench_startup.py). A warm cache starts nothing and ``now`` only loads.
     """
     from .._kernels._jit import compile_in_background
 
-    if not later and not now:
-        from .._kernels.partition import partition_kernel
-
-        later = (partition_kernel,)
     compile_in_background(*later)
     for k in now:
         k.get()

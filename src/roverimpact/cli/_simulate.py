@@ -18,8 +18,7 @@ def _compile_ahead() -> None:
     from .._kernels.lemke import impact_kernel
     from .._kernels.partition import partition_kernel
 
-    compile_ahead(impact_kernel)
-    compile_ahead(now=(partition_kernel,))
+    compile_ahead(impact_kernel, now=(partition_kernel,))
 
 
 @app.command("simulate")
