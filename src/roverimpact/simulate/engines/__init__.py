@@ -25,6 +25,7 @@ from ..result import SimulationResult
 from .mujoco import (
     ENGINES,
     LinearContact,
+    check_frictionless,
     equivalent_kelvin_voigt,
     linear_contact,
     simulate_impact_mujoco,
@@ -84,10 +85,8 @@ def check_engine(name: str, mbm, config, *, terrain: bool = False) -> None:
     if terrain:
         raise ConfigError("the MuJoCo engine drives on the plane z = 0 only; a scenario with "
                           "[terrain] runs in the own engine (engine 'own')")
-    if name == "mujoco_laws" and getattr(config, "mu", 0.0) > 0.0:
-        raise ConfigError(f"engine 'mujoco_laws' applies frictionless contact forces: it "
-                          f"needs mu = 0, got mu = {config.mu} (engine 'mujoco' approximates "
-                          "friction, 'own' models it)")
+    if name == "mujoco_laws":
+        check_frictionless(getattr(config, "mu", 0.0))
     from ...models.export_mjcf import mjcf_element
 
     try:

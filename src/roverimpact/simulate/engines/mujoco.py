@@ -129,8 +129,8 @@ from ..run import (
     simulate_impact,
 )
 
-__all__ = ["ENGINES", "LinearContact", "equivalent_kelvin_voigt", "linear_contact",
-           "simulate_impact_mujoco", "simulate_impact_mujoco_laws"]
+__all__ = ["ENGINES", "LinearContact", "check_frictionless", "equivalent_kelvin_voigt",
+           "linear_contact", "simulate_impact_mujoco", "simulate_impact_mujoco_laws"]
 
 #: Constant impedance d of every contact (MuJoCo's minimum, mjMINIMP).
 IMPEDANCE = 1.0e-4
@@ -237,6 +237,15 @@ def linear_contact(law, *, delta0: float | None = None, v_i: float = 1.0,
                          f"(load {f0:.4g} N)")
 
 
+def check_frictionless(mu: float) -> None:
+    """The scenario's laws in MuJoCo (engine ``mujoco_laws``, ``contact="laws"``) apply
+    normal forces only: ConfigError unless ``mu == 0``."""
+    if mu > 0.0:
+        raise ConfigError(f"engine 'mujoco_laws' (contact='laws') applies frictionless "
+                          f"contact forces: it needs mu = 0, got mu = {mu} (engine "
+                          "'mujoco' approximates friction, 'own' models it)")
+
+
 def _cross(a, b):
     """a x b over the last axis (numpy's cross costs 30 us a call; this runs per step)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
@@ -330,9 +339,8 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         raise ConfigError(f"contact must be 'soft' (MuJoCo's contact) or 'laws' (the "
                           f"scenario's laws applied as forces), got {contact!r}")
     laws_mode = contact == "laws"
-    if laws_mode and config.mu > 0.0:
-        raise ConfigError("contact='laws' applies frictionless contact forces: it needs "
-                          f"mu = 0, got mu = {config.mu}")
+    if laws_mode:
+        check_frictionless(config.mu)
     sys = build_system(mbm, config)            # validates laws, springs, wheels
     model = sys.model
     nw = len(mbm.wheels)
