@@ -245,14 +245,13 @@ def _chunk_table(paths: list[Path], chunks, k: int, schema):
     t = pq.read_table(paths[k], schema=schema)
     case = t.column("case").to_numpy()
     if case.size > 1 and not (case[1:] > case[:-1]).all():
-        t = t.take(np.argsort(case, kind="stable"))
+        order = np.argsort(case, kind="stable")
+        t, case = t.take(order), case[order]
     # the chunk's cases in order: their indices (their ids were checked when a chunk
     # was taken from an earlier run, and a fresh chunk's come from its own cases)
     first = k * chunks.size if hasattr(chunks, "size") else None
     expected = (np.arange(first, first + chunks.n_cases(k)) if first is not None
                 else np.array([c.index for c in chunks[k]], dtype=np.int64))
-    if case.size > 1 and not (case[1:] > case[:-1]).all():
-        case = np.sort(case)
     if not np.array_equal(case, expected):  # pragma: no cover - a bug
         raise RoverImpactError(
             f"{paths[k]}: holds {t.num_rows} rows that are not the {len(expected)} "
