@@ -189,6 +189,25 @@ def test_results_stream_writes_the_table_as_chunks_arrive(tmp_path):
     assert (out / "results.csv").read_text() == (tmp_path / "ref" / "results.csv").read_text()
 
 
+def test_results_table_sorts_a_chunk_written_out_of_order(tmp_path):
+    """A chunk file whose rows are not in case order (another writer) goes into the table
+    in case order; the table is the one of the ordered chunks."""
+    from roverimpact.studies.store import RESULTS, write_results
+    from roverimpact.studies.sweep import Chunks
+
+    cases = [{"obstacle.beta_deg": float(b)} for b in range(5, 90, 7)]
+    study, ref = _chunked_study(tmp_path, cases, 3)
+    chunks = Chunks(cases_of(study_from_dict(study)), 3)
+    out = tmp_path / "shuffled"
+    (out / "chunks").mkdir(parents=True)
+    for k in range(len(chunks)):
+        df = pd.read_parquet(chunk_path(tmp_path / "ref", k))
+        (df.iloc[::-1] if k in (1, 4) else df).to_parquet(chunk_path(out, k), index=False)
+    assert pd.read_parquet(chunk_path(out, 1))["case"].tolist() == [5, 4, 3]
+    assert write_results(out, chunks, out / RESULTS) == 13
+    pd.testing.assert_frame_equal(pd.read_parquet(out / RESULTS), ref.table)
+
+
 def test_results_stream_stops_at_another_column_type_and_leaves_nothing(tmp_path):
     """Chunks whose columns differ in type (an int, then a float parameter) stop the
     stream; the table is then written as without it (unified), and an abandoned stream
