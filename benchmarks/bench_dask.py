@@ -10,7 +10,7 @@ for starting a cluster, :func:`roverimpact.studies.executors.worth_a_cluster`).
 Each workload runs three ways, wall time from the call to the finished table:
 * serial (``workers=None``);
 * ``workers=N``: a local cluster started for the study (its start-up included), or the
-  serial fallback when the pilot chunk says the cluster does not pay (the executor used is
+  serial fallback when the probe says the cluster does not pay (the executor used is
   printed, from the manifest);
 * on an already running local cluster (``scheduler=address``), as several studies of one
   session share one (``reproduce``), start-up excluded.

@@ -219,6 +219,59 @@ def test_small_work_runs_serially_and_says_so(tmp_path, workers, why):
     assert manifest["executor"].startswith("serial") and why in manifest["executor"]
 
 
+class _RunningCluster:
+    """Stands for a started local cluster of two workers (``run_study(cluster=...)``)."""
+
+    workers, running = 2, True
+
+    def address(self):
+        return "tcp://nowhere:0"
+
+
+@pytest.mark.parametrize("worth", [True, False])
+def test_a_probe_sizes_the_work_and_every_chunk_runs_where_it_was_decided(
+        tmp_path, monkeypatch, worth):
+    """--workers times a probe here (one case untimed, then 1/16 of the first chunk;
+    rows discarded), then every pending chunk, the first included, goes to the cluster,
+    or all run here: nothing is computed twice but the probe, and the table is the
+    serial one."""
+    from roverimpact.studies import sweep
+
+    serial = run_study(_study(chunk_size=6), tmp_path / "s").table
+    sent, judged = [], []
+
+    def fake_dask(pending, chunks, args, params, simulate, scheduler, retries, store):
+        sent.extend(pending)
+        sweep.run_serial(pending, chunks, args, params, simulate, store)
+
+    def fake_worth(estimate, workers, running):
+        judged.append((estimate, workers, running))
+        return worth
+
+    monkeypatch.setattr(sweep, "run_dask", fake_dask)
+    monkeypatch.setattr(sweep, "worth_a_cluster", fake_worth)
+    ev = CountingRigidBody()
+    notes = []
+    res = run_study(_study(chunk_size=6), tmp_path / "w", evaluator=ev,
+                    cluster=_RunningCluster(), note=notes.append)
+    pd.testing.assert_frame_equal(res.table, serial)
+    assert ev.n == 18 + 1 + 1  # the cases, the untimed case, ceil(6 / 16) timed
+    (estimate, workers, running), = judged
+    assert estimate > 0 and workers == 2 and running
+    assert sent == ([0, 1, 2] if worth else [])
+    manifest = json.loads((tmp_path / "w" / "manifest.json").read_text())
+    assert manifest["executor"].startswith("local Dask" if worth else "serial: the work")
+    assert bool(notes) is not worth
+
+
+def test_a_bad_worker_start_method_fails_before_any_case(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", "threads")
+    ev = CountingRigidBody()
+    with pytest.raises(ConfigError, match="ROVERIMPACT_WORKER_START must be one of"):
+        run_study(_study(chunk_size=6), tmp_path / "w", evaluator=ev, workers=2)
+    assert ev.n == 0
+
+
 def test_killed_worker_loses_and_duplicates_no_row(tmp_path):
     pytest.importorskip("dask.distributed")
     import cloudpickle

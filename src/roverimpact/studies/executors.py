@@ -151,7 +151,8 @@ def worker_start_method() -> str:
     Dask spawns by default: every worker starts a fresh Python that imports numpy,
     Pinocchio, Dask and roverimpact and loads numba's cached kernels: 2.0-6.0 s for a
     cluster of two on 2 cores. A forked worker inherits all of that from the command,
-    which has loaded it for its first chunk: 0.14-0.27 s (benchmarks/bench_dask.py).
+    which has loaded it for the probe that sized the work: 0.14-0.27 s
+    (benchmarks/bench_dask.py).
     ``fork`` is Python's own default on Linux before 3.14; macOS (where system libraries
     are not fork-safe) and Windows spawn.
 
@@ -222,6 +223,7 @@ class LazyCluster:
     def __init__(self, workers: int):
         if workers < 1:
             raise ConfigError(f"--workers must be >= 1, got {workers}")
+        worker_start_method()  # a bad ROVERIMPACT_WORKER_START fails before any work
         self.workers = workers
         self._cm = None
         self._address = None

@@ -35,6 +35,7 @@ from .executors import (
     ChunkFile,
     LazyCluster,
     check_scheduler,
+    compute_chunk,
     need_dask,
     run_dask,
     run_serial,
@@ -249,10 +250,10 @@ def run_study(
         Also write ``results.csv``.
     workers : int, optional
         Run on a local Dask cluster of ``workers`` processes (1 thread each) when that is
-        faster: the first chunk runs here and times the work; if the rest would take
-        less than the cluster costs to start (:func:`~.executors.worth_a_cluster`), it
-        runs here too, and ``note`` says so. Never slower than serial by more than the
-        first chunk's share.
+        faster: a probe of a few cases runs here first and times the work; if it would
+        take less than the cluster costs to start (:func:`~.executors.worth_a_cluster`),
+        it runs here, and ``note`` says so. Never slower than serial by more than the
+        probe (1/16 of a chunk, discarded).
     scheduler : str, optional
         Run on an existing Dask cluster, ``tcp://HOST:PORT``.
     chunk_size : int, optional
@@ -362,27 +363,40 @@ def run_study(
                    n_reused=sum(chunks.n_cases(k) for k in done), stream=stream)
 
 
+#: The probe that sizes the work before a local cluster is started: about this fraction
+#: of the first pending chunk (at least one case), computed here and discarded.
+PROBE_FRACTION = 1 / 16
+
+
 def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: LazyCluster,
                      retries: int) -> str:
-    """Run the first pending chunk here and time it; the rest on ``cluster`` if that is
-    worth it, else here. Returns what ran, for the manifest and the user."""
-    import time as _time
+    """Time a probe of the first pending chunk here; run all pending chunks on ``cluster``
+    if that is worth it, else here. Returns what ran, for the manifest and the user.
 
-    n_rest = sum(chunks.n_cases(k) for k in pending[1:])
+    The probe is one case (untimed: it loads the kernels, which forked workers then
+    inherit), then about :data:`PROBE_FRACTION` of the chunk, timed; its rows are
+    discarded. Timing a whole first chunk here instead, as this function once did, left
+    the second core idle for that chunk: a 1e6-case sweep on 2 workers lost 0.4-0.5 s
+    of 10-11 s (``benchmarks/bench_dask.py``)."""
     if cluster.workers < 2:
         run_serial(pending, chunks, args, params, simulate, store)
         return "serial: one worker is no faster than this process"
-    t = _time.perf_counter()
-    run_serial(pending[:1], chunks, args, params, simulate, store)
-    per_case = (_time.perf_counter() - t) / max(chunks.n_cases(pending[0]), 1)
-    estimate = per_case * n_rest
-    if not pending[1:]:
+    if len(pending) < 2:
+        run_serial(pending, chunks, args, params, simulate, store)
         return "serial: a single chunk"
+    first = pending[0] * chunks.size
+    n_probe = max(1, math.ceil(chunks.n_cases(pending[0]) * PROBE_FRACTION))
+    compute_chunk(*args, chunks.cases.view(first, first + 1), params, simulate)
+    t = time.perf_counter()
+    compute_chunk(*args, chunks.cases.view(first, first + n_probe), params, simulate)
+    per_case = (time.perf_counter() - t) / n_probe
+    n_all = sum(chunks.n_cases(k) for k in pending)
+    estimate = per_case * n_all
     if not worth_a_cluster(estimate, cluster.workers, cluster.running):
-        run_serial(pending[1:], chunks, args, params, simulate, store)
-        return (f"serial: the work (about {estimate:.1f} s here for {n_rest} more cases) is "
+        run_serial(pending, chunks, args, params, simulate, store)
+        return (f"serial: the work (about {estimate:.1f} s here for {n_all} cases) is "
                 f"too small to pay for a {cluster.workers}-worker cluster")
-    run_dask(pending[1:], chunks, args, params, simulate, cluster.address(), retries, store)
+    run_dask(pending, chunks, args, params, simulate, cluster.address(), retries, store)
     return f"local Dask cluster of {cluster.workers} workers"
 
 
