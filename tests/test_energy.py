@@ -203,7 +203,7 @@ def test_single_system_fast_path_equals_the_batched_path():
         M = X @ X.T + n * np.eye(n)
         A = rng.standard_normal((m, n))
         v = rng.standard_normal(n)
-        assert energy._plain_single(M, A, v)
+        assert energy._partition_single(M, A, v, 1e-9, True) is not None  # the fast path
         one, batch = ri.partition(M, A, v), ri.partition(M[None], A[None], v[None])
         for f in ("T", "T_c", "T_a", "rank"):
             assert getattr(one, f) == getattr(batch, f)[0]
@@ -215,6 +215,46 @@ def test_single_system_fast_path_equals_the_batched_path():
     with pytest.raises(InputError) as e2:
         ri.partition(bad.tolist(), [[1.0, 0.0]], [1.0, 1.0])       # the generic path
     assert str(e1.value) == str(e2.value)
+
+
+@pytest.mark.parametrize("M, A, v", [
+    (np.eye(3)[:2], np.ones((1, 3)), np.ones(3)),             # M not square
+    (np.eye(3), np.ones((1, 2)), np.ones(3)),                  # A with 2 columns
+    (np.eye(3), np.ones((1, 3)), np.ones(4)),                  # v too long
+    (np.eye(3), np.ones((1, 3)), np.ones(2)),                  # v too short
+    (np.empty((0, 0)), np.empty((1, 0)), np.empty(0)),         # no degrees of freedom
+    (np.eye(3)[:, :2].copy(), np.ones((1, 2)), np.ones(2)),    # M (3, 2)
+])
+def test_single_system_of_mismatched_shapes_gets_the_general_error(M, A, v):
+    """The one-system kernel checks the shapes itself (it reads nothing out of bounds):
+    mismatched ones go to the general path, whose message is the one float32 arrays
+    (never the kernel's type) get."""
+    from roverimpact import energy
+
+    assert energy._partition_single(M, A, v, 1e-9, True) is None
+    with pytest.raises(InputError) as fast:
+        ri.partition(M, A, v)
+    with pytest.raises(InputError) as generic:
+        ri.partition(M.astype(np.float32), A.astype(np.float32), v.astype(np.float32))
+    assert str(fast.value) == str(generic.value)
+
+
+@pytest.mark.filterwarnings("ignore::PendingDeprecationWarning")  # np.matrix
+def test_single_system_of_other_types_takes_the_general_path():
+    """Lists, other dtypes, a Fortran layout, np.matrix, a zero-row A: the same result as
+    float64 C arrays."""
+    rng = np.random.default_rng(5)
+    M = random_spd(rng, 4)
+    A = rng.standard_normal((2, 4)).astype(np.float32).astype(np.float64)
+    v = rng.standard_normal(4).astype(np.float32).astype(np.float64)
+    ref = ri.partition(M, A, v)
+    for args in ((M.tolist(), A.tolist(), v.tolist()), (np.asmatrix(M), A, v),
+                 (M, A.astype(np.float32), v.astype(np.float32)), (np.asfortranarray(M), A, v)):
+        got = ri.partition(*args)
+        assert got.T_c == pytest.approx(ref.T_c, rel=1e-12)
+        np.testing.assert_allclose(got.v_c, ref.v_c, rtol=1e-12, atol=1e-14)
+    none = ri.partition(M, np.empty((0, 4)), v)
+    assert none.T_c == 0.0 and none.rank == 0 and none.T_a == pytest.approx(ref.T)
 
 
 def test_single_system_result_is_a_normal_partition():

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 import roverimpact as ri
 from roverimpact import _validation
 from roverimpact._kernels.lanes_jit import lanes_kernel
-from roverimpact._kernels.partition import partition_kernel
+from roverimpact._kernels.partition import run_items
 from roverimpact.energy import LANES_MIN_BATCH
 
 from .reference.systems import random_spd
@@ -66,7 +66,7 @@ def _batch(rng, nb, n, m, kinds):
 
 def _compare(M, A, v, iM, iA, iv, want_vc=True):
     got = _run(lanes_kernel(), M, A, v, iM, iA, iv, want_vc)
-    ref = _run(partition_kernel, M, A, v, iM, iA, iv, want_vc)
+    ref = _run(run_items, M, A, v, iM, iA, iv, want_vc)
     np.testing.assert_array_equal(got[5], ref[5])  # status
     ok = ref[5] == _validation.STATUS_OK
     T = ref[0][ok]

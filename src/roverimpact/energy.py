@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _validation
+from ._kernels import partition as _one
 from ._kernels.lanes_jit import lanes_kernel
-from ._kernels.partition import partition_kernel
 from ._validation import InputError, as_array, broadcast_batch, fmt_index
 
 #: Default relative tolerance of the rank decision (see :func:`partition`).
@@ -217,11 +217,12 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     """
     if not 0.0 < rtol < 1.0:  # NaN and inf fail it too
         raise InputError(f"rtol must be in (0, 1), got {rtol}")
-    if _plain_single(M, A, v):
-        try:
-            return _partition_single(M, A, v, float(rtol), bool(want_velocities))
-        except _NOT_C_CONTIGUOUS:  # a view of another layout: the general path copies it
-            pass
+    try:  # one system as float64 C arrays: the kernel on the arrays as they are
+        single = _partition_single(M, A, v, rtol, want_velocities)
+    except _NOT_ONE_SYSTEM:  # anything else (lists, batches, other dtypes or layouts)
+        single = None
+    if single is not None:
+        return single
     M, A, v, batch, n, m = prepare(M, A, v)
     Mf = np.ascontiguousarray(M.reshape(_size(M.shape[:-2]), n, n))
     Af = np.ascontiguousarray(A.reshape(_size(A.shape[:-2]), m, n))
@@ -234,7 +235,7 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     rank = np.empty(nb, dtype=np.int64)
     status = np.zeros(nb, dtype=np.int64)
     vc = np.empty((nb, n)) if want_velocities else np.empty((0, n))
-    kernel = lanes_kernel() if nb >= LANES_MIN_BATCH else partition_kernel.get()
+    kernel = lanes_kernel() if nb >= LANES_MIN_BATCH else _one.run_items
     kernel(Mf, Af, vf, iM, iA, iv, float(rtol), bool(want_velocities), T, Tc, Ta, vc, rank,
            status)
     if (status[0] if nb == 1 else status.any()):
@@ -256,45 +257,41 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     )
 
 
-_F8 = np.dtype(np.float64)
+#: What numba raises for arguments outside the one-system kernel's signature (not an
+#: ndarray, another dtype, number of axes or memory layout; ValueError: an empty list).
+_NOT_ONE_SYSTEM = (TypeError, ValueError)
 
 
-def _plain_single(M, A, v) -> bool:
-    """One unbatched system given as native float64 ndarrays of matching shapes: the case
-    :func:`_partition_single` takes without the batch bookkeeping of :func:`prepare`
-    (C-contiguous too, or the kernel raises ``_NOT_C_CONTIGUOUS``)."""
-    if type(M) is np.ndarray and type(A) is np.ndarray and type(v) is np.ndarray:
-        sM, sA, sv = M.shape, A.shape, v.shape
-        return (len(sM) == 2 and len(sA) == 2 and len(sv) == 1
-                and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8
-                and sM[0] == sM[1] == sA[1] == sv[0] > 0)
-    return False
-
-
-#: What numba raises for arguments outside a kernel's signature (here: an array that is
-#: not C-contiguous).
-_NOT_C_CONTIGUOUS = TypeError
-
-
-def _partition_single(M, A, v, rtol: float, want_velocities: bool) -> Partition:
-    """:func:`partition` of one system: the batched kernel on a batch of one, without the
-    broadcasting bookkeeping (the same numbers, checks and errors)."""
-    n = M.shape[0]
-    res = np.empty((4, 1))
-    ires = np.zeros((2, 1), dtype=np.int64)  # rank, status
-    vc = np.empty((1, n)) if want_velocities else _NO_VELOCITIES
-    partition_kernel.get()(M.reshape(1, n, n), A.reshape(1, A.shape[0], n), v.reshape(1, n),
-                           _ZERO_INDEX, _ZERO_INDEX, _ZERO_INDEX, rtol, want_velocities,
-                           res[0], res[1], res[2], vc, ires[0], ires[1])
-    if ires[1, 0]:
-        _raise_status(ires[1], M, A, v, _ZERO_INDEX, _ZERO_INDEX, _ZERO_INDEX, ())
-    T, Tc = res[0, 0], res[1, 0]
+def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
+    """:func:`partition` of one system given as float64 C arrays M (n, n), A (m, n),
+    v (n,): the one-item kernel on the arrays as they are, without the broadcasting
+    bookkeeping (the same numbers, checks and errors). Raises ``_NOT_ONE_SYSTEM`` (numba's,
+    for other types) or returns None (other shapes) where the general path must take over."""
+    n = len(M)  # TypeError for what has no length; other shapes: the kernel says so
+    out = np.empty((1, _one.OUT_V + 2 * n if want_velocities else _one.OUT_V))
+    _one.partition_kernel.get()(M, A, v, _ZERO_INDEX3, -1, rtol, want_velocities, out)
+    row = out[0]
+    status = row[_one.OUT_STATUS]
+    if status:
+        if status == _one.STATUS_SHAPE:
+            return None
+        _raise_status(np.array([status], dtype=np.int64), M, A, v, _ZERO_INDEX, _ZERO_INDEX,
+                      _ZERO_INDEX, ())
+    T, Tc = row[_one.OUT_T], row[_one.OUT_TC]
     if not math.isfinite(T + Tc):
-        raise_overflow(res[0] + res[1], M, v, _ZERO_INDEX, _ZERO_INDEX, ())
+        raise_overflow(np.array([T + Tc]), M, v, _ZERO_INDEX, _ZERO_INDEX, ())
+    r = int(row[_one.OUT_RANK])
+    rank = _RANKS[r] if r < len(_RANKS) else np.int64(r)
     if want_velocities:
-        v_c = vc[0]
-        return _new_partition(T, Tc, res[2, 0], v_c, v - v_c, ires[0, 0])
-    return _new_partition(T, Tc, res[2, 0], None, None, ires[0, 0])
+        return _new_partition(T, Tc, row[_one.OUT_TA], row[_one.OUT_V:_one.OUT_V + n],
+                              row[_one.OUT_V + n:], rank)
+    return _new_partition(T, Tc, row[_one.OUT_TA], None, None, rank)
+
+
+_ZERO_INDEX3 = np.zeros((3, 1), dtype=np.int64)
+_ZERO_INDEX3.flags.writeable = False
+#: ranks as numpy integers, as the batched path gives them (``np.int64(r)`` costs 0.4 us)
+_RANKS = tuple(np.int64(r) for r in range(65))
 
 
 def _new_partition(T, T_c, T_a, v_c, v_a, rank) -> Partition:
@@ -314,9 +311,6 @@ def _new_partition(T, T_c, T_a, v_c, v_a, rank) -> Partition:
 
 
 _object_new = object.__new__
-
-
-_NO_VELOCITIES = np.empty((0, 0))  # want_velocities=False: vc has no rows
 
 
 # ----------------------------------------------------------------------------------------

@@ -15,7 +15,8 @@ One pass per configuration, no Python in the loop:
 The orthogonal projector onto ``range(W) = range(L^{-1} A^T)`` is the whitened form of
 ``P_c = M^{-1} A^T (A M^{-1} A^T)^+ A``; no inverse of a singular matrix is ever formed.
 
-:func:`partition_kernel` processes one item at a time. :func:`.lanes_jit.lanes_kernel`
+:func:`partition_kernel` processes one item at a time (:func:`run_items` calls it with the
+lane kernel's arguments). :func:`.lanes_jit.lanes_kernel`
 returns the lane-parallel kernel (generated module :mod:`.lanes`), which processes 8 items
 at once in SIMD lanes and hands nearly dependent rows back to :func:`partition_factored`.
 :func:`prefetch` is a cache hint used by that kernel.
@@ -38,7 +39,7 @@ from .._validation import (
     STATUS_OK,
     SYM_RTOL,
 )
-from ._jit import kernel, partition_signature
+from ._jit import boolean, f8, i8, kernel, ro, rw
 
 _EPS = np.finfo(np.float64).eps
 # Reassociation lets LLVM vectorise the dot products; no 'nnan'/'ninf': the kernel
@@ -220,46 +221,110 @@ def partition_factored(
     return STATUS_OK
 
 
-@kernel(partition_signature(), fastmath=FASTMATH)
-def partition_kernel(
-    M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status
-):  # pragma: no cover - compiled
-    """Partition every item ``b``: ``M[iM[b]]``, ``A[iA[b]]``, ``v[iv[b]]``, one at a time.
+#: Columns of the partition kernel's output row: ``T, T_c, T_a, rank, status``, then
+#: ``v_c`` and ``v_a`` (n each) if velocities are wanted.
+OUT_T, OUT_TC, OUT_TA, OUT_RANK, OUT_STATUS, OUT_V = range(6)
 
-    A :class:`~._jit.Kernel`: compiled for one signature on first use (``.get()``)."""
-    nb = iM.shape[0]
+
+#: Status of a one-system call (``m = -1``) whose shapes do not match.
+STATUS_SHAPE = -1
+
+
+def items_signature():
+    """``(M, A, v, index, m, rtol, want_vc, out)`` of :func:`partition_kernel`."""
+    return types.void(ro(f8, 2), ro(f8, 2), ro(f8, 1), ro(i8, 2), i8, f8, boolean,
+                      rw(f8, 2))
+
+
+@kernel(items_signature(), fastmath=FASTMATH)
+def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover - compiled
+    """Partition every item ``b``, one at a time: the mass matrix ``M[iM n : iM n + n]``,
+    rows ``A[iA m : iA m + m]`` and velocity ``v[iv n : iv n + n]``, ``(iM, iA, iv) =
+    index[:, b]`` (the inputs stacked along their first axis). ``out[b]`` receives
+    ``T, T_c, T_a, rank, status`` and, if ``want_vc``, ``v_c`` and ``v_a`` (columns
+    :data:`OUT_V` onwards). The caller checks the shapes and indices, except with
+    ``m = -1``: one system (M (n, n), A (m, n), v (n,), ``index`` zero) passed as it is,
+    whose shapes the kernel checks (status :data:`STATUS_SHAPE` if they do not match).
+
+    Few arguments on purpose: numba unboxes every array argument of every call, and a
+    one-item call is mostly that (14 arguments took 0.9 us, this signature 0.3 us, of a
+    call that computes for about 1.5 us; ``benchmarks/bench_single.py``). A
+    :class:`~._jit.Kernel`: compiled for one signature on first use (``.get()``)."""
+    nb = index.shape[1]
     n = M.shape[1]
-    m = A.shape[1]
-    L = np.zeros((n, n))
-    invd = np.empty(n)
-    W = np.empty((m, n))  # W[j] is column j of L^{-1} A^T (row-major for speed)
-    H = np.empty((m, n))  # Householder vectors: H[k, k:] holds v_k
-    hn = np.empty(m)  # their squared norms
-    u = np.empty(n)
-    y = np.empty(n)
-    z = np.empty(n)
-    cn = np.empty(m)
-    res = np.empty(4)
-    dummy = np.empty(n)
+    if m < 0:  # one system as it is (index zero): the shapes must match exactly
+        m = A.shape[0]
+        if n == 0 or M.shape[0] != n or A.shape[1] != n or v.shape[0] != n or nb != 1:
+            out[0, OUT_STATUS] = STATUS_SHAPE
+            return
+    # one scratch buffer: every allocation costs about as much as a short loop
+    buf = np.empty(n * n + 2 * m * n + 2 * m + 5 * n + 4)
+    L = buf[:n * n].reshape(n, n)  # only the lower triangle is written and read
+    o = n * n
+    W = buf[o:o + m * n].reshape(m, n)  # W[j] is column j of L^{-1} A^T (row-major)
+    o += m * n
+    H = buf[o:o + m * n].reshape(m, n)  # Householder vectors: H[k, k:] holds v_k
+    o += m * n
+    hn = buf[o:o + m]  # their squared norms
+    o += m
+    cn = buf[o:o + m]
+    o += m
+    invd = buf[o:o + n]
+    o += n
+    u = buf[o:o + n]
+    o += n
+    y = buf[o:o + n]
+    o += n
+    z = buf[o:o + n]
+    o += n
+    dummy = buf[o:o + n]
+    o += n
+    res = buf[o:o + 4]
     last = -1
     last_code = STATUS_OK
     for b in range(nb):
-        im = iM[b]
+        im = index[0, b]
+        row = out[b]
         if im != last:
-            last_code = factor(M[im], L, invd)
+            last_code = factor(M[im * n:im * n + n], L, invd)
             last = im
         if last_code != STATUS_OK:
-            status[b] = last_code
+            row[OUT_STATUS] = last_code
             continue
-        vc_row = vc[b] if want_vc else dummy
-        code = partition_factored(L, invd, A[iA[b]], v[iv[b]], rtol, want_vc, W, H, hn, u, y,
+        ia = index[1, b] * m
+        iv = index[2, b] * n
+        vb = v[iv:iv + n]
+        vc_row = row[OUT_V:OUT_V + n] if want_vc else dummy
+        code = partition_factored(L, invd, A[ia:ia + m], vb, rtol, want_vc, W, H, hn, u, y,
                                   z, cn, vc_row, res)
-        status[b] = code
+        row[OUT_STATUS] = code
         if code == STATUS_OK:
-            T[b] = res[0]
-            Tc[b] = res[1]
-            Ta[b] = res[2]
-            rank[b] = np.int64(res[3])
+            row[OUT_T] = res[0]
+            row[OUT_TC] = res[1]
+            row[OUT_TA] = res[2]
+            row[OUT_RANK] = res[3]
+            if want_vc:
+                for i in range(n):
+                    row[OUT_V + n + i] = vb[i] - vc_row[i]
+
+
+def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
+    """:func:`partition_kernel` with the arguments and outputs of the lane kernel
+    (:func:`._jit.partition_signature`): batches of a few items, and the tests that hold
+    the two kernels side by side."""
+    nb, m, n = iM.shape[0], A.shape[1], M.shape[1]
+    out = np.empty((nb, OUT_V + (2 * n if want_vc else 0)))
+    out[:, OUT_STATUS] = STATUS_OK
+    partition_kernel.get()(M.reshape(-1, n), A.reshape(-1, n), v.reshape(-1),
+                           np.stack((iM, iA, iv)), m, rtol, want_vc, out)
+    status[:] = out[:, OUT_STATUS]
+    ok = status == STATUS_OK
+    T[ok] = out[ok, OUT_T]
+    Tc[ok] = out[ok, OUT_TC]
+    Ta[ok] = out[ok, OUT_TA]
+    rank[ok] = out[ok, OUT_RANK]
+    if want_vc:
+        vc[ok] = out[ok, OUT_V:OUT_V + n]
 
 
 @intrinsic
