@@ -297,7 +297,7 @@ _RANKS = tuple(np.int64(r) for r in range(65))
 def _new_partition(T, T_c, T_a, v_c, v_a, rank) -> Partition:
     """``Partition(T, T_c, T_a, v_c, v_a, rank)`` without the frozen dataclass's
     ``__init__``, which sets each field through ``object.__setattr__`` (0.57 against
-    0.22 us a call, of about 6 us for a one-system :func:`partition`). The fields are the
+    0.22 us a call, of about 4 us for a one-system :func:`partition`). The fields are the
     dataclass's; tests/test_energy.py checks the object equals the one ``__init__`` makes."""
     p = _object_new(Partition)
     d = p.__dict__

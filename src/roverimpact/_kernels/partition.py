@@ -246,10 +246,10 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
     ``m = -1``: one system (M (n, n), A (m, n), v (n,), ``index`` zero) passed as it is,
     whose shapes the kernel checks (status :data:`STATUS_SHAPE` if they do not match).
 
-    Few arguments on purpose: numba unboxes every array argument of every call, and a
-    one-item call is mostly that (14 arguments took 0.9 us, this signature 0.3 us, of a
-    call that computes for about 1.5 us; ``benchmarks/bench_single.py``). A
-    :class:`~._jit.Kernel`: compiled for one signature on first use (``.get()``)."""
+    Few arguments on purpose: numba unboxes every array argument of every call, a
+    noticeable share of a one-system call of a few microseconds
+    (``benchmarks/bench_single.py``). A :class:`~._jit.Kernel`: compiled for one
+    signature on first use (``.get()``)."""
     nb = index.shape[1]
     n = M.shape[1]
     if m < 0:  # one system as it is (index zero): the shapes must match exactly
