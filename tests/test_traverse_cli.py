@@ -107,12 +107,53 @@ def test_json_and_report_regeneration(short, tmp_path, capfd):
     assert (tmp_path / "j" / "map.png").is_file()
 
 
-def test_dask_equals_serial(short):
+def test_dask_equals_serial(short, monkeypatch):
+    """Chunks of 40 stations on 2 forked workers (the cluster forced on: this traverse
+    alone would not pay for one): the same tables as serially."""
     pytest.importorskip("dask.distributed")
+    from roverimpact.studies import executors
+
     f, _ = short
     cfg = load_traverse(f)
+    cfg = cfg.model_copy(update={"run": cfg.run.model_copy(update={"chunk": 40})})
     a = run_traverse(cfg)
-    b = run_traverse(cfg, workers=1)
+    monkeypatch.setattr(executors, "worth_a_cluster", lambda *a, **k: True)
+    b = run_traverse(cfg, workers=2)
+    assert (a.executor, b.executor) == ("serial", "dask local 2 workers")
+    pd.testing.assert_frame_equal(a.wheels, b.wheels)
+    pd.testing.assert_frame_equal(a.poses, b.poses)
+
+
+def test_bad_worker_start_method_fails_before_any_station(short, monkeypatch):
+    pytest.importorskip("dask.distributed")
+    from roverimpact.traverse import run as trun
+
+    f, _ = short
+    called = []
+    monkeypatch.setattr(trun, "traverse_chunk", lambda *a: called.append(a))
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", "threads")
+    with pytest.raises(ConfigError, match="ROVERIMPACT_WORKER_START must be one of"):
+        run_traverse(load_traverse(f), workers=2)
+    assert not called
+
+
+@pytest.mark.parametrize("workers, chunk, why", [
+    (2, 40, "too small to pay for a 2-worker cluster"),
+    (2, 500, "a single chunk"),
+    (1, 40, "one worker is no faster"),
+])
+def test_small_traverse_runs_serially_and_says_so(short, tmp_path, workers, chunk, why):
+    """--workers on less work than a cluster's start-up (timed on a probe of a few
+    stations), on one chunk, or with one worker: serial, no cluster started, the same
+    tables; the note and the manifest say why."""
+    f, _ = short
+    cfg = load_traverse(f)
+    cfg = cfg.model_copy(update={"run": cfg.run.model_copy(update={"chunk": chunk})})
+    a = run_traverse(cfg)
+    notes = []
+    b = run_traverse(cfg, tmp_path / "w", workers=workers, note=notes.append)
+    assert len(notes) == 1 and why in notes[0] and b.executor == notes[0]
+    assert json.loads((tmp_path / "w" / "manifest.json").read_text())["executor"] == notes[0]
     pd.testing.assert_frame_equal(a.wheels, b.wheels)
     pd.testing.assert_frame_equal(a.poses, b.poses)
 

@@ -16,6 +16,7 @@ from ._app import (
     compile_ahead,
     compiles_here,
     console,
+    err_console,
     new_table,
     print_json,
     progress_bar,
@@ -90,7 +91,8 @@ def traverse_cmd(
     with progress_bar(config.stem, unit="stations", to_stderr=as_json) as update:
         compile_ahead(now=now)
         res = run_traverse(config, out, workers=workers, scheduler=scheduler, csv=csv,
-                           progress=update)
+                           progress=update,
+                           note=lambda text: err_console.print(f"note: {text}"))
     path = traverse_report(out, config=res.config) if report else None
     table = summary(res.poses, res.wheels)
     if as_json:

@@ -402,6 +402,8 @@ class TraverseResult:
     elapsed: float
     files: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
+    #: where the stations ran (also in the manifest)
+    executor: str = "serial"
 
 
 def _chunks(cfg: TraverseConfig) -> list[tuple[int, int, int]]:
@@ -412,9 +414,40 @@ def _chunks(cfg: TraverseConfig) -> list[tuple[int, int, int]]:
     return out
 
 
+#: The probe that sizes the work before a local cluster is started: about this fraction
+#: of the first chunk's stations (at least 2), computed here and discarded.
+PROBE_FRACTION = 1 / 64
+
+
+def _local_or_serial(cfg_dict, chunks, total, workers) -> str | None:
+    """Whether the stations run on a local cluster of ``workers``: None if so, else why
+    they run here. One station first (untimed: it builds the terrain and the model and
+    loads or compiles every compiled function a station needs, which forked workers then
+    inherit instead of each compiling them: a first run with ``--workers 2`` took 35.6 s
+    where a serial one took 22 s), then about :data:`PROBE_FRACTION` of the first chunk,
+    timed, for :func:`~roverimpact.studies.executors.worth_a_cluster`."""
+    from ..studies.executors import worth_a_cluster
+
+    if workers < 2:
+        return "serial: one worker is no faster than this process"
+    if len(chunks) < 2:
+        return "serial: a single chunk of stations"
+    i, a, b = chunks[0]
+    traverse_chunk(cfg_dict, i, a, a + 1)
+    k = min(b - a, max(2, math.ceil((b - a) * PROBE_FRACTION)))
+    t = time.perf_counter()
+    traverse_chunk(cfg_dict, i, a, a + k)
+    estimate = (time.perf_counter() - t) / k * total
+    if not worth_a_cluster(estimate, workers, running=False):
+        return (f"serial: the work (about {estimate:.1f} s here for {total} stations) is "
+                f"too small to pay for a {workers}-worker cluster")
+    return None
+
+
 def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | None = None,
                  scheduler: str | None = None, csv: bool = False,
-                 progress: Callable[[int, int], None] | None = None) -> TraverseResult:
+                 progress: Callable[[int, int], None] | None = None,
+                 note: Callable[[str], None] | None = None) -> TraverseResult:
     """Run a traverse file (path, dict or :class:`TraverseConfig`) and write its tables.
 
     Parameters
@@ -429,6 +462,10 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         Also write the tables as CSV.
     progress : callable, optional
         ``progress(stations_done, stations_total)``.
+    note : callable, optional
+        ``note(text)``: why ``workers`` were asked for but the stations ran here (a
+        single chunk, or less work than the cluster costs to start, timed on a probe of
+        a few stations first; :func:`_local_or_serial`).
 
     Raises
     ------
@@ -436,7 +473,12 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         A bad file, a path that leaves the terrain, an unwritable folder, an unreachable
         scheduler: before any work.
     """
-    from ..studies.executors import check_scheduler, local_cluster, need_dask
+    from ..studies.executors import (
+        check_scheduler,
+        local_cluster,
+        need_dask,
+        worker_start_method,
+    )
 
     if isinstance(source, TraverseConfig):
         cfg, text = source, None
@@ -459,6 +501,7 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         scheduler = check_scheduler(scheduler)
     elif workers is not None:
         need_dask()
+        worker_start_method()  # a bad ROVERIMPACT_WORKER_START fails before any work
     _check_inputs(cfg, where)
     chunks = _chunks(cfg)
     total = sum(b - a for _, a, b in chunks)
@@ -468,6 +511,15 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
     done = 0
     if progress:
         progress(0, total)
+    executor = ("dask " + str(scheduler)) if scheduler is not None else "serial"
+    if workers is not None and scheduler is None:
+        why = _local_or_serial(cfg_dict, chunks, total, workers)
+        if why is None:
+            executor = f"dask local {workers} workers"
+        else:
+            executor, workers = why, None
+            if note:
+                note(why)
     if workers is None and scheduler is None:
         for n, (i, a, b) in enumerate(chunks):
             parts[n] = traverse_chunk(cfg_dict, i, a, b)
@@ -491,10 +543,11 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         segments = least_risk_settings(cfg, segments)
         timings["suspension"] = time.perf_counter() - t1
     res = TraverseResult(config=cfg, out_dir=out_dir, poses=poses, wheels=wheels,
-                         segments=segments, elapsed=elapsed, timings=timings)
+                         segments=segments, elapsed=elapsed, timings=timings,
+                         executor=executor)
     if out_dir is not None:
         check_out_dir(out_dir)
-        _write(res, text, csv, workers, scheduler)
+        _write(res, text, csv)
     return res
 
 
@@ -516,7 +569,7 @@ def _run_dask(address, cfg_dict, chunks, parts, progress, total) -> int:
     return done
 
 
-def _write(res: TraverseResult, text: str | None, csv: bool, workers, scheduler) -> None:
+def _write(res: TraverseResult, text: str | None, csv: bool) -> None:
     import tomllib
 
     out = res.out_dir
@@ -537,8 +590,7 @@ def _write(res: TraverseResult, text: str | None, csv: bool, workers, scheduler)
                 "stations": len(res.poses),
                 "failed_poses": int((res.poses["status"] != "ok").sum()),
                 "elapsed_s": res.elapsed, "timings": res.timings,
-                "executor": ("dask " + str(scheduler)) if scheduler else
-                            (f"dask local {workers} workers" if workers else "serial"),
+                "executor": res.executor,
                 "versions": versions()}
     atomic_write_bytes(out / MANIFEST, json.dumps(manifest, indent=2).encode())
     files["config"], files["manifest"] = out / CONFIG_COPY, out / MANIFEST
