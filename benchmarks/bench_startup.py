@@ -14,7 +14,8 @@ Times whole processes and prints each against bare Python measured in the same r
   cold; one run each, about a minute), ``roverimpact simulate
   examples/simulate_rover2d.toml``, ``roverimpact sweep
   examples/study_rover2d_beta_h.toml`` and ``roverimpact traverse
-  examples/traverse_rocky.toml`` cold and warm (one run each, about a minute);
+  examples/traverse_rocky.toml`` cold and warm, and that traverse cold with
+  ``--workers 2`` (one run each, about a minute);
 - ``--kernels``: the compile time of each compiled kernel alone (a fresh process and an
   empty cache per kernel, after a trivial compile that pays numba's one-off set-up) and
   the time to load it from the cache it wrote. A kernel's time includes the functions it
@@ -172,6 +173,10 @@ def main() -> None:
                  base)
             shutil.rmtree(f"{out}/traverse")
             _row("traverse traverse_rocky (warm cache)", [_run(traverse, _env(cache))], base)
+        with tempfile.TemporaryDirectory() as cache:  # forked workers, never slower
+            shutil.rmtree(f"{out}/traverse")
+            _row("traverse traverse_rocky --workers 2 (cold: empty cache)",
+                 [_run([*traverse, "--workers", "2"], _env(cache))], base)
     shutil.rmtree(out, ignore_errors=True)
     if args.kernels:
         _kernel_times()
