@@ -194,10 +194,10 @@ def test_dask_local_cluster_equals_serial(tmp_path, monkeypatch):
     """The real pipeline (scenario layer + simulator) on 2 worker processes: same table
     (the cluster forced on: this study alone would not pay for one)."""
     pytest.importorskip("dask.distributed")
-    from roverimpact.studies import sweep
+    from roverimpact.studies import executors
 
     serial = run_study(ROVER_STUDY, tmp_path / "s").table
-    monkeypatch.setattr(sweep, "worth_a_cluster", lambda *a, **k: True)
+    monkeypatch.setattr(executors, "worth_a_cluster", lambda *a, **k: True)
     res = run_study(ROVER_STUDY, tmp_path / "d", workers=2, chunk_size=2)
     assert np.isfinite(serial["F_max"]).all() and len(serial) == 6
     pd.testing.assert_frame_equal(res.table, serial)
@@ -235,7 +235,7 @@ def test_a_probe_sizes_the_work_and_every_chunk_runs_where_it_was_decided(
     rows discarded), then every pending chunk, the first included, goes to the cluster,
     or all run here: nothing is computed twice but the probe, and the table is the
     serial one."""
-    from roverimpact.studies import sweep
+    from roverimpact.studies import executors, sweep
 
     serial = run_study(_study(chunk_size=6), tmp_path / "s").table
     sent, judged = [], []
@@ -249,7 +249,7 @@ def test_a_probe_sizes_the_work_and_every_chunk_runs_where_it_was_decided(
         return worth
 
     monkeypatch.setattr(sweep, "run_dask", fake_dask)
-    monkeypatch.setattr(sweep, "worth_a_cluster", fake_worth)
+    monkeypatch.setattr(executors, "worth_a_cluster", fake_worth)
     ev = CountingRigidBody()
     notes = []
     res = run_study(_study(chunk_size=6), tmp_path / "w", evaluator=ev,

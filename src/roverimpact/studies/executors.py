@@ -11,6 +11,7 @@ import json
 import os
 import socket
 import sys
+import time
 from collections.abc import Mapping, Sequence
 from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
@@ -37,6 +38,7 @@ __all__ = [
     "need_dask",
     "run_dask",
     "run_serial",
+    "why_serial",
     "worker_start_method",
     "worth_a_cluster",
 ]
@@ -263,6 +265,30 @@ def worth_a_cluster(serial_s: float, workers: int, running: bool) -> bool:
         return False
     overhead = CLUSTER_RUNNING_S if running else CLUSTER_START_S[worker_start_method()]
     return overhead + serial_s / workers < serial_s
+
+
+def why_serial(workers: int, n_chunks: int, first, probe, n_probe: int, n_total: int, *,
+               running: bool = False, unit: str = "cases") -> str | None:
+    """Whether work of ``n_chunks`` chunks goes to a local cluster of ``workers``: None if
+    so, else why it runs in this process (for the user and the manifest).
+
+    ``first()`` computes one item (untimed: it loads or compiles what the work needs,
+    which forked workers then inherit instead of each compiling it themselves), then
+    ``probe()`` computes ``n_probe`` items, timed, to estimate the ``n_total`` items for
+    :func:`worth_a_cluster`; the callers discard both results. A whole first chunk
+    timed here instead leaves the second core idle for that chunk."""
+    if workers < 2:
+        return "serial: one worker is no faster than this process"
+    if n_chunks < 2:
+        return "serial: a single chunk"
+    first()
+    t = time.perf_counter()
+    probe()
+    estimate = (time.perf_counter() - t) / max(n_probe, 1) * n_total
+    if not worth_a_cluster(estimate, workers, running):
+        return (f"serial: the work (about {estimate:.1f} s here for {n_total} {unit}) is "
+                f"too small to pay for a {workers}-worker cluster")
+    return None
 
 
 def run_serial(pending, chunks, args, params, simulate, store) -> None:

@@ -39,7 +39,7 @@ from .executors import (
     need_dask,
     run_dask,
     run_serial,
-    worth_a_cluster,
+    why_serial,
 )
 from .store import (
     CHUNKS,
@@ -370,32 +370,22 @@ PROBE_FRACTION = 1 / 16
 
 def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: LazyCluster,
                      retries: int) -> str:
-    """Time a probe of the first pending chunk here; run all pending chunks on ``cluster``
-    if that is worth it, else here. Returns what ran, for the manifest and the user.
-
-    The probe is one case (untimed: it loads the kernels, which forked workers then
-    inherit), then about :data:`PROBE_FRACTION` of the chunk, timed; its rows are
-    discarded. Timing a whole first chunk here instead, as this function once did, left
-    the second core idle for that chunk: a 1e6-case sweep on 2 workers lost 0.4-0.5 s
-    of 10-11 s (``benchmarks/bench_dask.py``)."""
-    if cluster.workers < 2:
-        run_serial(pending, chunks, args, params, simulate, store)
-        return "serial: one worker is no faster than this process"
-    if len(pending) < 2:
-        run_serial(pending, chunks, args, params, simulate, store)
-        return "serial: a single chunk"
+    """Run all pending chunks on ``cluster`` if a probe of the first says that is worth it
+    (:func:`~.executors.why_serial`: one case, then about :data:`PROBE_FRACTION` of the
+    chunk, timed; rows discarded), else here. Returns what ran, for the manifest and the
+    user. (Timing a whole first chunk here, as this function once did, cost a 1e6-case
+    sweep on 2 workers 0.4-0.5 s of 10-11 s: ``benchmarks/bench_dask.py``.)"""
     first = pending[0] * chunks.size
     n_probe = max(1, math.ceil(chunks.n_cases(pending[0]) * PROBE_FRACTION))
-    compute_chunk(*args, chunks.cases.view(first, first + 1), params, simulate)
-    t = time.perf_counter()
-    compute_chunk(*args, chunks.cases.view(first, first + n_probe), params, simulate)
-    per_case = (time.perf_counter() - t) / n_probe
-    n_all = sum(chunks.n_cases(k) for k in pending)
-    estimate = per_case * n_all
-    if not worth_a_cluster(estimate, cluster.workers, cluster.running):
+    why = why_serial(
+        cluster.workers, len(pending),
+        lambda: compute_chunk(*args, chunks.cases.view(first, first + 1), params, simulate),
+        lambda: compute_chunk(*args, chunks.cases.view(first, first + n_probe), params,
+                              simulate),
+        n_probe, sum(chunks.n_cases(k) for k in pending), running=cluster.running)
+    if why is not None:
         run_serial(pending, chunks, args, params, simulate, store)
-        return (f"serial: the work (about {estimate:.1f} s here for {n_all} cases) is "
-                f"too small to pay for a {cluster.workers}-worker cluster")
+        return why
     run_dask(pending, chunks, args, params, simulate, cluster.address(), retries, store)
     return f"local Dask cluster of {cluster.workers} workers"
 

@@ -421,27 +421,18 @@ PROBE_FRACTION = 1 / 64
 
 def _local_or_serial(cfg_dict, chunks, total, workers) -> str | None:
     """Whether the stations run on a local cluster of ``workers``: None if so, else why
-    they run here. One station first (untimed: it builds the terrain and the model and
-    loads or compiles every compiled function a station needs, which forked workers then
-    inherit instead of each compiling them: a first run with ``--workers 2`` took 35.6 s
-    where a serial one took 22 s), then about :data:`PROBE_FRACTION` of the first chunk,
-    timed, for :func:`~roverimpact.studies.executors.worth_a_cluster`."""
-    from ..studies.executors import worth_a_cluster
+    they run here (:func:`~roverimpact.studies.executors.why_serial`). One station first
+    builds the terrain and the model and loads or compiles every compiled function a
+    station needs, which forked workers then inherit instead of each compiling them (a
+    first run with ``--workers 2`` took 35.6 s where a serial one took 22 s); then about
+    :data:`PROBE_FRACTION` of the first chunk, timed."""
+    from ..studies.executors import why_serial
 
-    if workers < 2:
-        return "serial: one worker is no faster than this process"
-    if len(chunks) < 2:
-        return "serial: a single chunk of stations"
     i, a, b = chunks[0]
-    traverse_chunk(cfg_dict, i, a, a + 1)
     k = min(b - a, max(2, math.ceil((b - a) * PROBE_FRACTION)))
-    t = time.perf_counter()
-    traverse_chunk(cfg_dict, i, a, a + k)
-    estimate = (time.perf_counter() - t) / k * total
-    if not worth_a_cluster(estimate, workers, running=False):
-        return (f"serial: the work (about {estimate:.1f} s here for {total} stations) is "
-                f"too small to pay for a {workers}-worker cluster")
-    return None
+    return why_serial(workers, len(chunks), lambda: traverse_chunk(cfg_dict, i, a, a + 1),
+                      lambda: traverse_chunk(cfg_dict, i, a, a + k), k, total,
+                      unit="stations")
 
 
 def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | None = None,
