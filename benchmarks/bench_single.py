@@ -29,21 +29,30 @@ from numba import njit
 import roverimpact as ri
 
 
-@njit(cache=True)
-def hand_tc(M, A, v):
-    n, m = M.shape[0], A.shape[0]
-    L = np.zeros((n, n))
+@njit(inline="always")
+def _cholesky(X, L):
+    """Lower Cholesky factor of X into L (L may be X itself: in place)."""
+    n = X.shape[0]
     for j in range(n):
-        s = M[j, j]
+        s = X[j, j]
         for k in range(j):
             s -= L[j, k] * L[j, k]
         d = math.sqrt(s)
         L[j, j] = d
         for i in range(j + 1, n):
-            t = M[i, j]
+            t = X[i, j]
             for k in range(j):
                 t -= L[i, k] * L[j, k]
             L[i, j] = t / d
+
+
+@njit(inline="always")
+def _textbook(M, A, v):
+    """L (M = L L^T), W = L^-1 A^T, R (G = W^T W = R R^T, in G's place) and
+    y = R^-1 A v, so that T_c = 1/2 |y|^2."""
+    n, m = M.shape[0], A.shape[0]
+    L = np.zeros((n, n))
+    _cholesky(M, L)
     W = np.empty((n, m))
     for c in range(m):
         for i in range(n):
@@ -59,24 +68,19 @@ def hand_tc(M, A, v):
                 t += W[i, a] * W[i, b]
             G[a, b] = t
     g = A @ v
-    # G y = g by Cholesky
-    for j in range(m):
-        s = G[j, j]
-        for k in range(j):
-            s -= G[j, k] * G[j, k]
-        d = math.sqrt(s)
-        G[j, j] = d
-        for i in range(j + 1, m):
-            t = G[i, j]
-            for k in range(j):
-                t -= G[i, k] * G[j, k]
-            G[i, j] = t / d
+    _cholesky(G, G)
     y = np.empty(m)
     for i in range(m):
         t = g[i]
         for k in range(i):
             t -= G[i, k] * y[k]
         y[i] = t / G[i, i]
+    return L, W, G, y
+
+
+@njit(cache=True)
+def hand_tc(M, A, v):
+    y = _textbook(M, A, v)[3]
     return 0.5 * (y @ y)
 
 
@@ -85,50 +89,7 @@ def hand_vc(M, A, v):
     """The same route, returning what ``partition`` returns by default: T, T_c, T_a and
     the velocities v_c = M^-1 A^T G^-1 A v and v_a = v - v_c (full-rank rows only)."""
     n, m = M.shape[0], A.shape[0]
-    L = np.zeros((n, n))
-    for j in range(n):
-        s = M[j, j]
-        for k in range(j):
-            s -= L[j, k] * L[j, k]
-        d = math.sqrt(s)
-        L[j, j] = d
-        for i in range(j + 1, n):
-            t = M[i, j]
-            for k in range(j):
-                t -= L[i, k] * L[j, k]
-            L[i, j] = t / d
-    W = np.empty((n, m))
-    for c in range(m):
-        for i in range(n):
-            t = A[c, i]
-            for k in range(i):
-                t -= L[i, k] * W[k, c]
-            W[i, c] = t / L[i, i]
-    G = np.empty((m, m))
-    for a in range(m):
-        for b in range(m):
-            t = 0.0
-            for i in range(n):
-                t += W[i, a] * W[i, b]
-            G[a, b] = t
-    g = A @ v
-    for j in range(m):
-        s = G[j, j]
-        for k in range(j):
-            s -= G[j, k] * G[j, k]
-        d = math.sqrt(s)
-        G[j, j] = d
-        for i in range(j + 1, m):
-            t = G[i, j]
-            for k in range(j):
-                t -= G[i, k] * G[j, k]
-            G[i, j] = t / d
-    y = np.empty(m)
-    for i in range(m):
-        t = g[i]
-        for k in range(i):
-            t -= G[i, k] * y[k]
-        y[i] = t / G[i, i]
+    L, W, G, y = _textbook(M, A, v)
     z = np.empty(m)  # G^-1 g = R^-T y
     for i in range(m - 1, -1, -1):
         t = y[i]
