@@ -149,6 +149,12 @@ def main() -> None:
           f"{t_ri / t_hand_vc:4.2f}x the v_c kernel (target <= 2x), "
           f"{t_ri / t_hand:4.2f}x the T_c kernel")
     print(f"batched roverimpact.partition, n = {n}, m = {m}, one core:")
+    for k in (2, 17):  # below LANES_MIN_BATCH: the one-item kernel, item by item
+        Bk = rng.standard_normal((k, n, n))
+        Mk = Bk @ np.swapaxes(Bk, 1, 2) + n * np.eye(n)
+        Ak, vk = rng.standard_normal((k, m, n)), rng.standard_normal((k, n))
+        t = per_call(lambda Mk=Mk, Ak=Ak, vk=vk: ri.partition(Mk, Ak, vk), 5000)
+        print(f"  {k:>9,} items  {1e6 * t:6.1f} us a call, {1e6 * t / k:5.2f} us an item")
     rates = {}
     for k in (100_000, 1_000_000):
         Bk = rng.standard_normal((k, n, n)) * 0.3

@@ -217,12 +217,15 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     """
     if not 0.0 < rtol < 1.0:  # NaN and inf fail it too
         raise InputError(f"rtol must be in (0, 1), got {rtol}")
-    try:  # one system as float64 C arrays: the kernel on the arrays as they are
-        single = _partition_single(M, A, v, rtol, want_velocities)
-    except _NOT_ONE_SYSTEM:  # anything else (lists, batches, other dtypes or layouts)
-        single = None
-    if single is not None:
-        return single
+    if (type(M) is _NDARRAY and type(A) is _NDARRAY and type(v) is _NDARRAY
+            and M.ndim == 2 and A.ndim == 2 and v.ndim == 1
+            and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8):
+        try:  # one system: the kernel on the arrays as they are
+            single = _partition_single(M, A, v, rtol, want_velocities)
+        except _NOT_ONE_SYSTEM:  # another memory layout (numba refuses it)
+            single = None
+        if single is not None:
+            return single
     M, A, v, batch, n, m = prepare(M, A, v)
     Mf = np.ascontiguousarray(M.reshape(_size(M.shape[:-2]), n, n))
     Af = np.ascontiguousarray(A.reshape(_size(A.shape[:-2]), m, n))
@@ -257,17 +260,21 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     )
 
 
-#: What numba raises for arguments outside the one-system kernel's signature (not an
-#: ndarray, another dtype, number of axes or memory layout; ValueError: an empty list).
-_NOT_ONE_SYSTEM = (TypeError, ValueError)
+#: What numba raises for arguments outside the one-system kernel's signature (here: a
+#: float64 array that is not C-contiguous). Numba builds that error's message from the
+#: kernel's signature, which costs tens of microseconds: :func:`partition` checks the
+#: types and numbers of axes first, so batches and lists never get that far.
+_NOT_ONE_SYSTEM = TypeError
+_NDARRAY, _F8 = np.ndarray, np.dtype(np.float64)
 
 
 def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
     """:func:`partition` of one system given as float64 C arrays M (n, n), A (m, n),
     v (n,): the one-item kernel on the arrays as they are, without the broadcasting
     bookkeeping (the same numbers, checks and errors). Raises ``_NOT_ONE_SYSTEM`` (numba's,
-    for other types) or returns None (other shapes) where the general path must take over."""
-    n = len(M)  # TypeError for what has no length; other shapes: the kernel says so
+    for another layout) or returns None (other shapes) where the general path must take
+    over."""
+    n = len(M)  # other shapes: the kernel says so
     out = np.empty((1, _one.OUT_V + 2 * n if want_velocities else _one.OUT_V))
     _one.partition_kernel.get()(M, A, v, _ZERO_INDEX3, -1, rtol, want_velocities, out)
     row = out[0]

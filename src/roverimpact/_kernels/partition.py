@@ -226,6 +226,14 @@ def partition_factored(
 OUT_T, OUT_TC, OUT_TA, OUT_RANK, OUT_STATUS, OUT_V = range(6)
 
 
+@njit(cache=True, nogil=True)
+def _failed(row, code):  # pragma: no cover - compiled
+    """An output row of an item that fails its checks: the status, NaN energies, rank 0."""
+    row[OUT_T] = row[OUT_TC] = row[OUT_TA] = np.nan
+    row[OUT_RANK] = 0.0
+    row[OUT_STATUS] = code
+
+
 #: Status of a one-system call (``m = -1``) whose shapes do not match.
 STATUS_SHAPE = -1
 
@@ -242,7 +250,8 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
     rows ``A[iA m : iA m + m]`` and velocity ``v[iv n : iv n + n]``, ``(iM, iA, iv) =
     index[:, b]`` (the inputs stacked along their first axis). ``out[b]`` receives
     ``T, T_c, T_a, rank, status`` and, if ``want_vc``, ``v_c`` and ``v_a`` (columns
-    :data:`OUT_V` onwards). The caller checks the shapes and indices, except with
+    :data:`OUT_V` onwards; an item that fails its checks: NaN energies, rank 0, and
+    velocities left as they were). The caller checks the shapes and indices, except with
     ``m = -1``: one system (M (n, n), A (m, n), v (n,), ``index`` zero) passed as it is,
     whose shapes the kernel checks (status :data:`STATUS_SHAPE` if they do not match).
 
@@ -289,7 +298,7 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
             last_code = factor(M[im * n:im * n + n], L, invd)
             last = im
         if last_code != STATUS_OK:
-            row[OUT_STATUS] = last_code
+            _failed(row, last_code)
             continue
         ia = index[1, b] * m
         iv = index[2, b] * n
@@ -297,8 +306,10 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
         vc_row = row[OUT_V:OUT_V + n] if want_vc else dummy
         code = partition_factored(L, invd, A[ia:ia + m], vb, rtol, want_vc, W, H, hn, u, y,
                                   z, cn, vc_row, res)
-        row[OUT_STATUS] = code
-        if code == STATUS_OK:
+        if code != STATUS_OK:
+            _failed(row, code)
+        else:
+            row[OUT_STATUS] = code
             row[OUT_T] = res[0]
             row[OUT_TC] = res[1]
             row[OUT_TA] = res[2]
@@ -311,20 +322,18 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
 def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
     """:func:`partition_kernel` with the arguments and outputs of the lane kernel
     (:func:`._jit.partition_signature`): batches of a few items, and the tests that hold
-    the two kernels side by side."""
+    the two kernels side by side. An item whose status is not ``STATUS_OK`` gets NaN
+    energies and rank 0."""
     nb, m, n = iM.shape[0], A.shape[1], M.shape[1]
+    index = np.empty((3, nb), dtype=np.int64)
+    index[0], index[1], index[2] = iM, iA, iv
     out = np.empty((nb, OUT_V + (2 * n if want_vc else 0)))
-    out[:, OUT_STATUS] = STATUS_OK
-    partition_kernel.get()(M.reshape(-1, n), A.reshape(-1, n), v.reshape(-1),
-                           np.stack((iM, iA, iv)), m, rtol, want_vc, out)
-    status[:] = out[:, OUT_STATUS]
-    ok = status == STATUS_OK
-    T[ok] = out[ok, OUT_T]
-    Tc[ok] = out[ok, OUT_TC]
-    Ta[ok] = out[ok, OUT_TA]
-    rank[ok] = out[ok, OUT_RANK]
+    partition_kernel.get()(M.reshape(-1, n), A.reshape(-1, n), v.reshape(-1), index, m,
+                           rtol, want_vc, out)
+    T[:], Tc[:], Ta[:] = out[:, OUT_T], out[:, OUT_TC], out[:, OUT_TA]
+    rank[:], status[:] = out[:, OUT_RANK], out[:, OUT_STATUS]
     if want_vc:
-        vc[ok] = out[ok, OUT_V:OUT_V + n]
+        vc[:] = out[:, OUT_V:OUT_V + n]
 
 
 @intrinsic
