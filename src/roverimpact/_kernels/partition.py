@@ -323,7 +323,7 @@ def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
     """:func:`partition_kernel` with the arguments and outputs of the lane kernel
     (:func:`._jit.partition_signature`): batches of a few items, and the tests that hold
     the two kernels side by side. An item whose status is not ``STATUS_OK`` gets NaN
-    energies and rank 0."""
+    energies and rank 0 (its ``vc`` row is undefined)."""
     nb, m, n = iM.shape[0], A.shape[1], M.shape[1]
     index = np.empty((3, nb), dtype=np.int64)
     index[0], index[1], index[2] = iM, iA, iv
