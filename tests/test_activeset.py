@@ -17,6 +17,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import roverimpact as ri
+from roverimpact.exceptions import SolverError
 from roverimpact.unilateral import TOL, active_set, unilateral_impact
 
 from .strategies import full_rank_rows, spd_matrices, vectors
@@ -487,16 +488,58 @@ def test_row_scaling_changes_nothing_but_the_impulse_unit(system, e, scale):
     assert float(b.T_c_minus) == pytest.approx(float(a.T_c_minus), rel=1e-9, abs=1e-14)
 
 
-@pytest.mark.xfail(strict=True, raises=ri.SolverError, reason=(
-    "known: Lemke's algorithm in floating point fails on nearly wedged contacts (two almost "
-    "opposite normals; scipy's NNLS finds p = (0, 4, 4000, 4000) N s with w = 0)"))
-def test_wedged_contacts_known_failure():
+def test_wedged_contacts_are_solved_as_nnls_solves_them():
     """Found by hypothesis (drawn matrices): contacts 3 and 4 are almost opposite, so the
-    solution needs impulses 1000 times the approach; the problem is feasible (NNLS solves
-    it) but the pivoting fails. Kept as a strict xfail so a fix is noticed."""
+    solution needs impulses 1000 times the approach. Lemke's pivoting ends on a ray; the
+    kernel's fallback (Lawson-Hanson on the equivalent convex QP) solves it, to round-off
+    that grows with the impulses, and is now kept. Reference: scipy's NNLS on the rows
+    whitened and projected off the bilateral row (with e = 0 the impact is
+    min |W p + P L^T v|^2 over p >= 0), and momentum balance."""
+    from scipy.optimize import nnls
+
     M = 4.0 * np.eye(4)
     N = np.array([[0, 0, 0, 1.0], [0, 0, 1, -1], [0, -1, 0, 0], [0, 1, -0.001, 0]])
     B = np.array([[3.0, 0, 0, 0]])
     v = np.array([0, 0, 0, 1.0])
     r = unilateral_impact(M, v, N, 0.0, bilateral=B)
-    np.testing.assert_allclose(r.impulse, [0.0, 4.0, 4000.0, 4000.0], rtol=1e-6)
+    L = np.linalg.cholesky(M)
+    WB = np.linalg.solve(L, B.T)
+    P = np.eye(4) - WB @ np.linalg.pinv(WB)
+    Wp = P @ np.linalg.solve(L, N.T)
+    p_ref, _ = nnls(Wp, -P @ (L.T @ v))
+    np.testing.assert_allclose(p_ref, [0.0, 4.0, 4000.0, 4000.0], rtol=1e-6)
+    np.testing.assert_allclose(r.impulse, p_ref, rtol=1e-6, atol=1e-9)
+    lhs = M @ (r.v_plus - v) - N.T @ r.impulse - B.T @ r.impulse_bilateral
+    assert np.abs(lhs).max() <= 1e-9 * np.abs(N.T @ r.impulse).max()
+    g = N @ r.v_plus  # contacts neither penetrate nor pull, to round-off of 4000 N s
+    assert g.min() >= -1e-12 * np.abs(r.impulse).max()
+    assert np.abs(B @ r.v_plus).max() <= 1e-12
+
+
+def test_infeasible_status_of_a_solvable_problem_says_the_solver_broke_down(monkeypatch):
+    """Should Lemke and its fallback both fail where the problem provably has a solution
+    (Newton's law and e = 0, or one e and no bilateral rows: p minimises a least-squares
+    problem over p >= 0), the error says the pivoting broke down, not that no impulses
+    exist; with per-contact restitution a problem can be infeasible and the message
+    stays (test_infeasible_and_locked_raise_solver_error)."""
+    from roverimpact._kernels import lemke
+    from roverimpact.unilateral import STATUS_INFEASIBLE
+
+    class Failing:
+        def get(self):
+            def run(*args):
+                args[-1][:] = STATUS_INFEASIBLE  # status
+            return run
+
+    monkeypatch.setattr("roverimpact.unilateral.impact_kernel", Failing())
+    assert lemke.STATUS_INFEASIBLE == STATUS_INFEASIBLE
+    M, N, v = 2.0 * np.eye(2), np.array([[0.0, 1.0], [1.0, 0.0]]), np.array([-1.0, -1.0])
+    for e, B in ((0.0, None), (0.5, None), (0.0, [[1.0, 1.0]])):
+        with pytest.raises(SolverError, match="broke down") as err:
+            unilateral_impact(M, v, N, e, bilateral=B)
+        assert "no solution" not in str(err.value)
+    for e, B in (([0.2, 0.8], None), (0.5, [[1.0, 1.0]])):
+        with pytest.raises(SolverError, match="no solution"):
+            unilateral_impact(M, v, N, e, bilateral=B)
+    with pytest.raises(SolverError, match="no solution"):
+        unilateral_impact(M, v, N, 0.0, law="poisson")

@@ -250,6 +250,19 @@ def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, w
         idx = tuple(int(i) for i in np.unravel_index(bad, batch)) if batch else ()
         code = int(status[bad])
         where = fmt_index(idx)
+        eb = Ef[iE[bad]]
+        if code == STATUS_INFEASIBLE and law == "newton" and (
+                not eb.any() or (pb == 0 and (eb == eb[0]).all())):
+            # p minimises |W p + c|^2 over p >= 0 (W the whitened unilateral rows, projected
+            # off the bilateral ones; c = (1 + e) L^T v, resp. its projection for e = 0),
+            # whose minimiser always exists: the pivoting broke down, not the problem
+            raise SolverError(
+                f"Lemke's algorithm broke down on this contact problem ({where}), which has "
+                "a solution (with Newton's law and one restitution coefficient, or e = 0, "
+                "it always does): nearly opposite contact normals need impulses far larger "
+                "than the approach and defeat the pivoting. Merge or remove the nearly "
+                "opposite contact rows"
+            )
         if code == STATUS_INFEASIBLE:
             raise SolverError(
                 f"the unilateral impact problem has no solution ({where}): no set of "

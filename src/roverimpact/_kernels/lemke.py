@@ -87,6 +87,22 @@ def lcp_residual(G, q, z, k):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def _impulse_scaled_residual(G, q, z, k):  # pragma: no cover - compiled
+    """:func:`lcp_residual` of ``q`` scaled to O(1), with ``w`` relative to
+    ``s = max(1, max|z|)`` and ``z_i w_i`` to ``s^2`` (round-off of ``w`` grows with ``z``)."""
+    s = 1.0
+    for i in range(k):
+        s = max(s, abs(z[i]))
+    res = 0.0
+    for i in range(k):
+        w = q[i]
+        for j in range(k):
+            w += G[i, j] * z[j]
+        res = max(res, -z[i], -w / s, abs(z[i] * w) / (s * s))
+    return res
+
+
+@njit(cache=True, nogil=True)
 def relative_residual(G, q, z, k, usc):  # pragma: no cover - compiled
     """Residual of ``w = G z + q`` relative to the velocity scale ``usc`` (``sqrt(2T^-)``).
 
@@ -353,8 +369,10 @@ def scaled_lcp(G, qs, z, T, basis, S, A, rs, zp, maxit, thr):  # pragma: no cove
     st = lemke(G, qn, z, T, basis, S, A, rs, zp, maxit)
     if st != STATUS_OK or lcp_residual(G, qn, z, k) > 1e-11:
         # degenerate problem: the convex QP by an active-set method; keep it if it solves
+        # (to round-off of w = G z + q, which grows with the impulses: nearly opposite
+        # contacts need impulses 1000 times the approach, tests/test_activeset.py)
         st2 = nnls_lcp(G, qn, zp, S, A, rs, T[:, 0], maxit)
-        if st2 == STATUS_OK and lcp_residual(G, qn, zp, k) <= 1e-11:
+        if st2 == STATUS_OK and _impulse_scaled_residual(G, qn, zp, k) <= 1e-11:
             for i in range(k):
                 z[i] = zp[i]
             st = STATUS_OK
