@@ -541,5 +541,3 @@ def test_infeasible_status_of_a_solvable_problem_says_the_solver_broke_down(monk
     for e, B in (([0.2, 0.8], None), (0.5, [[1.0, 1.0]])):
         with pytest.raises(SolverError, match="no solution"):
             unilateral_impact(M, v, N, e, bilateral=B)
-    with pytest.raises(SolverError, match="no solution"):
-        unilateral_impact(M, v, N, 0.0, law="poisson")
