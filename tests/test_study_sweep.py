@@ -231,8 +231,8 @@ class _RunningCluster:
 @pytest.mark.parametrize("worth", [True, False])
 def test_a_probe_sizes_the_work_and_every_chunk_runs_where_it_was_decided(
         tmp_path, monkeypatch, worth):
-    """--workers times a probe here (one case untimed, then 1/16 of the first chunk;
-    rows discarded), then every pending chunk, the first included, goes to the cluster,
+    """--workers times a probe here (one case untimed, then one case and 1/16 of the
+    first chunk; rows discarded), then every pending chunk, the first included, goes to the cluster,
     or all run here: nothing is computed twice but the probe, and the table is the
     serial one."""
     from roverimpact.studies import executors, sweep
@@ -255,13 +255,44 @@ def test_a_probe_sizes_the_work_and_every_chunk_runs_where_it_was_decided(
     res = run_study(_study(chunk_size=6), tmp_path / "w", evaluator=ev,
                     cluster=_RunningCluster(), note=notes.append)
     pd.testing.assert_frame_equal(res.table, serial)
-    assert ev.n == 18 + 1 + 1  # the cases, the untimed case, ceil(6 / 16) timed
+    assert ev.n == 18 + 1 + 1  # the cases, one case untimed, ceil(6 / 16) = 1 timed
     (estimate, workers, running), = judged
     assert estimate > 0 and workers == 2 and running
     assert sent == ([0, 1, 2] if worth else [])
     manifest = json.loads((tmp_path / "w" / "manifest.json").read_text())
     assert manifest["executor"].startswith("local Dask" if worth else "serial: the work")
     assert bool(notes) is not worth
+
+
+@pytest.mark.parametrize("n_probe", [2, 5])
+def test_the_probe_separates_what_a_chunk_costs_once_from_what_an_item_costs(
+        monkeypatch, n_probe):
+    """A chunk of k items costing c0 + c1 k (a traverse chunk builds its terrain and model
+    once): the work is estimated at n_chunks c0 + n_total c1, not at the probe's time per
+    item times n_total (which charged c0 to every item), on a clock the probe advances."""
+    from types import SimpleNamespace
+
+    from roverimpact.studies import executors
+
+    now, calls, judged = [0.0], [], []
+    c0, c1 = 0.11, 0.016
+
+    def probe(k):
+        calls.append(k)
+        now[0] += c0 + c1 * k
+
+    monkeypatch.setattr(executors, "time", SimpleNamespace(perf_counter=lambda: now[0]))
+    monkeypatch.setattr(executors, "worth_a_cluster",
+                        lambda est, workers, running: judged.append(est) or False)
+    why = executors.why_serial(2, 3, probe, n_probe, 101, unit="stations")
+    assert calls == [1, 1, n_probe]  # loads, then two timed sizes
+    assert judged == [pytest.approx(3 * c0 + 101 * c1)]
+    assert why.startswith(f"serial: the work (about {3 * c0 + 101 * c1:.1f} s here for 101 "
+                          "stations)")
+    calls.clear()
+    judged.clear()
+    executors.why_serial(2, 3, probe, 1, 101)  # one item a probe: time per item only
+    assert calls == [1, 1] and judged == [pytest.approx(101 * (c0 + c1))]
 
 
 def test_a_bad_worker_start_method_fails_before_any_case(tmp_path, monkeypatch):
@@ -391,7 +422,10 @@ def test_cli_sigint_exits_130_with_the_resume_hint(tmp_path):
         params = { "model.params.mass" = { low = 1.0, high = 50.0 } }
     """))
     code = textwrap.dedent(f"""
-        import sys, time
+        import signal, sys, time
+        # Ctrl-C as a terminal delivers it, also when the tests run as a background job
+        # (whose shell starts it with SIGINT ignored)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         import roverimpact.studies.evaluate as ev
         slow = ev.ScenarioEvaluator.evaluate
         def evaluate(self, base, overrides, *, simulate=False):

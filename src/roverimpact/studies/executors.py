@@ -267,24 +267,41 @@ def worth_a_cluster(serial_s: float, workers: int, running: bool) -> bool:
     return overhead + serial_s / workers < serial_s
 
 
-def why_serial(workers: int, n_chunks: int, first, probe, n_probe: int, n_total: int, *,
+def why_serial(workers: int, n_chunks: int, probe, n_probe: int, n_total: int, *,
                running: bool = False, unit: str = "cases") -> str | None:
     """Whether work of ``n_chunks`` chunks goes to a local cluster of ``workers``: None if
     so, else why it runs in this process (for the user and the manifest).
 
-    ``first()`` computes one item (untimed: it loads or compiles what the work needs,
-    which forked workers then inherit instead of each compiling it themselves), then
-    ``probe()`` computes ``n_probe`` items, timed, to estimate the ``n_total`` items for
-    :func:`worth_a_cluster`; the callers discard both results. A whole first chunk
-    timed here instead leaves the second core idle for that chunk."""
+    ``probe(k)`` computes the first ``k`` items of the first chunk as a chunk of its own;
+    the callers discard its results. It runs three times:
+
+    1. ``probe(1)``, untimed: it loads or compiles what the work needs, which forked
+       workers then inherit instead of each compiling it themselves;
+    2. ``probe(1)`` and ``probe(n_probe)``, timed. A chunk costs ``c0 + c1 k`` for ``k``
+       items: what every chunk pays once (a traverse chunk's vectorised look-ahead and
+       limits) and what every item costs. The two times give both, and the work is
+       estimated at ``n_chunks c0 + n_total c1`` for :func:`worth_a_cluster`. (One
+       probe's time per item charged the chunk's cost to every item: it overestimated a
+       short traverse 2.5-fold and started a cluster that made it slower;
+       tests/test_traverse_cli.py.)
+
+    A whole first chunk timed here instead leaves the second core idle for that chunk."""
     if workers < 2:
         return "serial: one worker is no faster than this process"
     if n_chunks < 2:
         return "serial: a single chunk"
-    first()
+    probe(1)
     t = time.perf_counter()
-    probe()
-    estimate = (time.perf_counter() - t) / max(n_probe, 1) * n_total
+    probe(1)
+    t1 = time.perf_counter() - t
+    if n_probe > 1:
+        t = time.perf_counter()
+        probe(n_probe)
+        per_item = max(time.perf_counter() - t - t1, 0.0) / (n_probe - 1)
+        per_chunk = max(t1 - per_item, 0.0)
+    else:
+        per_item, per_chunk = t1, 0.0
+    estimate = n_chunks * per_chunk + n_total * per_item
     if not worth_a_cluster(estimate, workers, running):
         return (f"serial: the work (about {estimate:.1f} s here for {n_total} {unit}) is "
                 f"too small to pay for a {workers}-worker cluster")

@@ -371,17 +371,16 @@ PROBE_FRACTION = 1 / 16
 def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: LazyCluster,
                      retries: int) -> str:
     """Run all pending chunks on ``cluster`` if a probe of the first says that is worth it
-    (:func:`~.executors.why_serial`: one case, then about :data:`PROBE_FRACTION` of the
-    chunk, timed; rows discarded), else here. Returns what ran, for the manifest and the
-    user. (Timing a whole first chunk here, as this function once did, cost a 1e6-case
-    sweep on 2 workers 0.4-0.5 s of 10-11 s: ``benchmarks/bench_dask.py``.)"""
+    (:func:`~.executors.why_serial`: one case untimed, then one case and about
+    :data:`PROBE_FRACTION` of the chunk, timed; rows discarded), else here. Returns what
+    ran, for the manifest and the user. (Timing a whole first chunk here, as this
+    function once did, cost a 1e6-case sweep on 2 workers 0.4-0.5 s of 10-11 s:
+    ``benchmarks/bench_dask.py``.)"""
     first = pending[0] * chunks.size
     n_probe = max(1, math.ceil(chunks.n_cases(pending[0]) * PROBE_FRACTION))
     why = why_serial(
         cluster.workers, len(pending),
-        lambda: compute_chunk(*args, chunks.cases.view(first, first + 1), params, simulate),
-        lambda: compute_chunk(*args, chunks.cases.view(first, first + n_probe), params,
-                              simulate),
+        lambda k: compute_chunk(*args, chunks.cases.view(first, first + k), params, simulate),
         n_probe, sum(chunks.n_cases(k) for k in pending), running=cluster.running)
     if why is not None:
         run_serial(pending, chunks, args, params, simulate, store)
