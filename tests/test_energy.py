@@ -278,6 +278,34 @@ def test_batches_and_lists_never_try_the_one_system_kernel(monkeypatch):
     assert len(tried) == 1
 
 
+def test_transposes_and_column_slices_take_the_one_system_kernel_as_a_copy(monkeypatch):
+    """A Fortran-ordered M (a transpose, scipy's output), a column slice of a Jacobian or
+    a strided v: copied to C order for the one-system kernel, never handed to numba as
+    they are (its TypeError cost 225 us a call against 6 us, and a TypeError from there
+    would fall to the general path)."""
+    from roverimpact import energy
+
+    tried, general = [], []
+    real, real_prepare = energy._partition_single, energy.prepare
+    monkeypatch.setattr(energy, "_partition_single", lambda *a: tried.append(a) or real(*a))
+    monkeypatch.setattr(energy, "prepare", lambda *a: general.append(a) or real_prepare(*a))
+    rng = np.random.default_rng(5)
+    M = random_spd(rng, 6)
+    M = (M + M.T) / 2  # M.T == M to the bit
+    A = rng.standard_normal((2, 6))
+    v = rng.standard_normal(6)
+    ref = ri.partition(M, A, v)
+    wide = np.hstack([A, A])
+    for args in ((np.asfortranarray(M), A, v), (M, wide[:, :6], v),
+                 (M, A, np.repeat(v, 2)[::2]), (M.T, np.asfortranarray(A), v)):
+        assert not all(a.flags.c_contiguous for a in args)
+        p = ri.partition(*args)
+        assert p.T_c == ref.T_c and p.rank == ref.rank
+        np.testing.assert_array_equal(p.v_c, ref.v_c)
+    assert len(tried) == 5 and not general
+    assert all(a.flags.c_contiguous for t in tried for a in t[:3])
+
+
 def test_single_system_result_is_a_normal_partition():
     """The one-system path builds its result without ``__init__``: the same type, fields,
     repr and frozenness as a Partition made the usual way."""

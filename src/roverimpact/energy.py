@@ -220,9 +220,13 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     if (type(M) is _NDARRAY and type(A) is _NDARRAY and type(v) is _NDARRAY
             and M.ndim == 2 and A.ndim == 2 and v.ndim == 1
             and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8):
+        if not (M.flags.c_contiguous and A.flags.c_contiguous and v.flags.c_contiguous):
+            # a transpose or a column slice: a C copy costs a microsecond, numba refusing
+            # the layout (the TypeError below) about 80
+            M, A, v = np.ascontiguousarray(M), np.ascontiguousarray(A), np.ascontiguousarray(v)
         try:  # one system: the kernel on the arrays as they are
             single = _partition_single(M, A, v, rtol, want_velocities)
-        except _NOT_ONE_SYSTEM:  # another memory layout (numba refuses it)
+        except _NOT_ONE_SYSTEM:  # an argument numba refuses all the same
             single = None
         if single is not None:
             return single
@@ -260,10 +264,10 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     )
 
 
-#: What numba raises for arguments outside the one-system kernel's signature (here: a
-#: float64 array that is not C-contiguous). Numba builds that error's message from the
-#: kernel's signature, which costs tens of microseconds: :func:`partition` checks the
-#: types and numbers of axes first, so batches and lists never get that far.
+#: What numba raises for arguments outside the one-system kernel's signature. Numba
+#: builds that error's message from the kernel's signature, which costs tens of
+#: microseconds: :func:`partition` checks the types, numbers of axes and memory layout
+#: first, so batches, lists and transposes never get that far.
 _NOT_ONE_SYSTEM = TypeError
 _NDARRAY, _F8 = np.ndarray, np.dtype(np.float64)
 
