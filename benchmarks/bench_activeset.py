@@ -15,6 +15,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from machine import reference
 
 import roverimpact as ri
 
@@ -35,6 +36,7 @@ def best(f, repeat=5):
 
 
 def main():
+    print(reference())  # how fast this machine is right now (machine.py)
     rng = np.random.default_rng(0)
     nb = 10_000
     print(f"{'n':>3} {'k':>3} | batched us/item: T_c fixed  auto(impact)  active_set  ratio"

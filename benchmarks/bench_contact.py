@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from machine import reference
 
 from roverimpact.contact import get_law, impact_1dof, peak_force, predict
 
@@ -24,6 +25,7 @@ def best_of(fn, repeat=5):
 
 
 def main(N: int = 1_000_000) -> None:
+    print(reference())  # how fast this machine is right now (machine.py)
     rng = np.random.default_rng(0)
     T = rng.uniform(0.01, 100.0, N)
     v = rng.uniform(0.05, 2.0, N)

@@ -36,6 +36,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np
 from bench_study import BASE_2D, BASE_3D  # the same rovers as the study benchmark
+from machine import reference
 
 from roverimpact.studies import run_study
 
@@ -183,6 +184,7 @@ def parquet_encoding(n: int = 50_000) -> None:
 
 
 def main() -> None:
+    print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n-indicator", type=int, default=1_000_000)
     ap.add_argument("--n-sim", type=int, default=200)

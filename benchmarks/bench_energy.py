@@ -17,6 +17,7 @@ import time
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 
 import numpy as np
+from machine import reference
 
 import roverimpact as ri
 
@@ -62,6 +63,7 @@ def batched_lapack_svd(M, A, v):
 
 
 def main():
+    print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser()
     ap.add_argument("--n", type=int, default=18)
     ap.add_argument("--m", type=int, default=4)

@@ -22,6 +22,7 @@ import argparse
 import time
 
 import numpy as np
+from machine import reference
 
 from roverimpact.models import rocker_bogie, rover2d
 from roverimpact.simulate import SimulationConfig, initial_state, simulate_impact
@@ -113,6 +114,7 @@ def cli_per_impact():
 
 
 def main():
+    print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--no-cli", action="store_true", help="skip the command-line timing")

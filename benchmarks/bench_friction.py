@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from machine import reference
 
 import roverimpact as ri
 from roverimpact.energy import RTOL
@@ -139,6 +140,7 @@ def rover_sweep():
 
 
 def main():
+    print(reference())  # how fast this machine is right now (machine.py)
     random_problems()
     rover_sweep()
 

@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from machine import reference
 
 from roverimpact.models import load_robot
 
@@ -101,6 +102,7 @@ def best_of(fn, repeats=7, n=5) -> float:
 
 
 def main():
+    print(reference())  # how fast this machine is right now (machine.py)
     import mujoco
 
     tmp = Path(tempfile.mkdtemp())

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from machine import reference
 
 from roverimpact import partition
 from roverimpact.models import export_plain_urdf, rocker_bogie
@@ -35,6 +36,7 @@ def per_call(fn, n):
 
 
 def main():
+    print(reference())  # how fast this machine is right now (machine.py)
     import tempfile
 
     tmp = tempfile.mkdtemp()

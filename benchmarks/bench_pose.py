@@ -18,6 +18,7 @@ import argparse
 import time
 
 import numpy as np
+from machine import reference
 from scipy.optimize import least_squares
 
 from roverimpact.models import rocker_bogie, rover2d
@@ -93,6 +94,7 @@ def bench(name, mbm, terrain, n_single, n_batch):
 
 
 def main(quick: bool = False) -> None:
+    print(reference())  # how fast this machine is right now (machine.py)
     t0 = time.perf_counter()
     terrain = synthetic_mars((20.0, 20.0), 0.05, seed=1, rock_abundance=0.05, d_max=0.5,
                              origin=(-10.0, -10.0))

@@ -17,6 +17,7 @@ import argparse
 import time
 
 import numpy as np
+from machine import reference
 
 import roverimpact as ri
 from roverimpact.models import rocker_bogie, rover2d
@@ -73,6 +74,7 @@ def case(name, mbm, cfg, repeat):
 
 
 def main():
+    print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     a = ap.parse_args()

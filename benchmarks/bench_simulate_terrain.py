@@ -20,6 +20,7 @@ import argparse
 import time
 
 import numpy as np
+from machine import reference
 
 from roverimpact.models import rocker_bogie
 from roverimpact.models.terrain import FunctionTerrain, HeightField, PlaneTerrain
@@ -56,6 +57,7 @@ def grounds():
 
 
 def main():
+    print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     a = ap.parse_args()

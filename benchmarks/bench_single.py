@@ -24,6 +24,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np
+from machine import reference
 from numba import njit
 
 import roverimpact as ri
@@ -119,6 +120,7 @@ def per_call(fn, reps: int) -> float:
 
 
 def main() -> None:
+    print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=18)
     ap.add_argument("--m", type=int, default=4)

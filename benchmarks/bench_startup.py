@@ -54,6 +54,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from machine import reference
+
 ROOT = Path(__file__).resolve().parents[1]
 BG = "ROVERIMPACT_BACKGROUND_COMPILE"  # auto (load < cores), 1 (always), 0 (never)
 
@@ -121,6 +123,7 @@ def _kernel_times() -> None:
 
 
 def main() -> None:
+    print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser()
     ap.add_argument("-n", type=int, default=5, help="counted warm runs per command")
     ap.add_argument("--cold-runs", type=int, default=2, help="counted cold runs per command")

@@ -37,6 +37,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import numpy as np
+from machine import reference
 
 from roverimpact.studies import run_study
 from roverimpact.studies.config import apply_overrides, expand
@@ -194,6 +195,7 @@ def memory(sizes: list[int]) -> None:
 
 
 def main() -> None:
+    print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n-beta", type=int, default=1000)
     ap.add_argument("--n-h", type=int, default=100)

@@ -17,6 +17,7 @@ import argparse
 import time
 
 import numpy as np
+from machine import reference
 from scipy.interpolate import RectBivariateSpline
 
 from roverimpact.models.terrain import first_rim_contact, wheel_ground_contact
@@ -33,6 +34,7 @@ def best_of(fn, repeat=3):
 
 
 def main(quick: bool = False) -> None:
+    print(reference())  # how fast this machine is right now (machine.py)
     L = 200.0 if quick else 1000.0
     r = 0.1
     print(f"synthetic_mars({L:g} m x 20 m, 5 cm spacing)")

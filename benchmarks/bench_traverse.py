@@ -23,6 +23,7 @@ import sys
 import time
 
 import numpy as np
+from machine import reference
 
 from roverimpact.traverse.run import build_terrain, run_traverse
 from roverimpact.traverse.schema import traverse_from_dict
@@ -104,6 +105,7 @@ def parts(cfg_dict: dict, n: int = 2000) -> None:
 
 
 def main(quick: bool = False, dask: bool = True) -> None:
+    print(reference())  # how fast this machine is right now (machine.py)
     L = 100.0 if quick else 1000.0
     cfg = config(L, [{"name": "km", "start": [0.0, 0.0], "end": [L, 0.0], "spacing": 0.05}])
     t0 = time.perf_counter()
