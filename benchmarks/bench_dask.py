@@ -159,6 +159,90 @@ def cluster_start(workers: int) -> None:
               f"{t2 - t1:.2f}, close {t3 - t2:.2f})")
 
 
+def _cpu(who) -> float:
+    import resource
+
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
+
+
+def _chunk_costs(k: int) -> tuple[float, float, float]:
+    """Chunk ``k`` of the 1e6-case indicator sweep computed and encoded here: wall time,
+    CPU of this thread, CPU of the process's other threads meanwhile."""
+    import resource
+
+    from roverimpact.studies.executors import compute_chunk_file
+
+    prep, args, params = _BACKGROUND
+    s0, t0, w = _cpu(resource.RUSAGE_SELF), _cpu(resource.RUSAGE_THREAD), time.perf_counter()
+    compute_chunk_file(*args, prep.cases.view(k * prep.chunk_size, (k + 1) * prep.chunk_size),
+                       params, False)
+    w = time.perf_counter() - w
+    s1, t1 = _cpu(resource.RUSAGE_SELF), _cpu(resource.RUSAGE_THREAD)
+    return w, t1 - t0, (s1 - s0) - (t1 - t0)
+
+
+_BACKGROUND: tuple = ()
+
+
+def _plain_worker(ks, queue) -> None:
+    queue.put([_chunk_costs(k) for k in ks])
+
+
+def background_work(workers: int, n_chunks: int = 8) -> None:
+    """What a chunk costs alone, in plain forked processes computing at once, and in the
+    workers of a local cluster with Dask's default background work and with
+    :data:`roverimpact.studies.executors.CLUSTER_CONFIG`: the chunk's wall time, the
+    CPU of the worker's other threads, and the command's CPU (scheduler, nannies,
+    client) while the chunks run."""
+    global _BACKGROUND
+    import multiprocessing as mp
+    import resource
+
+    from dask.distributed import Client
+
+    import roverimpact.studies.executors as ex
+    from roverimpact.studies.sweep import prepare_study
+
+    prep = prepare_study(indicator_study(1_000_000))
+    grid = list(prep.study.grid) if prep.study.grid else []
+    _BACKGROUND = (prep, (prep.evaluator, prep.study.base, prep.base), grid)
+    _chunk_costs(0)                                   # loads what the workers inherit
+    ks = list(range(1, n_chunks + 1))
+    alone = np.array([_chunk_costs(k) for k in ks]).mean(0)
+    print(f"a chunk of {prep.chunk_size:,} indicator cases (mean of {n_chunks}), "
+          f"{workers} at once:")
+    print(f"  alone in this process          {alone[0]:.3f} s")
+    ctx = mp.get_context("fork")
+    queue = ctx.Queue()
+    procs = [ctx.Process(target=_plain_worker, args=(ks[j::workers], queue))
+             for j in range(workers)]
+    t = time.perf_counter()
+    for p in procs:
+        p.start()
+    plain = np.array([c for _ in procs for c in queue.get()]).mean(0)
+    for p in procs:
+        p.join()
+    wall = time.perf_counter() - t
+    print(f"  plain forked processes         {plain[0]:.3f} s  {plain[0] / alone[0]:.2f}x   "
+          f"{n_chunks} chunks in {wall:.2f} s ({n_chunks * alone[0] / wall:.2f}x serial)")
+    saved = ex.CLUSTER_CONFIG
+    for tag, cfg in (("Dask's defaults", {}), ("CLUSTER_CONFIG", saved)):
+        ex.CLUSTER_CONFIG = cfg
+        try:
+            with ex.local_cluster(workers) as address, Client(address) as client:
+                client.gather(client.map(_chunk_costs, [0] * workers, pure=False))
+                c0, t = _cpu(resource.RUSAGE_SELF), time.perf_counter()
+                got = np.array(client.gather(client.map(_chunk_costs, ks))).mean(0)
+                wall, cmd = time.perf_counter() - t, _cpu(resource.RUSAGE_SELF) - c0
+        finally:
+            ex.CLUSTER_CONFIG = saved
+        print(f"  cluster, {tag:15s}       {got[0]:.3f} s  {got[0] / alone[0]:.2f}x   "
+              f"{n_chunks} chunks in {wall:.2f} s ({n_chunks * alone[0] / wall:.2f}x serial); "
+              f"worker's other threads {100 * got[2] / got[1]:.1f} % of the chunk's CPU, "
+              f"command {cmd:.2f} s CPU")
+
+
 def parquet_encoding(n: int = 50_000) -> None:
     """One chunk of the indicator sweep (n rows) encoded with pyarrow's default options and
     with the studies' ``PARQUET_WRITE``: size and best of 5 encoding times."""
@@ -203,6 +287,8 @@ def main() -> None:
             compare(f"simulated sweep, 2-D rover, {args.n_sim} random cases",
                     simulated_study(args.n_sim), args.workers, address)
     cluster_start(args.workers)
+    if args.n_indicator:
+        background_work(args.workers)
     parquet_encoding()
 
 

@@ -205,6 +205,30 @@ def test_dask_local_cluster_equals_serial(tmp_path, monkeypatch):
     assert manifest["executor"] == "local Dask cluster of 2 workers"
 
 
+def test_local_clusters_turn_down_dasks_background_work():
+    """The workers of the clusters roverimpact starts run without Dask's statistical
+    profiler and with slower health and monitor ticks (CLUSTER_CONFIG: with Dask's
+    defaults a worker's other threads took 4 % of its chunk's CPU), and the command's
+    own Dask configuration is left as it was."""
+    pytest.importorskip("dask.distributed")
+    import dask
+    from dask.distributed import Client
+
+    from roverimpact.studies.executors import CLUSTER_CONFIG, local_cluster
+
+    def settings():
+        return {k: dask.config.get(k) for k in CLUSTER_CONFIG}
+
+    before = settings()
+    with local_cluster(2) as address, Client(address) as client:
+        seen = client.run(settings)
+        profiling = client.run(lambda dask_worker: dask_worker.periodic_callbacks.keys())
+    assert len(seen) == 2 and all(v == CLUSTER_CONFIG for v in seen.values())
+    assert CLUSTER_CONFIG["distributed.worker.profile.enabled"] is False
+    assert not any("profile" in k for keys in profiling.values() for k in keys)
+    assert settings() == before
+
+
 @pytest.mark.parametrize("workers, why", [(2, "too small to pay for a 2-worker cluster"),
                                           (1, "one worker is no faster")])
 def test_small_work_runs_serially_and_says_so(tmp_path, workers, why):

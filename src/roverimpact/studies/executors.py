@@ -26,6 +26,7 @@ from .config import Case, flatten
 from .store import PARQUET_WRITE
 
 __all__ = [
+    "CLUSTER_CONFIG",
     "CLUSTER_START_S",
     "START_METHODS",
     "WORKER_ENVIRON",
@@ -142,6 +143,22 @@ def compute_chunk_file(evaluator, base, normalized_base, cases, params, simulate
 #: numpy settings kept
 WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
 
+#: Dask configuration of the local clusters' own background work, which competes with the
+#: chunks for the cores: the workers' statistical profiler off (it samples the task's
+#: stack every 10 ms for a dashboard these clusters do not serve), the event-loop health
+#: tick every second instead of 20 ms, the dashboard's system monitor every 5 s instead
+#: of 0.5 s and the memory monitor every 0.5 s instead of 0.1 s (still well inside a
+#: chunk's seconds). With Dask's defaults a worker's other threads took 4-8 % of the CPU
+#: its chunk took, and the command (scheduler, nannies, client) 0.4-0.5 s of CPU while
+#: two workers computed 8 chunks of 2 s; with these, 0.3-0.5 % and 0.1 s
+#: (``benchmarks/bench_dask.py`` prints the comparison).
+CLUSTER_CONFIG = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+    "distributed.worker.memory.monitor-interval": "500ms",
+}
+
 #: Start methods of local workers (:func:`worker_start_method`).
 START_METHODS = ("fork", "forkserver", "spawn")
 
@@ -193,7 +210,7 @@ def local_cluster(workers: int):
     from dask.distributed import LocalCluster
 
     method = worker_start_method()
-    with dask.config.set({**WORKER_ENVIRON,
+    with dask.config.set({**WORKER_ENVIRON, **CLUSTER_CONFIG,
                           "distributed.worker.multiprocessing-method": method}), \
             _one_blas_thread(method):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
