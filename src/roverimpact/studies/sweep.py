@@ -159,11 +159,17 @@ MAX_AUTO_CHUNK = 50_000
 
 
 def _auto_chunk(n: int, simulate: bool) -> int:
-    """About 100 chunks of simulated cases (fine-grained resume and load balance), about
-    20 of indicator-only cases (fast: fewer, larger Parquet writes), at most
-    :data:`MAX_AUTO_CHUNK` cases."""
+    """About 100 chunks of simulated cases (fine-grained resume and load balance; at
+    least 8 cases a chunk), about 20 of indicator-only cases (fast: fewer, larger Parquet
+    writes), at most :data:`MAX_AUTO_CHUNK` cases.
+
+    Two workers finish ``c`` chunks of equal cost in ``ceil(c / 2)`` chunk times: 200
+    simulated cases in chunks of 16 made 13 chunks, 7 rounds for 6.5 of work (at most
+    1.86x), in chunks of 8 they make 25 (1.92x). A simulated case costs 36-110 ms
+    (``benchmarks/bench_dask.py``, on days of different machine speed), far more than
+    what a chunk adds to its cases (its table, its Parquet file, its task)."""
     if simulate:
-        return max(16, math.ceil(n / 100))
+        return max(8, math.ceil(n / 100))
     return min(max(256, math.ceil(n / 20)), MAX_AUTO_CHUNK)
 
 
