@@ -148,10 +148,10 @@ WORKER_ENVIRON = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": 
 #: stack every 10 ms for a dashboard these clusters do not serve), the event-loop health
 #: tick every second instead of 20 ms, the dashboard's system monitor every 5 s instead
 #: of 0.5 s and the memory monitor every 0.5 s instead of 0.1 s (still well inside a
-#: chunk's seconds). With Dask's defaults a worker's other threads took 4-8 % of the CPU
-#: its chunk took, and the command (scheduler, nannies, client) 0.4-0.5 s of CPU while
-#: two workers computed 8 chunks of 2 s; with these, 0.3-0.5 % and 0.1 s
-#: (``benchmarks/bench_dask.py`` prints the comparison).
+#: chunk's seconds). With Dask's defaults a worker's other threads took 4.2-5.4 % of the
+#: CPU its chunk took, and the command (scheduler, nannies, client) 0.36-0.68 s of CPU
+#: while two workers computed 8 chunks of 2 s; with these, 0.4 % and 0.08-0.13 s
+#: (``benchmarks/bench_dask.py`` prints the comparison; docs/studies.md).
 CLUSTER_CONFIG = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
