@@ -1,6 +1,7 @@
 """One-item partition against what a user would hand-write with numba, and batch scaling.
 
     python benchmarks/bench_single.py [--n 18] [--m 4]
+    python benchmarks/bench_single.py --vectoriser
 
 Issue #19's targets: a partition call of one item within 2x of a hand-written numba
 kernel; the batched partition (n = 18, m = 4) at >= 1.5e6 items/s on one core and no
@@ -11,6 +12,10 @@ Cholesky of M, W = L^-1 A^T, G = W^T W, T_c = 1/2 (A v)^T G^-1 (A v) by a second
 (no input checks, no rank-revealing factorisation, no result object). roverimpact's
 ``partition`` checks its inputs, handles dependent rows and returns v_c, v_a and the
 ranks; the figure is what that costs per call.
+
+``--vectoriser``: the one-item kernel compiled twice in this process, as it is (LLVM's
+loop vectoriser off, for it and for the functions it calls) and with numba's default
+(on), timed in turns over several sizes.
 """
 
 from __future__ import annotations
@@ -119,12 +124,69 @@ def per_call(fn, reps: int) -> float:
     return best
 
 
+def _one_item_kernel(loop_vectorize: bool):
+    """The one-item partition kernel and the functions it calls, compiled afresh from
+    ``roverimpact/_kernels/partition.py`` (no on-disk cache) with the loop vectoriser on
+    or off."""
+    import types
+
+    from roverimpact._kernels import partition
+    from roverimpact._kernels._jit import vectorisers
+
+    name = f"roverimpact._kernels._bench_{'vec' if loop_vectorize else 'novec'}"
+    mod = types.ModuleType(name)
+    mod.__package__ = "roverimpact._kernels"
+    with open(partition.__file__) as f:
+        src = f.read().replace("cache=True", "cache=False")
+    src = src.replace("@shared(fastmath=FASTMATH)", (
+        "@njit(cache=False, nogil=True, fastmath=FASTMATH)"  # compiled with it on too
+        if loop_vectorize else "@shared(cache=False, fastmath=FASTMATH)"))
+    if loop_vectorize:
+        src = src.replace("fastmath=FASTMATH, loop_vectorize=False)", "fastmath=FASTMATH)")
+    exec(compile(src, name, "exec"), mod.__dict__)
+    mod.partition_kernel._options["cache"] = False
+    assert mod.partition_kernel._loop_vectorize == loop_vectorize
+    with vectorisers(loop=1):  # numba's default, whatever the environment says
+        return mod.partition_kernel.get()
+
+
+def vectoriser() -> None:
+    """The one-item kernel with LLVM's loop vectoriser off (as shipped) and on."""
+    kernels = {"off (as shipped)": _one_item_kernel(False), "on": _one_item_kernel(True)}
+    rng = np.random.default_rng(0)
+    index = np.zeros((3, 1), dtype=np.int64)
+    print("one-item kernel, one call, best of 5 rounds taken in turns [us]: "
+          "T_c alone / with v_c and v_a")
+    for n, m in ((5, 1), (9, 3), (18, 4), (18, 10), (30, 6), (60, 8)):
+        B = rng.standard_normal((n, n))
+        M = B @ B.T + n * np.eye(n)
+        A, v = rng.standard_normal((m, n)), rng.standard_normal(n)
+        out, out_v = np.empty((1, 5)), np.empty((1, 5 + 2 * n))
+        best = {}
+        for _ in range(5):
+            for name, k in kernels.items():
+                args = (M, A, v, index, -1, 1e-9)
+                k(*args, False, out)
+                t = per_call(lambda k=k, a=args, o=out: k(*a, False, o), 2000)
+                tv = per_call(lambda k=k, a=args, o=out_v: k(*a, True, o), 2000)
+                old = best.get(name, (math.inf, math.inf))
+                best[name] = (min(old[0], t), min(old[1], tv))
+        print(f"  n = {n:2d}, m = {m:2d}:  " + "   ".join(
+            f"loop vectoriser {name} {1e6 * t:6.2f} / {1e6 * tv:6.2f}"
+            for name, (t, tv) in best.items()))
+
+
 def main() -> None:
     print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=18)
     ap.add_argument("--m", type=int, default=4)
+    ap.add_argument("--vectoriser", action="store_true",
+                    help="time the one-item kernel with LLVM's loop vectoriser off and on")
     a = ap.parse_args()
+    if a.vectoriser:
+        vectoriser()
+        return
     rng = np.random.default_rng(0)
     n, m = a.n, a.m
     B = rng.standard_normal((n, n))

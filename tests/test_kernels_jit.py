@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import roverimpact as ri
 from roverimpact._kernels.lemke import impact_kernel
@@ -91,10 +92,9 @@ print(json.dumps([before, sent, k.cached(), sum(d.stats.cache_hits.values()),
     assert _python(code_off, tmp_path, ROVERIMPACT_BACKGROUND_COMPILE="0") == "[]"
 
 
-def test_build_settings_are_scoped_and_required_kernels_come_first(monkeypatch):
+def test_build_settings_are_scoped_to_the_kernel(monkeypatch):
     """``slp`` / ``loop_vectorize`` hold only while this kernel compiles (the lane kernel:
-    SLP on, loop vectoriser off); ``requires`` are compiled before, with numba's own
-    settings, so the functions they share are compiled the same way in every process."""
+    SLP on, loop vectoriser off; the one-item kernel: loop vectoriser off)."""
     from numba import types
     from numba.core import config as numba_config
 
@@ -110,15 +110,57 @@ def test_build_settings_are_scoped_and_required_kernels_come_first(monkeypatch):
     monkeypatch.setattr(_jit, "njit", fake_njit)
     before = (numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE)
     sig = types.void()
-    first = _jit.Kernel(lambda: None, sig)
-    lanes_like = _jit.Kernel(lambda: None, sig, slp=True, loop_vectorize=False,
-                             requires=(first,))
+    plain = _jit.Kernel(lambda: None, sig)
+    lanes_like = _jit.Kernel(lambda: None, sig, slp=True, loop_vectorize=False)
+    plain.get()
     lanes_like.get()
     assert seen == [before, (1, 0)]
     assert (numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE) == before
-    assert first.compiled and lanes_like.compiled
-    # the real lane kernel is declared that way
-    assert LANES._slp and not LANES._loop_vectorize and partition_kernel in LANES._requires
+    assert plain.compiled and lanes_like.compiled
+    # the real kernels are declared that way
+    assert LANES._slp and not LANES._loop_vectorize
+    assert not partition_kernel._slp and not partition_kernel._loop_vectorize
+
+
+_SHARED_CODE = """
+import json, re, warnings
+import numpy as np
+from numba import njit
+from roverimpact._kernels import partition as part
+from roverimpact._kernels._jit import vectorisers
+warnings.simplefilter("error")  # numba warns when asked for the code of a cached function
+M = 2.0 * np.eye(5)
+L, invd = np.zeros((5, 5)), np.empty(5)
+
+@njit
+def caller(M, L, invd):
+    return part.factor(M, L, invd)
+
+with vectorisers(slp=1, loop=1):
+    codes = [int(caller(M, L, invd))]
+    control = njit(fastmath=part.FASTMATH)(part.factor.py_func)
+    codes.append(int(control(M, L, invd)))
+vector = re.compile(r"<[0-9]+ x double>")
+irs = ["".join(f.inspect_llvm().values()) for f in (part.factor, control)]
+print(json.dumps([codes, [len(vector.findall(ir)) for ir in irs], [len(ir) for ir in irs],
+                  float(L[4, 4]), ["compile" in vars(f)
+                                   for f in (part.factor, part.partition_factored)]]))
+"""
+
+
+def test_shared_functions_get_the_same_code_whichever_kernel_compiles_them_first(tmp_path):
+    """``factor`` and ``partition_factored`` are called by the one-item, lane, impact and
+    ``T_c_at`` kernels, whose vectoriser settings differ, and numba's on-disk cache does not
+    record those settings: :func:`._jit.shared` compiles them with both vectorisers off
+    even when the kernel that needs them first has them on. Run in a new process with an
+    empty cache (numba cannot show the code of a function it loaded from the cache). The
+    control, the same Python function compiled as a plain ``@njit`` under the same
+    settings, does get vector code (so the check can fail)."""
+    codes, vectors, sizes, l44, wrapped = json.loads(_python(_SHARED_CODE, tmp_path))
+    assert codes == [0, 0] and l44 == pytest.approx(np.sqrt(2.0))
+    assert min(sizes) > 10_000  # the real code, not numba's placeholder for cached code
+    assert vectors[0] == 0 and vectors[1] > 0
+    assert wrapped == [True, True]  # the wrapped compile of _jit.shared
 
 
 def test_every_kernel_can_be_found_from_its_home():

@@ -10,7 +10,10 @@ them at no cost), outputs writable C arrays. It is compiled (or loaded from numb
 cache) the first time it is needed, never at import, and has one cache entry.
 
 Functions that kernels call stay ``@njit``: they are compiled for the types their callers
-pass, which the explicit signatures fix.
+pass, which the explicit signatures fix. Those that several kernels call are :func:`shared`:
+compiled with LLVM's vectorisers off whichever kernel needs them first, so that every
+process (and numba's on-disk cache, whose entries do not record these settings) has the
+same code for them.
 
 numba compiles one function at a time per process. On a fresh install a command that will
 need a kernel later can have it compiled meanwhile on another core:
@@ -25,6 +28,7 @@ import os
 import subprocess
 import sys
 import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 from numba import njit, types
@@ -58,15 +62,15 @@ class Kernel:
     ``kernel.get()`` returns the compiled dispatcher (hot paths call it directly);
     ``kernel(*args)`` calls it. ``slp=True`` compiles with LLVM's SLP vectoriser switched
     on for this function only (numba leaves it off), ``loop_vectorize=False`` with its
-    loop vectoriser off (numba leaves it on); the previous settings are restored.
-    ``requires``: kernels built first, with numba's settings, so that the ``@njit``
-    functions this one shares with them are compiled (and cached) with those settings
-    whichever kernel a process needs first.
+    loop vectoriser off (numba leaves it on); the previous settings are restored. They
+    apply to the kernel and to the code of the functions it calls as LLVM inlines or
+    links it into the kernel; :func:`shared` functions are themselves always compiled
+    with both off.
     Thread-safe: a kernel is compiled once even if two threads ask for it together.
     """
 
     def __init__(self, py_func, signature, *, slp: bool = False, loop_vectorize: bool = True,
-                 requires: tuple[Kernel, ...] = (), home: str | None = None, **options):
+                 home: str | None = None, **options):
         self.py_func = py_func
         #: ``module:attribute`` where this object lives (for :func:`compile_in_background`)
         self.home = home or f"{py_func.__module__}:{py_func.__name__}"
@@ -74,7 +78,6 @@ class Kernel:
         self._options = {"cache": True, "nogil": True, **options}
         self._slp = slp
         self._loop_vectorize = loop_vectorize
-        self._requires = tuple(requires)
         self._dispatcher = None
         self._background = None  # a process compiling this kernel into the cache
         self._lock = threading.Lock()
@@ -118,18 +121,10 @@ class Kernel:
             return True
 
     def _build(self):
-        for other in self._requires:
-            other.get()
-        previous = (getattr(numba_config, "SLP_VECTORIZE", 0),
-                    getattr(numba_config, "LOOP_VECTORIZE", 1))
-        if self._slp:
-            numba_config.SLP_VECTORIZE = 1
-        if not self._loop_vectorize:
-            numba_config.LOOP_VECTORIZE = 0
-        try:
+        slp = 1 if self._slp else None
+        loop = None if self._loop_vectorize else 0
+        with vectorisers(slp=slp, loop=loop):
             return njit(self.signature, **self._options)(self.py_func)
-        finally:
-            numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE = previous
 
     def __call__(self, *args):
         return self.get()(*args)
@@ -137,6 +132,45 @@ class Kernel:
     def __repr__(self) -> str:
         state = "compiled" if self.compiled else "not compiled yet"
         return f"<Kernel {self.py_func.__module__}.{self.__name__}{self.signature} ({state})>"
+
+
+@contextmanager
+def vectorisers(*, slp: int | None = None, loop: int | None = None):
+    """numba's ``SLP_VECTORIZE`` / ``LOOP_VECTORIZE`` set (``None``: left as they are)
+    while the block compiles; the previous values are restored. numba reads them when it
+    optimises a compiled function's LLVM module."""
+    previous = (getattr(numba_config, "SLP_VECTORIZE", 0),
+                getattr(numba_config, "LOOP_VECTORIZE", 1))
+    if slp is not None:
+        numba_config.SLP_VECTORIZE = slp
+    if loop is not None:
+        numba_config.LOOP_VECTORIZE = loop
+    try:
+        yield
+    finally:
+        numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE = previous
+
+
+def shared(**options):
+    """Decorator: ``@njit(cache=True, nogil=True, **options)`` for a function several
+    kernels call, compiled with LLVM's loop and SLP vectorisers off whatever the settings
+    of the kernel that needs it first (:class:`Kernel` ``slp`` / ``loop_vectorize``).
+
+    Without this, its code would depend on which kernel a process (or the first process
+    to fill numba's on-disk cache, whose entries do not record these settings) compiled
+    first. Off, not on: the loop vectoriser makes the short loops of one item's
+    factorisations slower (``benchmarks/bench_single.py``)."""
+    def wrap(py_func):
+        dispatcher = njit(**{"cache": True, "nogil": True, **options})(py_func)
+        compile_ = dispatcher.compile
+
+        def compile(sig):  # what numba calls to compile it for a caller's argument types
+            with vectorisers(slp=0, loop=0):
+                return compile_(sig)
+
+        dispatcher.compile = compile
+        return dispatcher
+    return wrap
 
 
 def kernel(signature, **options):

@@ -9,19 +9,18 @@ from __future__ import annotations
 
 from . import lanes
 from ._jit import Kernel, partition_signature
-from .partition import FASTMATH, partition_kernel
+from .partition import FASTMATH
 
 #: Inputs read-only (callers may pass read-only or broadcast views), outputs writable.
 #: SLP vectoriser on, loop vectoriser off: the per-lane statements become one SIMD
 #: instruction each, where the loop vectoriser would vectorise the loops over rows and
 #: columns across iterations instead and read the lanes through gathers (328 gathers in
 #: the kernel; n = 18, m = 4, batch 1e5, one core: 1.2-1.3e6 items/s against 1.6-1.9e6/s
-#: without it, same results to 3e-15; ``benchmarks/bench_single.py``). The one-item
-#: kernel is built first: the fallback's functions it shares (``factor``,
-#: ``partition_factored``) are then compiled with the loop vectoriser, as for it.
+#: without it, same results to 3e-15; ``benchmarks/bench_single.py``). The fallback's
+#: functions it shares with the one-item kernel (``factor``, ``partition_factored``) are
+#: :func:`._jit.shared`: compiled the same way whichever kernel a process builds first.
 LANES = Kernel(lanes.partition_lanes, partition_signature(), slp=True, loop_vectorize=False,
-               requires=(partition_kernel,), fastmath=FASTMATH, error_model="numpy",
-               home=f"{__name__}:LANES")
+               fastmath=FASTMATH, error_model="numpy", home=f"{__name__}:LANES")
 
 
 def lanes_kernel():

@@ -39,15 +39,15 @@ from .._validation import (
     STATUS_OK,
     SYM_RTOL,
 )
-from ._jit import boolean, f8, i8, kernel, ro, rw
+from ._jit import boolean, f8, i8, kernel, ro, rw, shared
 
 _EPS = np.finfo(np.float64).eps
-# Reassociation lets LLVM vectorise the dot products; no 'nnan'/'ninf': the kernel
-# relies on NaN comparisons to detect bad input.
+# Reassociation lets LLVM vectorise the lane kernel's sums (SLP); no 'nnan'/'ninf': the
+# kernels rely on NaN comparisons to detect bad input.
 FASTMATH = {"reassoc", "contract", "arcp"}
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@shared(fastmath=FASTMATH)
 def factor(Mi, L, invd):  # pragma: no cover - compiled
     """Check ``Mi`` (finite, symmetric, positive definite) and factor it, ``Mi = L L^T``.
 
@@ -91,7 +91,7 @@ def factor(Mi, L, invd):  # pragma: no cover - compiled
     return STATUS_OK
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
+@shared(fastmath=FASTMATH)
 def partition_factored(
     L, invd, Ab, vb, rtol, want_vc, W, H, hn, u, y, z, cn, vc_row, res
 ):  # pragma: no cover - compiled
@@ -244,7 +244,7 @@ def items_signature():
                       rw(f8, 2))
 
 
-@kernel(items_signature(), fastmath=FASTMATH)
+@kernel(items_signature(), fastmath=FASTMATH, loop_vectorize=False)
 def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover - compiled
     """Partition every item ``b``, one at a time: the mass matrix ``M[iM n : iM n + n]``,
     rows ``A[iA m : iA m + m]`` and velocity ``v[iv n : iv n + n]``, ``(iM, iA, iv) =
@@ -258,7 +258,11 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
     Few arguments on purpose: numba unboxes every array argument of every call, a
     noticeable share of a one-system call of a few microseconds
     (``benchmarks/bench_single.py``). A :class:`~._jit.Kernel`: compiled for one
-    signature on first use (``.get()``)."""
+    signature on first use (``.get()``), with LLVM's loop vectoriser off: its loops run
+    over one item's n and m (a few to a few tens), too short for vector code to pay for
+    its set-up, and it made this kernel slower: n = 18, m = 4, 6.0 us a call against 4.4
+    with T_c alone, 7.2 against 4.9 with the velocities; no size from n = 5 to 60 faster
+    with it (``benchmarks/bench_single.py --vectoriser``)."""
     nb = index.shape[1]
     n = M.shape[1]
     if m < 0:  # one system as it is (index zero): the shapes must match exactly
