@@ -18,8 +18,10 @@ import numpy as np
 import pytest
 
 import roverimpact as ri
+from roverimpact._kernels.friction import friction_kernel
 from roverimpact._kernels.lemke import impact_kernel
 from roverimpact._kernels.partition import partition_kernel
+from roverimpact.frictional import frictional_impact
 
 SRC = str(Path(__file__).resolve().parents[1] / "src")
 
@@ -47,6 +49,14 @@ def test_readonly_and_writable_inputs_share_one_compiled_kernel():
     for Mi, Ni in ((M, N), (_readonly(M), np.array(N)), (np.stack([M] * 2), N)):
         ri.active_set(Mi, v * 0 - 1.0, Ni)
     assert len(impact_kernel.get().signatures) == 1
+    # the frictional kernel: read-only and writable inputs, broadcast and stacked (as a
+    # plain @njit it compiled once per mix, about 50 s each on a fresh 2-core install)
+    T = _readonly([[[1.0, 0.0, 0.0, 0.0]]])
+    for Mi, vi, Ni, Ti in ((M, -v, N, T), (_readonly(M), np.array(-v), np.array(N), T),
+                           (np.stack([M] * 2), _readonly(np.stack([-v] * 2)), N,
+                            np.broadcast_to(T, (2, 1, 1, 4)))):
+        frictional_impact(Mi, vi, Ni, Ti, 0.5)
+    assert len(friction_kernel.get().signatures) == 1
 
 
 def _python(code: str, cache: Path, **env) -> str:

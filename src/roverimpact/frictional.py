@@ -347,8 +347,8 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
         "meth": np.full(nb, -1, dtype=np.int8),
         "iters": np.zeros(nb, dtype=np.int64),
     }
-    friction_kernel(*flat, *idx, ntan, nd, coef, math.cos(math.pi / int(facets)),
-                    float(rtol), float(tol), want_vplus, *out.values())
+    friction_kernel.get()(*flat, *idx, ntan, nd, coef, math.cos(math.pi / int(facets)),
+                          float(rtol), float(tol), bool(want_vplus), *out.values())
     _raise_status(out, M, idx[0], batch)
     return out, batch, dict(M=M, v=v, N=N, Tg=Tg, B=B, n=n, k=k, tm=tm, pb=pb)
 

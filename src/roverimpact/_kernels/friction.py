@@ -44,9 +44,10 @@ Per configuration, with no Python in the loop:
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from .._validation import STATUS_OK
+from ._jit import b1, boolean, f8, i8, kernel, ro, rw
 from .lemke import (
     STATUS_INFEASIBLE,
     STATUS_LOCKED,
@@ -731,7 +732,23 @@ def _held_energy(H, h, nrm, S, m, C, y):  # pragma: no cover - compiled
     return 0.5 * e, r
 
 
-@njit(cache=True, nogil=True)
+def _friction_signature():
+    """Inputs read-only C arrays (``M, N, Tg, B, v, E, MU``, the seven flat indices,
+    ``ntan, nd, coef``), ``cosm, rtol, tol, want_vplus``, then the writable outputs."""
+    i1 = types.int8
+    return (ro(f8, 3), ro(f8, 3), ro(f8, 4), ro(f8, 3), ro(f8, 2), ro(f8, 2), ro(f8, 2),
+            *(ro(i8, 1),) * 7, ro(i8, 1), ro(i8, 1), ro(f8, 3),
+            f8, f8, f8, boolean,
+            rw(f8, 2), rw(f8, 3), rw(f8, 2), rw(f8, 2), rw(f8, 3),
+            rw(f8, 1), rw(f8, 1), rw(f8, 1), rw(i8, 1), rw(i1, 2),
+            rw(b1, 2), rw(b1, 3), rw(b1, 2), rw(b1, 2),
+            rw(f8, 1), rw(i8, 1), rw(b1, 1), rw(i1, 1), rw(i8, 1))
+
+
+# one explicit signature (compiled on first use): as a plain @njit it was compiled once per
+# mix of read-only and writable inputs (six in the test suite, about 50 s each on a fresh
+# install of a 2-core machine)
+@kernel(_friction_signature())
 def friction_kernel(
     M, N, Tg, B, v, E, MU, iM, iN, iT, iB, iv, iE, iU, ntan, nd, coef, cosm, rtol, tol,
     want_vplus,
