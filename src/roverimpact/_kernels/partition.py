@@ -260,9 +260,9 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
     (``benchmarks/bench_single.py``). A :class:`~._jit.Kernel`: compiled for one
     signature on first use (``.get()``), with LLVM's loop vectoriser off: its loops run
     over one item's n and m (a few to a few tens), too short for vector code to pay for
-    its set-up, and it made this kernel slower: n = 18, m = 4, 6.0 us a call against 4.4
-    with T_c alone, 7.2 against 4.9 with the velocities; no size from n = 5 to 60 faster
-    with it (``benchmarks/bench_single.py --vectoriser``)."""
+    its set-up, and it made this kernel slower: n = 18, m = 4, 6.0-6.1 us a call against
+    4.4-4.6 with T_c alone, 7.2-7.4 against 4.9-5.1 with the velocities; no size from
+    n = 5 to 60 faster with it (``benchmarks/bench_single.py --vectoriser``)."""
     nb = index.shape[1]
     n = M.shape[1]
     if m < 0:  # one system as it is (index zero): the shapes must match exactly
