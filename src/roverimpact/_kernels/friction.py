@@ -177,7 +177,7 @@ def _lemke(G, q, K, z, T, basis, maxit):  # pragma: no cover - compiled
         T[i, i] = 1.0
         T[i, z0] = -1.0
         T[i, rhs] = q[i]
-    r = 0
+    r = np.int64(0)  # not a literal: one compile of _lexless/_pivot, not two
     for i in range(1, K):
         if _lexless(T, i, 1.0, r, 1.0, K, rhs):
             r = i
@@ -193,7 +193,7 @@ def _lemke(G, q, K, z, T, basis, maxit):  # pragma: no cover - compiled
                     z[b - K] = max(T[i, rhs], 0.0)
             return STATUS_OK
         enter = leave + K if leave < K else leave - K
-        r = -1
+        r = np.int64(-1)  # (a literal -1 would compile _lexless a third time)
         for i in range(K):
             a = T[i, enter]
             if a > _PIV:
@@ -419,7 +419,7 @@ def _mode_iteration(H, h0, tgt, sc, tw, fr, mue, ntan, nd, coef, cosm, k, tm, th
     single = False
     for it in range(maxit):
         # unknowns: (contact, kind, direction) ; kind 0 = p, 1 = tau_q, 2 = beta_a, 3 = beta_b
-        m = 0
+        m = np.int64(0)  # (a literal 0 would compile _gauss twice)
         for c in range(k):
             md = mode[c]
             if md == _M_SEP:
@@ -885,7 +885,7 @@ def friction_kernel(
         for j in range(pb):
             nB[j] = _whiten(L, invd, Bb[j], WB, j)
             bmax = max(bmax, nB[j])
-        rB0 = 0
+        rB0 = np.int64(0)  # (a literal 0 would compile _orth_append_t twice)
         for j in range(pb):
             if nB[j] > rtol * bmax and nB[j] > 0.0:
                 for i in range(n):
@@ -1258,7 +1258,7 @@ def friction_kernel(
         Tp[b] = 0.5 * tt
         # states and the rows held for T_c^-: T_c = 1/2 |u - u0|^2 (the bilateral and
         # locked rows, projected out) + 1/2 h_S^T H_SS^+ h_S (the other held rows)
-        ns = 0
+        ns = np.int64(0)  # (a literal 0 would compile _held_energy twice)
         for j in range(k):
             locked[b, j] = lock[j]
             stick = hn[j] and fric[j] and slipn[j] <= thr
