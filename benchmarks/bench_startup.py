@@ -26,19 +26,21 @@ Run: ``python benchmarks/bench_startup.py [-n 5] [--cold-runs 2] [--full] [--ker
 What makes a fresh install faster (measured with this script; see also
 ``roverimpact._kernels._jit``): every kernel compiled for exactly one signature (the
 unilateral impact kernel was compiled four times by ``reproduce``, once per combination of
-read-only and writable index arrays, the partition kernels twice), no literal-int
-specialisations of the Lemke helpers, the lane-parallel kernel (6-8 s to compile) only for
-batches of 64 items or more, and a second process compiling while the command works, when the
-machine has a core to spare (``energy`` sends the row assembly it needs first and
-compiles the partition kernel itself meanwhile: the other way round left it waiting 1.4 s
-for the second process), and the end of the process without the interpreter's teardown
-(``roverimpact.cli.run``: 0.3 s after compiled kernels were loaded). Not done: caches
-built at install time. numba keys a cache entry to the source file (its folder,
-modification time and size) and to the CPU (name and features): an editable install keeps
-its caches next to the source and rebuilds them after any edit, a wheel's caches would be
-built for another machine's CPU and ignored, and pip has no post-install step for wheels
-(a hook in the build would be fragile). A user can warm the cache once with ``roverimpact
-reproduce --quick``.
+read-only and writable index arrays, the partition kernels twice; the frictional kernel up
+to six times), no literal-int specialisations of the Lemke and friction helpers (five of
+the latter were compiled twice or three times: the frictional kernel's first compile took
+43 s with them and 36 s without, one run each on 2026-11-28), the lane-parallel kernel
+(6-8 s to compile) only for batches of 64 items or more, and a second process compiling
+while the command works, when the machine has a core to spare (``energy`` sends the row
+assembly it needs first and compiles the partition kernel itself meanwhile: the other way
+round left it waiting 1.4 s for the second process), and the end of the process without
+the interpreter's teardown (``roverimpact.cli.run``: 0.3 s after compiled kernels were
+loaded). Not done: caches built at install time. numba keys a cache entry to the source
+file (its folder, modification time and size) and to the CPU (name and features): an
+editable install keeps its caches next to the source and rebuilds them after any edit, a
+wheel's caches would be built for another machine's CPU and ignored, and pip has no
+post-install step for wheels (a hook in the build would be fragile). A user can warm the
+cache once with ``roverimpact reproduce --quick``.
 """
 
 from __future__ import annotations
@@ -66,6 +68,10 @@ KERNELS = [
     ("unilateral impact (Lemke)", "roverimpact._kernels.lemke", "impact_kernel"),
     ("row assembly, one configuration", "roverimpact.models._assemble", "_evaluate_one"),
     ("row assembly, batched", "roverimpact.models._assemble", "_evaluate_many"),
+    ("row assembly + partition (T_c_at)", "roverimpact.models._assemble", "_partition_at"),
+    ("frictional impact", "roverimpact._kernels.friction", "friction_kernel"),
+    ("reduced model, RK4 peaks", "roverimpact._kernels.reduced", "rk4_peaks"),
+    ("reduced model, stiff peaks", "roverimpact._kernels.reduced", "stiff_peaks"),
 ]
 
 _KERNEL_CODE = """
