@@ -60,20 +60,33 @@ def test_readonly_and_writable_inputs_share_one_compiled_kernel():
 
 
 def test_kernel_helpers_are_not_compiled_for_literal_arguments():
-    """A helper called with a variable that starts as a literal (``r = 0``, then passed
-    on) is compiled by numba once for ``Literal[int](0)`` and once more for ``int64``:
-    five helpers of the frictional kernel were, which made its first compile 43 s instead
-    of 36 on this machine. Checked on the helpers this process compiled (none when the
-    kernels came from numba's cache, as after a first run; CI starts from an empty one)."""
+    """numba compiles a helper once more for each literal argument type: a variable that
+    starts as a literal (``r = 0``) and is passed on compiles it for ``Literal[int](0)``
+    as well as for ``int64``. Found and removed: five helpers of the frictional kernel
+    (its first compile took 43 s instead of 36 on this machine), ``partition_factored``
+    for the literal ``False`` of ``T_c_at``'s kernel, the height-field contact's
+    ``_refine`` for a literal -1. Checked on the helpers this process compiled (none when
+    the kernels came from numba's cache, as after a first run; CI starts from an empty
+    one)."""
     from numba import types
     from numba.core.registry import CPUDispatcher
 
-    from roverimpact._kernels import friction, lemke, partition
+    from roverimpact._kernels import friction, lemke, partition, terrain
+    from roverimpact.models.terrain import HeightField, wheel_ground_contact
+    from roverimpact.scenario import ImpactSetup
 
     M = np.diag([2.0, 3.0, 4.0])
     frictional_impact(M, [0.2, -1.0, 0.1], [[0.0, 1.0, 0.0]], [[[1.0, 0.0, 0.0]]], 0.5)
     ri.active_set(M, [0.0, -1.0, -1.0], [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-    helpers = {id(d): d for mod in (friction, lemke, partition) for d in vars(mod).values()
+    ri.partition(M, [0.0, 1.0, 0.0], [0.2, -1.0, 0.1])
+    setup = ImpactSetup.from_scenario(ri.Scenario.model_validate({
+        "model": {"name": "rover2d"}, "velocity": {"u": 0.5},
+        "obstacle": {"wheel": "front", "beta_deg": 45.0}}))
+    assert setup.T_c_at(setup.q) > 0.0  # T_c_at's kernel calls partition_factored too
+    hf = HeightField(np.random.default_rng(0).normal(size=(8, 8)) * 0.01, 0.5)
+    assert np.isfinite(wheel_ground_contact(hf, [1.5, 1.5, 0.3], (0, 1, 0), 0.2).gap)
+    helpers = {id(d): d for mod in (friction, lemke, partition, terrain)
+               for d in vars(mod).values()
                if isinstance(d, CPUDispatcher)}.values()
     compiled = [d for d in helpers if d.signatures]
     if not compiled:

@@ -179,7 +179,8 @@ def hf_wheel_contact(zp, stride, nx, ny, x0, y0, dx, dy, C, A, r, n_scan, max_it
         if not ok[w]:
             continue
         # the two lowest local minima of the scan, refined; the lower result kept
-        k1, k2, g1v, g2v = -1, -1, np.inf, np.inf
+        # not literals: a literal -1 passed on as k2 compiled _refine a second time
+        k1, k2, g1v, g2v = np.int64(-1), np.int64(-1), np.inf, np.inf
         for k in range(n_scan + 1):
             left = gs[k - 1] if k > 0 else np.inf
             right = gs[k + 1] if k < n_scan else np.inf

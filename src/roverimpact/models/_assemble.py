@@ -169,7 +169,8 @@ def _partition_at(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_con
     H = np.empty((m, nv))
     scratch = np.empty((4, nv))
     cn = np.empty((2, m))
-    return partition_factored(L, invd, A, v, rtol, False, W, H, cn[0], scratch[0],
+    no_vc = np.bool_(False)  # not a literal: one compile of partition_factored, not two
+    return partition_factored(L, invd, A, v, rtol, no_vc, W, H, cn[0], scratch[0],
                               scratch[1], scratch[2], cn[1], scratch[3], res)
 
 
