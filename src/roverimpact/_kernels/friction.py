@@ -824,6 +824,10 @@ def friction_kernel(
     A = np.empty((kmax, kmax))
     rs = np.empty(kmax)
     Gn = np.empty((k, k))
+    # the frictionless solve's own tableau and solve matrix: C arrays of its size, where
+    # slices of T and A would compile the Lemke helpers a second time (for 'A' layouts)
+    Tn = np.empty((k, 2 * k + 2))
+    An = np.empty((k, k))
     qn0 = np.empty(k)
     xp = np.empty(k)
     xt = np.empty((k, tm))
@@ -1060,8 +1064,8 @@ def friction_kernel(
                     for c in range(k):
                         Gn[a, c] = G[a, c]
                     qn0[a] = qs[a]
-                st0 = scaled_lcp(Gn, qn0, z[:k], T[:k, :2 * k + 2], basis[:k], S[:k],
-                                  A[:k, :k], rs[:k], zl[:k], 50 + 20 * k, thr)
+                st0 = scaled_lcp(Gn, qn0, z[:k], Tn, basis[:k], S[:k], An, rs[:k], zl[:k],
+                                  50 + 20 * k, thr)
                 if F == 0:
                     st = st0
                     if st != STATUS_OK:
