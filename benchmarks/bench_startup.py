@@ -28,13 +28,12 @@ What makes a fresh install faster (measured with this script; see also
 unilateral impact kernel was compiled four times by ``reproduce``, once per combination of
 read-only and writable index arrays, the partition kernels twice; the frictional kernel up
 to six times), no literal-int specialisations of the Lemke and friction helpers (five of
-the latter were compiled twice or three times: the frictional kernel's first compile took
-43 s with them and 36 s without, one run each on 2026-11-28), the lane-parallel kernel
-(6-8 s to compile) only for batches of 64 items or more, and a second process compiling
-while the command works, when the machine has a core to spare (``energy`` sends the row
-assembly it needs first and compiles the partition kernel itself meanwhile: the other way
-round left it waiting 1.4 s for the second process), and the end of the process without
-the interpreter's teardown (``roverimpact.cli.run``: 0.3 s after compiled kernels were
+the latter were compiled twice or three times), the lane-parallel kernel (6-8 s to
+compile) only for batches of 64 items or more, and a second process compiling while the
+command works, when the machine has a core to spare (``energy`` sends the row assembly it
+needs first and compiles the partition kernel itself meanwhile: the other way round left
+it waiting 1.4 s for the second process), and the end of the process without the
+interpreter's teardown (``roverimpact.cli.run``: 0.3 s after compiled kernels were
 loaded). Not done: caches built at install time. numba keys a cache entry to the source
 file (its folder, modification time and size) and to the CPU (name and features): an
 editable install keeps its caches next to the source and rebuilds them after any edit, a
