@@ -50,7 +50,7 @@ def test_readonly_and_writable_inputs_share_one_compiled_kernel():
         ri.active_set(Mi, v * 0 - 1.0, Ni)
     assert len(impact_kernel.get().signatures) == 1
     # the frictional kernel: read-only and writable inputs, broadcast and stacked (as a
-    # plain @njit it compiled once per mix, about 50 s each on a fresh 2-core install)
+    # plain @njit it compiled once per mix, the longest compile of the package's kernels)
     T = _readonly([[[1.0, 0.0, 0.0, 0.0]]])
     for Mi, vi, Ni, Ti in ((M, -v, N, T), (_readonly(M), np.array(-v), np.array(N), T),
                            (np.stack([M] * 2), _readonly(np.stack([-v] * 2)), N,
@@ -63,7 +63,7 @@ def test_kernel_helpers_are_not_compiled_for_literal_arguments():
     """numba compiles a helper once more for each literal argument type: a variable that
     starts as a literal (``r = 0``) and is passed on compiles it for ``Literal[int](0)``
     as well as for ``int64``. Found and removed: five helpers of the frictional kernel
-    (its first compile took 43 s instead of 36 on this machine), ``partition_factored``
+    (the longest compile of the package's kernels), ``partition_factored``
     for the literal ``False`` of ``T_c_at``'s kernel, the height-field contact's
     ``_refine`` for a literal -1. Checked on the helpers this process compiled (none when
     the kernels came from numba's cache, as after a first run; CI starts from an empty

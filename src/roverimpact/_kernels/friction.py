@@ -746,8 +746,8 @@ def _friction_signature():
 
 
 # one explicit signature (compiled on first use): as a plain @njit it was compiled once per
-# mix of read-only and writable inputs (six in the test suite, about 50 s each on a fresh
-# install of a 2-core machine)
+# mix of read-only and writable inputs (six in the test suite; one compile is the longest of
+# the package's kernels, ``benchmarks/bench_startup.py --kernels``)
 @kernel(_friction_signature())
 def friction_kernel(
     M, N, Tg, B, v, E, MU, iM, iN, iT, iB, iv, iE, iU, ntan, nd, coef, cosm, rtol, tol,
