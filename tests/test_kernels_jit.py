@@ -236,3 +236,55 @@ def test_every_kernel_can_be_found_from_its_home():
             "roverimpact._kernels.reduced:stiff_peaks",
             "roverimpact.models._assemble:_evaluate_one"} <= set(found)
 
+
+
+def test_a_first_compile_says_what_it_compiles_and_a_cached_one_does_not(monkeypatch):
+    """``roverimpact._kernels.compile_notice`` wraps a compile that numba's cache cannot
+    serve (a first run can compile for half a minute); the command line's shows the
+    kernel's name on a terminal and nothing in a pipe or a log."""
+    import io
+
+    from numba import types
+    from rich.console import Console
+
+    from roverimpact import _kernels
+    from roverimpact._kernels import _jit
+    from roverimpact.cli._app import compile_notice
+
+    events = []
+
+    class Notice:
+        def __init__(self, kernel):
+            self.kernel = kernel
+
+        def __enter__(self):
+            events.append(("enter", self.kernel.__name__, self.kernel.compiled))
+
+        def __exit__(self, *exc):
+            events.append(("exit", self.kernel.__name__, self.kernel.compiled))
+
+    monkeypatch.setattr(_jit, "njit", lambda signature, **options: lambda f: f)
+    monkeypatch.setattr(_kernels, "compile_notice", Notice)
+
+    def fresh():
+        pass
+
+    def warm():
+        pass
+
+    for f, cached in ((fresh, False), (warm, True)):
+        k = _jit.Kernel(f, types.void())
+        monkeypatch.setattr(k, "cached", lambda cached=cached: cached)
+        k.get()
+        k.get()  # built once: no second notice
+    assert events == [("enter", "fresh", False), ("exit", "fresh", True)]
+
+    kernel = _jit.Kernel(fresh, types.void())
+    tty = Console(file=io.StringIO(), force_terminal=True, width=200)
+    with compile_notice(kernel, tty):
+        pass
+    assert "compiling fresh, first run on this machine only" in tty.file.getvalue()
+    pipe = Console(file=io.StringIO(), force_terminal=False)
+    with compile_notice(kernel, pipe):
+        pass
+    assert pipe.file.getvalue() == ""

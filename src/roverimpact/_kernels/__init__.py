@@ -7,3 +7,9 @@
 - :mod:`._jit`: kernels compiled for one explicit signature on first use, and their
   compilation in a background process on a fresh install.
 """
+
+#: ``compile_notice(kernel)`` returns a context manager entered around a kernel's first
+#: compile in a process when numba's cache cannot serve it (a fresh install, or an upgrade):
+#: the command line sets one that says what is compiling (``cli._app.compile_notice``).
+#: Here, not in :mod:`._jit`, so that setting it imports no numba. None: nothing is shown.
+compile_notice = None

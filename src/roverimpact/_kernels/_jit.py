@@ -28,11 +28,13 @@ import os
 import subprocess
 import sys
 import threading
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 from numba import njit, types
 from numba.core import config as numba_config
+
+from .. import _kernels
 
 f8, i8, b1, boolean = types.float64, types.int64, types.bool_, types.boolean
 
@@ -85,13 +87,20 @@ class Kernel:
         self.__name__ = py_func.__name__
 
     def get(self):
-        """The compiled dispatcher (compiled or loaded from the cache on the first call)."""
+        """The compiled dispatcher (compiled or loaded from the cache on the first call).
+
+        A compile that numba's cache cannot serve runs inside
+        ``roverimpact._kernels.compile_notice(self)`` when one is set (the command line's
+        says what is compiling)."""
         d = self._dispatcher
         if d is None:
             with self._lock:
                 if self._dispatcher is None:
-                    self._wait_background()
-                    self._dispatcher = self._build()
+                    notice = _kernels.compile_notice
+                    with (notice(self) if notice is not None and not self.cached()
+                          else nullcontext()):
+                        self._wait_background()
+                        self._dispatcher = self._build()
                 d = self._dispatcher
         return d
 

@@ -61,8 +61,11 @@ def _print_interrupted(word: str, exc: BaseException | None) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``roverimpact`` console script; returns the exit code."""
+    from .. import _kernels
     from ..exceptions import RoverImpactError
+    from ._app import compile_notice
 
+    _kernels.compile_notice = compile_notice  # first compiles say what they compile
     try:
         rv = app(args=argv, standalone_mode=False, prog_name="roverimpact")
     except _ABORT as exc:  # click turns Ctrl-C into Abort; the interruption is its cause

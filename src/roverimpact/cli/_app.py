@@ -269,6 +269,20 @@ def check_output(path: Path, *, folder: bool, option: str = "-o",
 
 
 @contextmanager
+def compile_notice(kernel, console=None):
+    """Around a kernel's first compile on this machine (a fresh install or an upgrade, when
+    numba's cache cannot serve it; :data:`roverimpact._kernels.compile_notice`): a
+    transient line on stderr saying what compiles, so that a first run of half a minute
+    does not look hung. On a terminal only: pipes and logs get nothing."""
+    console = err_console if console is None else console
+    if not console.is_terminal:
+        yield
+        return
+    with console.status(f"compiling {kernel.__name__}, first run on this machine only"):
+        yield
+
+
+@contextmanager
 def progress_bar(label: str, unit: str = "cases", *, to_stderr: bool = False):
     """A rich progress bar with ETA, shown from the first report on (so that a study
     rejected before any work prints only its error); yields ``progress(done, total)``.
