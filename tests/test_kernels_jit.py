@@ -288,3 +288,7 @@ def test_a_first_compile_says_what_it_compiles_and_a_cached_one_does_not(monkeyp
     with compile_notice(kernel, pipe):
         pass
     assert pipe.file.getvalue() == ""
+    other = Console(file=io.StringIO(), force_terminal=True)  # a forked worker's terminal
+    with compile_notice(kernel, other, pid=os.getpid() + 1):
+        pass
+    assert other.file.getvalue() == ""

@@ -8,6 +8,7 @@ becomes one line on stderr and exit code 2, never a traceback.
 from __future__ import annotations
 
 import atexit
+import functools
 import os
 import sys
 import threading
@@ -65,7 +66,8 @@ def main(argv: list[str] | None = None) -> int:
     from ..exceptions import RoverImpactError
     from ._app import compile_notice
 
-    _kernels.compile_notice = compile_notice  # first compiles say what they compile
+    # first compiles say what they compile (in this process, not in forked workers)
+    _kernels.compile_notice = functools.partial(compile_notice, pid=os.getpid())
     try:
         rv = app(args=argv, standalone_mode=False, prog_name="roverimpact")
     except _ABORT as exc:  # click turns Ctrl-C into Abort; the interruption is its cause

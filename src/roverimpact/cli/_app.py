@@ -21,6 +21,7 @@ import inspect
 import io
 import json
 import math
+import os
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -269,13 +270,15 @@ def check_output(path: Path, *, folder: bool, option: str = "-o",
 
 
 @contextmanager
-def compile_notice(kernel, console=None):
+def compile_notice(kernel, console=None, *, pid=None):
     """Around a kernel's first compile on this machine (a fresh install or an upgrade, when
     numba's cache cannot serve it; :data:`roverimpact._kernels.compile_notice`): a
     transient line on stderr saying what compiles, so that a first run of half a minute
-    does not look hung. On a terminal only: pipes and logs get nothing."""
+    does not look hung. On a terminal only: pipes and logs get nothing; with ``pid``, in
+    that process only (not in the Dask workers it forks, whose lines would cross the
+    progress bar)."""
     console = err_console if console is None else console
-    if not console.is_terminal:
+    if not console.is_terminal or (pid is not None and os.getpid() != pid):
         yield
         return
     with console.status(f"compiling {kernel.__name__}, first run on this machine only"):
