@@ -152,7 +152,9 @@ def _one_item_kernel(loop_vectorize: bool):
     mod.__package__ = "roverimpact._kernels"
     with open(partition.__file__) as f:
         src = f.read().replace("cache=True", "cache=False")
-    src = src.replace("@shared(fastmath=FASTMATH)", (
+    shared = "@shared(fastmath=FASTMATH)"
+    assert src.count(shared) == 2  # factor, partition_factored: else this no longer applies
+    src = src.replace(shared, (
         "@njit(cache=False, nogil=True, fastmath=FASTMATH)"  # compiled with it on too
         if loop_vectorize else "@shared(cache=False, fastmath=FASTMATH)"))
     if loop_vectorize:

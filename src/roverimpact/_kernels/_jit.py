@@ -38,6 +38,9 @@ from .. import _kernels
 
 f8, i8, b1, boolean = types.float64, types.int64, types.bool_, types.boolean
 
+#: numba options of every kernel and :func:`shared` function (their own options go on top)
+NJIT_OPTIONS = {"cache": True, "nogil": True}
+
 
 def ro(dtype, ndim: int):
     """Read-only C-contiguous array type (writable arrays convert to it)."""
@@ -77,7 +80,7 @@ class Kernel:
         #: ``module:attribute`` where this object lives (for :func:`compile_in_background`)
         self.home = home or f"{py_func.__module__}:{py_func.__name__}"
         self.signature = signature
-        self._options = {"cache": True, "nogil": True, **options}
+        self._options = {**NJIT_OPTIONS, **options}
         self._slp = slp
         self._loop_vectorize = loop_vectorize
         self._dispatcher = None
@@ -170,7 +173,7 @@ def shared(**options):
     first. Off, not on: the loop vectoriser makes the short loops of one item's
     factorisations slower (``benchmarks/bench_single.py``)."""
     def wrap(py_func):
-        dispatcher = njit(**{"cache": True, "nogil": True, **options})(py_func)
+        dispatcher = njit(**{**NJIT_OPTIONS, **options})(py_func)
         compile_ = dispatcher.compile
 
         def compile(sig):  # what numba calls to compile it for a caller's argument types
