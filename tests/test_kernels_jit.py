@@ -169,6 +169,40 @@ def test_build_settings_are_scoped_to_the_kernel(monkeypatch):
     assert not partition_kernel._slp and not partition_kernel._loop_vectorize
 
 
+def test_vectoriser_settings_are_invisible_to_compiles_in_other_threads():
+    """numba's vectoriser settings are global: while :func:`._jit.vectorisers` has them
+    changed, a compile in another thread (which takes numba's compiler lock) waits, and
+    then sees the settings as they were. The other thread here only takes the lock and
+    reads the settings; without the lock it would read them changed."""
+    import threading
+    import time
+
+    from numba.core import config as numba_config
+    from numba.core.compiler_lock import global_compiler_lock
+
+    from roverimpact._kernels._jit import vectorisers
+
+    before = (numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE)
+    started, seen = threading.Event(), []
+
+    def other_compile():
+        started.set()
+        with global_compiler_lock:
+            seen.append((numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE))
+
+    with vectorisers(slp=1 - before[0], loop=1 - before[1]):
+        with vectorisers(loop=before[1]):  # nested (a shared function inside a kernel)
+            assert numba_config.LOOP_VECTORIZE == before[1]
+        thread = threading.Thread(target=other_compile)
+        thread.start()
+        assert started.wait(10)
+        time.sleep(0.2)  # time for the thread to get the lock, were it free
+        assert seen == []
+        assert (numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE) != before
+    thread.join(10)
+    assert seen == [before]
+
+
 _SHARED_CODE = """
 import json, re, warnings
 import numpy as np

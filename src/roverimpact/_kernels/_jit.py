@@ -33,6 +33,7 @@ from pathlib import Path
 
 from numba import njit, types
 from numba.core import config as numba_config
+from numba.core.compiler_lock import global_compiler_lock
 
 from .. import _kernels
 
@@ -150,17 +151,22 @@ class Kernel:
 def vectorisers(*, slp: int | None = None, loop: int | None = None):
     """numba's ``SLP_VECTORIZE`` / ``LOOP_VECTORIZE`` set (``None``: left as they are)
     while the block compiles; the previous values are restored. numba reads them when it
-    optimises a compiled function's LLVM module."""
-    previous = (getattr(numba_config, "SLP_VECTORIZE", 0),
-                getattr(numba_config, "LOOP_VECTORIZE", 1))
-    if slp is not None:
-        numba_config.SLP_VECTORIZE = slp
-    if loop is not None:
-        numba_config.LOOP_VECTORIZE = loop
-    try:
-        yield
-    finally:
-        numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE = previous
+    optimises a compiled function's LLVM module.
+
+    The settings are numba's global ones: the block holds numba's compiler lock (reentrant;
+    every numba compile takes it), so that a compile in another thread neither sees them
+    nor is under way while they change."""
+    with global_compiler_lock:
+        previous = (getattr(numba_config, "SLP_VECTORIZE", 0),
+                    getattr(numba_config, "LOOP_VECTORIZE", 1))
+        if slp is not None:
+            numba_config.SLP_VECTORIZE = slp
+        if loop is not None:
+            numba_config.LOOP_VECTORIZE = loop
+        try:
+            yield
+        finally:
+            numba_config.SLP_VECTORIZE, numba_config.LOOP_VECTORIZE = previous
 
 
 def shared(**options):
