@@ -59,15 +59,18 @@ def test_readonly_and_writable_inputs_share_one_compiled_kernel():
     assert len(friction_kernel.get().signatures) == 1
 
 
-def test_kernel_helpers_are_not_compiled_for_literal_arguments():
+def test_kernel_helpers_are_compiled_once():
     """numba compiles a helper once more for each literal argument type: a variable that
     starts as a literal (``r = 0``) and is passed on compiles it for ``Literal[int](0)``
     as well as for ``int64``. Found and removed: five helpers of the frictional kernel
     (the longest compile of the package's kernels), ``partition_factored``
     for the literal ``False`` of ``T_c_at``'s kernel, the height-field contact's
-    ``_refine`` for a literal -1. Checked on the helpers this process compiled (none when
-    the kernels came from numba's cache, as after a first run; CI starts from an empty
-    one)."""
+    ``_refine`` for a literal -1. And once more for a writable array where its other
+    callers pass a read-only one: ``factor`` and ``partition_factored``, called by the
+    one-item, lane, impact, frictional and ``T_c_at`` kernels, have one compiled version
+    (``T_c_at``'s passes its arrays through ``partition.readonly``). Checked on the helpers
+    this process compiled (none when the kernels came from numba's cache, as after a first
+    run; CI starts from an empty one)."""
     from numba import types
     from numba.core.registry import CPUDispatcher
 
@@ -94,6 +97,9 @@ def test_kernel_helpers_are_not_compiled_for_literal_arguments():
     literal = sorted(d.py_func.__name__ for d in compiled for sig in d.signatures
                      if any(isinstance(t, types.Literal) for t in sig))
     assert literal == []
+    shared = {d.py_func.__name__: len(d.signatures)
+              for d in (partition.factor, partition.partition_factored) if d.signatures}
+    assert set(shared.values()) <= {1}, shared
 
 
 def _python(code: str, cache: Path, **env) -> str:

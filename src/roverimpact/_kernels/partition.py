@@ -28,6 +28,7 @@ import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.core import cgutils
+from numba.core.imputils import impl_ret_borrowed
 from numba.extending import intrinsic
 
 from .._validation import (
@@ -338,6 +339,22 @@ def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
     rank[:], status[:] = out[:, OUT_RANK], out[:, OUT_STATUS]
     if want_vc:
         vc[:] = out[:, OUT_V:OUT_V + n]
+
+
+@intrinsic
+def readonly(typingctx, arr):
+    """``arr`` typed read-only: the same array (no copy), for a writable array passed to a
+    :func:`~._jit.shared` function whose other callers pass read-only ones (the kernels'
+    inputs). numba compiles a function once per set of argument types, and a writable and
+    a read-only array are different types: without this, ``factor`` and
+    ``partition_factored`` were compiled a second time for ``T_c_at``'s kernel."""
+    if not isinstance(arr, types.Array) or not arr.mutable:
+        return None
+
+    def codegen(context, builder, signature, args):  # pragma: no cover - compiled
+        return impl_ret_borrowed(context, builder, signature.return_type, args[0])
+
+    return arr.copy(readonly=True)(arr), codegen
 
 
 @intrinsic

@@ -25,7 +25,7 @@ import pinocchio as pin
 from numba import njit
 
 from .._kernels._jit import b1, f8, i8, kernel, ro, rw
-from .._kernels.partition import factor, partition_factored
+from .._kernels.partition import factor, partition_factored, readonly
 from ._build import LinearLoopClosure
 from .constraints import GroundContact, LockedJoint, LoopClosure, PointContact
 
@@ -162,15 +162,15 @@ def _partition_at(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_con
             A[i, j] = A_all[rows[i], j]
     L = np.zeros((nv, nv))
     invd = np.empty(nv)
-    code = factor(M, L, invd)
-    if code != 0:
+    code = factor(readonly(M), L, invd)  # read-only, as the partition kernels pass them:
+    if code != 0:  # one compiled version of factor and partition_factored, not two
         return code
     W = np.empty((m, nv))
     H = np.empty((m, nv))
     scratch = np.empty((4, nv))
     cn = np.empty((2, m))
     no_vc = np.bool_(False)  # not a literal: one compile of partition_factored, not two
-    return partition_factored(L, invd, A, v, rtol, no_vc, W, H, cn[0], scratch[0],
+    return partition_factored(L, invd, readonly(A), v, rtol, no_vc, W, H, cn[0], scratch[0],
                               scratch[1], scratch[2], cn[1], scratch[3], res)
 
 
