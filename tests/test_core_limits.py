@@ -37,8 +37,8 @@ def test_an_energy_beyond_float64_is_refused(m, v):
             ri.impulsive_impact(m * np.eye(2), [[1.0, 0.0]], [-v, 0.0], restitution=0.5)
 
 
-def test_the_overflowing_item_of_a_batch_is_named():
-    n = 20  # the lanes kernel (batches of 16 and more) as well as the one-item kernel
+@pytest.mark.parametrize("n", [20, 70])  # the one-item kernel, the lane kernel (64 and more)
+def test_the_overflowing_item_of_a_batch_is_named(n):
     M = np.broadcast_to(np.eye(2), (n, 2, 2)).copy()
     M[7] *= 1e300
     v = np.full((n, 2), 1e5)

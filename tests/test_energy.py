@@ -131,6 +131,37 @@ def test_batched_equals_loop_and_broadcasts(rng):
     assert ri.effective_mass(M, A).shape == (B, m, m)
 
 
+def test_small_batches_agree_with_the_lane_path(rng):
+    """Batches below ``LANES_MIN_BATCH`` run the one-item kernel and return views of its
+    output rows: the same items in a batch large enough for the lane kernel give the same
+    numbers to rounding, v_a is v - v_c to the bit, and the types are the lane path's."""
+    from roverimpact.energy import LANES_MIN_BATCH
+
+    n, m, k = 9, 3, 5
+    M = np.stack([random_spd(rng, n) for _ in range(k)])
+    A = rng.standard_normal((k, m, n))
+    A[2, 2] = A[2, 0] + 2.0 * A[2, 1]  # a dependent row
+    v = rng.standard_normal((k, n))
+    reps = -(-LANES_MIN_BATCH // k)
+    big = ri.partition(np.tile(M, (reps, 1, 1)), np.tile(A, (reps, 1, 1)), np.tile(v, (reps, 1)))
+    for small in (ri.partition(M, A, v), ri.partition(M, A, v, want_velocities=False)):
+        for f in ("T", "T_c", "T_a"):
+            got, want = getattr(small, f), getattr(big, f)[:k]
+            assert got.dtype == want.dtype == np.float64 and got.shape == (k,)
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-14)
+        assert small.rank.dtype == np.int64 and small.rank.tolist() == big.rank[:k].tolist()
+        assert small.rank[2] == 2
+    small = ri.partition(M, A, v)
+    np.testing.assert_allclose(small.v_c, big.v_c[:k], rtol=1e-11, atol=1e-13)
+    np.testing.assert_array_equal(small.v_a, v - small.v_c)
+    # broadcast: one M and A, a grid of velocities; v_a against the broadcast v
+    v2 = rng.standard_normal((2, 3, n))
+    p = ri.partition(M[0], A[0], v2)
+    assert p.v_c.shape == p.v_a.shape == (2, 3, n) and p.T_c.shape == (2, 3)
+    np.testing.assert_array_equal(p.v_a, v2 - p.v_c)
+    assert p.T_c[1, 2] == pytest.approx(ri.partition(M[0], A[0], v2[1, 2]).T_c, rel=1e-12)
+
+
 def test_kernel_agrees_with_svd_reference(rng):
     """Second method: compiled pivoted-QR kernel vs LAPACK SVD projector, batched."""
     n, m, B = 18, 4, 200
