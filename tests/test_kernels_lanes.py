@@ -18,13 +18,28 @@ from hypothesis import strategies as st
 
 import roverimpact as ri
 from roverimpact import _validation
+from roverimpact._kernels import partition as one
 from roverimpact._kernels.lanes_jit import lanes_kernel
-from roverimpact._kernels.partition import run_items
 from roverimpact.energy import LANES_MIN_BATCH
 
 from .reference.systems import random_spd
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
+    """The one-item kernel with the arguments and outputs of the lane kernel
+    (``_jit.partition_signature``), to hold the two side by side. An item whose status is
+    not ``STATUS_OK`` gets NaN energies and rank 0 (its ``vc`` row is undefined)."""
+    nb, m, n = iM.shape[0], A.shape[1], M.shape[1]
+    index = np.stack([iM, iA, iv]).astype(np.int64)
+    out = np.empty((nb, one.OUT_V + (2 * n if want_vc else 0)))
+    one.partition_kernel.get()(M.reshape(-1, n), A.reshape(-1, n), v.reshape(-1), index, m,
+                               rtol, want_vc, out)
+    T[:], Tc[:], Ta[:] = out[:, one.OUT_T], out[:, one.OUT_TC], out[:, one.OUT_TA]
+    rank[:], status[:] = out[:, one.OUT_RANK], out[:, one.OUT_STATUS]
+    if want_vc:
+        vc[:] = out[:, one.OUT_V:one.OUT_V + n]
 
 
 def _run(kernel, M, A, v, iM, iA, iv, want_vc=True, rtol=1e-9):

@@ -26,7 +26,7 @@ LANES = Kernel(lanes.partition_lanes, partition_signature(), slp=True, loop_vect
 def lanes_kernel():
     """The compiled lane-parallel partition kernel.
 
-    Same arguments as :func:`.partition.run_items` (:func:`._jit.partition_signature`).
+    Arguments: :func:`._jit.partition_signature`.
 
     Compiled once per process (or loaded from numba's on-disk cache) with SLP
     vectorisation enabled and loop vectorisation disabled for this function only; the

@@ -15,8 +15,8 @@ One pass per configuration, no Python in the loop:
 The orthogonal projector onto ``range(W) = range(L^{-1} A^T)`` is the whitened form of
 ``P_c = M^{-1} A^T (A M^{-1} A^T)^+ A``; no inverse of a singular matrix is ever formed.
 
-:func:`partition_kernel` processes one item at a time (:func:`run_items` calls it with the
-lane kernel's arguments). :func:`.lanes_jit.lanes_kernel`
+:func:`partition_kernel` processes one item at a time (one system, or the batches below
+``roverimpact.energy.LANES_MIN_BATCH`` items). :func:`.lanes_jit.lanes_kernel`
 returns the lane-parallel kernel (generated module :mod:`.lanes`), which processes 8 items
 at once in SIMD lanes and hands nearly dependent rows back to :func:`partition_factored`.
 :func:`prefetch` is a cache hint used by that kernel.
@@ -322,23 +322,6 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
             if want_vc:
                 for i in range(n):
                     row[OUT_V + n + i] = vb[i] - vc_row[i]
-
-
-def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
-    """:func:`partition_kernel` with the arguments and outputs of the lane kernel
-    (:func:`._jit.partition_signature`): batches of a few items, and the tests that hold
-    the two kernels side by side. An item whose status is not ``STATUS_OK`` gets NaN
-    energies and rank 0 (its ``vc`` row is undefined)."""
-    nb, m, n = iM.shape[0], A.shape[1], M.shape[1]
-    index = np.empty((3, nb), dtype=np.int64)
-    index[0], index[1], index[2] = iM, iA, iv
-    out = np.empty((nb, OUT_V + (2 * n if want_vc else 0)))
-    partition_kernel.get()(M.reshape(-1, n), A.reshape(-1, n), v.reshape(-1), index, m,
-                           rtol, want_vc, out)
-    T[:], Tc[:], Ta[:] = out[:, OUT_T], out[:, OUT_TC], out[:, OUT_TA]
-    rank[:], status[:] = out[:, OUT_RANK], out[:, OUT_STATUS]
-    if want_vc:
-        vc[:] = out[:, OUT_V:OUT_V + n]
 
 
 @intrinsic
