@@ -13,6 +13,12 @@ Cholesky of M, W = L^-1 A^T, G = W^T W, T_c = 1/2 (A v)^T G^-1 (A v) by a second
 ``partition`` checks its inputs, handles dependent rows and returns v_c, v_a and the
 ranks; the figure is what that costs per call.
 
+The 1e5 and 1e6 batches are timed in turns, over 1e6 items each, as ``partition`` and as
+the lane kernel writing into output arrays made once (the computation alone). A
+``partition`` call of 1e6 items returns 312 MB of new arrays, above glibc's threshold for
+reusing freed memory: ``MALLOC_MMAP_MAX_=0 MALLOC_TRIM_THRESHOLD_=100000000000`` in the
+environment makes glibc reuse it at every size, as it does at 1e5 (docs/theory.md).
+
 ``--vectoriser``: the one-item kernel compiled twice in this process, as it is (LLVM's
 loop vectoriser off, for it and for the functions it calls) and with numba's default
 (on), timed in turns over several sizes.
@@ -33,6 +39,8 @@ from machine import reference
 from numba import njit
 
 import roverimpact as ri
+from roverimpact._kernels.lanes_jit import lanes_kernel
+from roverimpact.energy import RTOL
 
 
 @njit(inline="always")
@@ -239,21 +247,46 @@ def main() -> None:
         Ak, vk = rng.standard_normal((k, m, n)), rng.standard_normal((k, n))
         t = per_call(lambda Mk=Mk, Ak=Ak, vk=vk: ri.partition(Mk, Ak, vk), 5000)
         print(f"  {k:>9,} items  {1e6 * t:6.1f} us a call, {1e6 * t / k:5.2f} us an item")
-    rates = {}
-    for k in (100_000, 1_000_000):
+    sizes = (100_000, 1_000_000)
+    inputs = []
+    for k in sizes:
         Bk = rng.standard_normal((k, n, n)) * 0.3
         Mk = Bk @ np.swapaxes(Bk, 1, 2) + n * np.eye(n)
-        Ak = rng.standard_normal((k, m, n))
-        vk = rng.standard_normal((k, n))
-        ri.partition(Mk[:100], Ak[:100], vk[:100])
-        t = min(per_call(lambda Mk=Mk, Ak=Ak, vk=vk: ri.partition(Mk, Ak, vk), 1)
-                for _ in range(2))
-        rates[k] = k / t
-        print(f"  {k:>9,} items  {rates[k]:9.3g} items/s")
-        del Bk, Mk, Ak, vk
-    print(f"  1e6 / 1e5 rate {rates[1_000_000] / rates[100_000]:.2f}   "
-          f"(targets: >= 1.5e6 items/s; no slower at 1e6)")
+        del Bk
+        inputs.append((Mk, rng.standard_normal((k, m, n)), rng.standard_normal((k, n))))
+    ri.partition(*inputs[0])
+    lanes = lanes_kernel()
 
+    def kernel_only(Mk, Ak, vk, out):
+        """The lane kernel into output arrays made once (``out``)."""
+        idx, T, Tc, Ta, vc, rank, status = out
+        lanes(Mk, Ak, vk, idx, idx, idx, RTOL, True, T, Tc, Ta, vc, rank, status)
+
+    def ten_times(fn, *args):  # 1e5 items ten times: as many items as one call of 1e6
+        def call():
+            for _ in range(10):
+                fn(*args)
+        return call
+
+    def outputs(k):
+        return (np.arange(k), *np.zeros((3, k)), np.zeros((k, n)), np.zeros(k, np.int64),
+                np.zeros(k, np.int64))
+
+    # in turns, 1e6 items each: the machine's swings of speed would otherwise decide the
+    # ratio. partition's results are dropped after each call, so the 1e5 calls reuse
+    # memory freed by the last one (below glibc's 32 MB mmap threshold), where the 1e6
+    # results (v_c and v_a 144 MB each) are fresh pages every call; the lane kernel into
+    # output arrays made once shows the computation alone.
+    full = in_turns(ten_times(ri.partition, *inputs[0]), lambda: ri.partition(*inputs[1]),
+                    rounds=3, reps=1)
+    outs = [outputs(k) for k in sizes]
+    alone = in_turns(ten_times(kernel_only, *inputs[0], outs[0]),
+                     lambda: kernel_only(*inputs[1], outs[1]), rounds=3, reps=1)
+    for what, times in (("partition", full), ("lane kernel alone", alone)):
+        r = [1_000_000 / t for t in times]
+        print(f"  {what:<18} 1e5 items {r[0]:9.3g}/s, 1e6 items {r[1]:9.3g}/s, "
+              f"1e6 / 1e5 rate {r[1] / r[0]:.2f}")
+    print("  (targets: >= 1.5e6 items/s; no slower at 1e6)")
 
 if __name__ == "__main__":
     main()
