@@ -269,9 +269,9 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
 def _partition_items(M, A, v, Mf, Af, vf, iM, iA, iv, batch, rtol, want_velocities):
     """:func:`partition` of a batch below ``LANES_MIN_BATCH`` items: the one-item kernel
     item by item, its results returned as views of its output rows (``v_a`` as the kernel
-    computed it, ``v - v_c`` item by item), not copied out column by column. The same
-    numbers, checks and errors as the lane path; about a quarter less Python per call
-    (``benchmarks/bench_single.py``, 2 and 17 items)."""
+    computed it, ``v - v_c`` item by item), not copied out column by column
+    (``benchmarks/bench_single.py`` times 2 and 17 items). The same numbers, checks and
+    errors as the lane path."""
     nb, n, m = iM.shape[0], Mf.shape[-1], Af.shape[-2]
     index = np.empty((3, nb), dtype=np.int64)
     index[0], index[1], index[2] = iM, iA, iv
