@@ -288,5 +288,6 @@ def main() -> None:
               f"1e6 / 1e5 rate {r[1] / r[0]:.2f}")
     print("  (targets: >= 1.5e6 items/s; no slower at 1e6)")
 
+
 if __name__ == "__main__":
     main()
