@@ -5,6 +5,12 @@ compiled kernel (one core) against a plain per-item numpy loop and against the b
 numpy a user would write (stacked Cholesky and solves; also with an SVD, rank-revealing as
 the kernel is), all in the same run; ratios against the loop and the batched baseline.
 
+Then the effective masses along the last row, free and with the other rows held
+(``roverimpact.energy.row_masses``: the compiled kernel for the whole batch, and the same
+call on batches of 32, below ``LANES_MIN_BATCH``, numpy's LAPACK and the partition)
+against the batched numpy a user would write (stacked Cholesky, one solve, an SVD of the
+held rows: what ``effective_mass`` did before, twice), checked against each other.
+
     python benchmarks/bench_energy.py [--n 18] [--m 4] [--batch 100000]
 """
 
@@ -60,6 +66,53 @@ def batched_lapack_svd(M, A, v):
     u = np.einsum("bji,bj->bi", L, v)
     y = np.einsum("bji,bj->bi", U, u)
     return 0.5 * np.sum(y**2, axis=-1)
+
+
+def batched_masses(M, a, B):
+    """What a user would write, batched: ``1 / (a M^-1 a^T)`` and, with the rows ``B``
+    held, ``1 / |(I - Pi) L^-1 a^T|^2`` (Pi onto range(L^-1 B^T), from an SVD with the rank
+    decided at 1e-9) by numpy's stacked Cholesky, one solve and an SVD."""
+    L = np.linalg.cholesky(M)
+    W = np.linalg.solve(L, np.concatenate([a[..., None], np.swapaxes(B, -1, -2)], axis=-1))
+    w, WB = W[..., 0], W[..., 1:]
+    U, s, _ = np.linalg.svd(WB / np.linalg.norm(WB, axis=-2, keepdims=True),
+                            full_matrices=False)
+    U = U * (s > 1e-9 * s[..., :1])[..., None, :]
+    wp = w - np.einsum("bij,bj->bi", U, np.einsum("bji,bj->bi", U, w))
+    return 1.0 / np.einsum("bi,bi->b", wp, wp), 1.0 / np.einsum("bi,bi->b", w, w)
+
+
+def masses(M, A):
+    """Effective masses along the last row of A, held and free: row_masses against
+    batched_masses."""
+    from roverimpact.energy import row_masses
+
+    B, n = len(M), M.shape[-1]
+    a, held = A[:, -1], A[:, :-1]
+    row_masses(M[:100], a[:100], held[:100])  # compile / load cache
+    small = 32
+
+    def in_small_batches():
+        for s in range(0, B, small):
+            row_masses(M[s:s + small], a[s:s + small], held[s:s + small])
+
+    t_kernel = best_of(lambda: row_masses(M, a, held))
+    k = min(B, 20_000)
+    t_small = best_of(in_small_batches, repeat=1) if B <= k else best_of(
+        lambda: [row_masses(M[s:s + small], a[s:s + small], held[s:s + small])
+                 for s in range(0, k, small)], repeat=1) * B / k
+    t_numpy = best_of(lambda: batched_masses(M, a, held), repeat=1)
+    got, ref = row_masses(M[:500], a[:500], held[:500]), batched_masses(M[:500], a[:500],
+                                                                         held[:500])
+    assert np.allclose(got, ref, rtol=1e-9), "row_masses disagrees with batched numpy"
+    rate = lambda t: B / t  # noqa: E731
+    print(f"\neffective masses along one row (free, and {A.shape[1] - 1} rows held), batch "
+          f"{B}, n = {n}, one core")
+    print(f"{'method':48s} {'configs/s':>12s} {'vs batched':>11s}")
+    for name, t in [("batched numpy (cholesky + solve + svd): baseline", t_numpy),
+                    ("row_masses, whole batch (compiled kernel)", t_kernel),
+                    (f"row_masses, batches of {small} (numpy + partition)", t_small)]:
+        print(f"{name:48s} {rate(t):12.3g} {t_numpy / t:10.1f}x")
 
 
 def main():
@@ -127,6 +180,7 @@ def main():
         print(f"{name:48s} {rate(t):12.3g} {t_loop / t:8.1f}x {t_lapack / t:10.1f}x")
     print(f"target (issue #3): 1e6 configs/s; partition T_c only reaches {rate(t_fast) / 1e6:.2f}x "
           "of it")
+    masses(M, A)
 
 
 if __name__ == "__main__":

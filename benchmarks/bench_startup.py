@@ -64,6 +64,7 @@ BG = "ROVERIMPACT_BACKGROUND_COMPILE"  # auto (load < cores), 1 (always), 0 (nev
 KERNELS = [
     ("partition (one item at a time)", "roverimpact._kernels.partition", "partition_kernel"),
     ("partition lanes (batched, SLP)", "roverimpact._kernels.lanes_jit", "LANES"),
+    ("effective mass of single rows", "roverimpact._kernels.masses", "masses_kernel"),
     ("unilateral impact (Lemke)", "roverimpact._kernels.lemke", "impact_kernel"),
     ("row assembly, one configuration", "roverimpact.models._assemble", "_evaluate_one"),
     ("row assembly, batched", "roverimpact.models._assemble", "_evaluate_many"),

@@ -357,3 +357,165 @@ def test_single_system_result_is_a_normal_partition():
     # a Fortran-ordered (not C-contiguous) system takes the general path: same numbers
     pf = ri.partition(np.asfortranarray(M), np.asfortranarray(A), v)
     assert pf.T_c == pytest.approx(p.T_c, rel=1e-14)
+
+
+# ----------------------------------------------------------------------------------------
+# Effective mass of single rows, free and with held rows (the compiled row_masses)
+# ----------------------------------------------------------------------------------------
+
+
+def held_reference(M, a, B):
+    """A second method: 1 / (a N a^T), N = M^-1 - M^-1 B^T (B M^-1 B^T)^+ B M^-1 with
+    explicit inverses and numpy's pseudo-inverse (SVD), and 1 / (a M^-1 a^T)."""
+    Mi = np.linalg.inv(M)
+    N = Mi - Mi @ B.T @ np.linalg.pinv(B @ Mi @ B.T, rcond=1e-10) @ B @ Mi
+    return 1.0 / (a @ N @ a), 1.0 / (a @ Mi @ a)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(2, 9).flatmap(lambda n: st.tuples(
+    spd_matrices(n, decades=2.0), full_rank_rows(1, n),
+    st.integers(0, n - 2).flatmap(lambda p: full_rank_rows(p, n)) if n > 2
+    else st.just(np.zeros((0, n))),
+    st.integers(0, 2**32 - 1))))
+def test_row_masses_match_the_schur_complement(args):
+    """m_eff with held rows B (some of them redundant) and without, against
+    held_reference; the same numbers from effective_mass."""
+    from roverimpact.energy import row_masses
+
+    M, a, B, seed = args
+    a = a[0]
+    rng = np.random.default_rng(seed)
+    if len(B):  # a redundant held row: a combination of the others
+        B = np.vstack([B, rng.standard_normal(len(B)) @ B])
+    m_eff, m_free = row_masses(M, a, B)
+    ref_eff, ref_free = held_reference(M, a, B)
+    assert m_free == pytest.approx(ref_free, rel=1e-9)
+    if ref_free / ref_eff < 1e-8:  # a (nearly) in the span of B: blocked, or all but
+        assert m_eff > 1e6 * m_free  # (the reference is inf or rounding)
+    else:
+        assert m_eff == pytest.approx(ref_eff, rel=1e-7)
+    assert m_eff >= m_free * (1 - 1e-12)  # holding rows never lowers the mass
+    assert ri.effective_mass(M, a, held=B) == m_eff
+    assert ri.effective_mass(M, a) == m_free
+
+
+def test_row_masses_closed_forms():
+    """A 3 kg point mass hit along (0, 0.6, 0.8): 3 kg free; with its vertical motion
+    held, 1 / (0.6^2 / 3) kg; with both other directions held (the row blocked), inf. A
+    free rigid body hit at r along n: 1/m_eff = 1/m + (r x n)^T I^-1 (r x n)."""
+    from roverimpact.energy import row_masses
+
+    M = 3.0 * np.eye(3)
+    a = np.array([0.0, 0.6, 0.8])
+    assert row_masses(M, a) == (pytest.approx(3.0, rel=1e-14), pytest.approx(3.0, rel=1e-14))
+    m_eff, m_free = row_masses(M, a, [0.0, 0.0, 1.0])
+    assert m_eff == pytest.approx(3.0 / 0.36, rel=1e-13) and m_free == pytest.approx(3.0)
+    assert row_masses(M, a, [[0.0, 1.0, 0.0], [0.0, 0.0, 2.0]])[0] == np.inf
+    assert row_masses(M, a, [[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])[0] == pytest.approx(3.0 / 0.64)
+    m, I = 7.0, np.diag([0.3, 0.5, 0.7])
+    r, nrm = np.array([0.2, -0.1, 0.4]), np.array([0.0, 0.6, 0.8])
+    Mb = np.block([[m * np.eye(3), np.zeros((3, 3))], [np.zeros((3, 3)), I]])
+    rn = np.cross(r, nrm)
+    ref = 1.0 / (1 / m + rn @ np.linalg.solve(I, rn))
+    assert row_masses(Mb, np.concatenate([nrm, rn]))[1] == pytest.approx(ref, rel=1e-13)
+
+
+def test_row_masses_batches_and_broadcasting():
+    """A batch equals its items one by one, with M, a or the held rows shared
+    (broadcast), and batch shapes of more than one axis."""
+    from roverimpact.energy import row_masses
+
+    rng = np.random.default_rng(11)
+    k, n, p = 70, 7, 3
+    M = np.stack([random_spd(rng, n) for _ in range(k)])
+    a = rng.standard_normal((k, n))
+    B = rng.standard_normal((k, p, n))
+    me, mf = row_masses(M, a, B)
+    assert me.shape == mf.shape == (k,)
+    for i in (0, 33, k - 1):
+        one = row_masses(M[i], a[i], B[i])
+        assert (me[i], mf[i]) == pytest.approx(one, rel=1e-14)
+        assert me[i] == pytest.approx(held_reference(M[i], a[i], B[i])[0], rel=1e-9)
+    shared_M = row_masses(M[0], a, B[0])
+    shared_rows = row_masses(M, a[0], B[0])
+    for i in (1, 50):
+        assert shared_M[0][i] == pytest.approx(row_masses(M[0], a[i], B[0])[0], rel=1e-14)
+        assert shared_rows[0][i] == pytest.approx(row_masses(M[i], a[0], B[0])[0], rel=1e-14)
+    grid = row_masses(M[:6].reshape(2, 3, n, n), a[:6].reshape(2, 3, n), B[0])
+    assert grid[0].shape == (2, 3)
+    assert grid[0][1, 2] == pytest.approx(row_masses(M[5], a[5], B[0])[0], rel=1e-14)
+    m_eff, m_free = row_masses(M[0], a[0])
+    assert isinstance(m_eff, np.float64) and m_eff == m_free
+
+
+def _stack(good, bad, k):
+    """``k`` items: ``good`` everywhere but item 1, which is ``bad``."""
+    out = np.repeat(np.asarray(good, float)[None], k, axis=0)
+    out[1] = bad
+    return out
+
+
+@pytest.mark.parametrize("k", [2, 70])  # numpy and partition / the compiled kernel
+@pytest.mark.parametrize("call, message", [
+    (lambda M, a, B, k: (M, _stack(a, 0.0, k), B), "A is a zero row (batch index 1)"),
+    (lambda M, a, B, k: (M, _stack(a, np.nan, k), B), "A contains NaN or inf (batch index 1)"),
+    (lambda M, a, B, k: (M, a, _stack(B, np.inf, k)), "held contains NaN or inf (batch index 1)"),
+    (lambda M, a, B, k: (_stack(M, -M, k), a, B), "M is not positive definite (batch index 1"),
+    (lambda M, a, B, k: (_stack(M, M + np.triu(np.ones((3, 3)), 1), k), a, B),
+     "M is not symmetric (batch index 1)"),
+    (lambda M, a, B, k: (_stack(M, M * np.nan, k), a, B), "M contains NaN or inf (batch index 1)"),
+    (lambda M, a, B, k: (M, a, np.ones((k, 1, 4))), "held must have shape (..., p, n) with n = 3"),
+    (lambda M, a, B, k: (M, np.ones((k, 4)), B), "A must have shape"),
+    (lambda M, a, B, k: (M[None].repeat(k, 0), a[None].repeat(k + 1, 0), B),
+     "batch shapes do not broadcast"),
+])
+def test_row_masses_bad_input(call, message, k):
+    """One clear error naming the input and the item, from both paths."""
+    from roverimpact.energy import row_masses
+
+    M = np.diag([1.0, 2.0, 3.0])
+    a = np.array([1.0, 0.0, 0.0])
+    B = np.array([[0.0, 1.0, 0.0]])
+    with pytest.raises(InputError) as exc:
+        row_masses(*call(M, a, B, k))
+    assert message in str(exc.value)
+    with pytest.raises(InputError, match="rtol"):
+        row_masses(M, a, B, rtol=0.0)
+
+
+@pytest.mark.parametrize("k", [2, 70])
+def test_row_masses_check_M_without_held_rows(k):
+    """Without held rows too, a mass matrix that is not symmetric is an error (numpy's
+    Cholesky reads one triangle only)."""
+    from roverimpact.energy import row_masses
+
+    M = np.diag([1.0, 2.0, 3.0])
+    bad = _stack(M, M + np.triu(np.ones((3, 3)), 1), k)
+    with pytest.raises(InputError, match=r"M is not symmetric \(batch index 1\)"):
+        row_masses(bad, [1.0, 0.0, 0.0])
+    with pytest.raises(InputError, match=r"M is not symmetric \(batch index 1\)"):
+        ri.effective_mass(bad, [1.0, 0.0, 0.0])
+
+
+def test_row_masses_small_batches_and_the_kernel_agree():
+    """Below LANES_MIN_BATCH items numpy's LAPACK and the partition; from it on the
+    compiled kernel: the same masses to rounding, with redundant and blocking held rows."""
+    from roverimpact import energy
+
+    rng = np.random.default_rng(4)
+    k, n, p = energy.LANES_MIN_BATCH, 9, 4
+    M = np.stack([random_spd(rng, n) for _ in range(k)])
+    a = rng.standard_normal((k, n))
+    B = rng.standard_normal((k, p, n))
+    B[::3, -1] = B[::3, 0] - 2.0 * B[::3, 1]  # a redundant held row
+    B[1::5, 0] = 3.0 * a[1::5]  # a held row along a: blocked
+    big = energy.row_masses(M, a, B)
+    for lo in range(0, k, 16):
+        small = energy.row_masses(M[lo:lo + 16], a[lo:lo + 16], B[lo:lo + 16])
+        for got, ref in zip(small, big, strict=True):
+            ref = ref[lo:lo + 16]
+            assert np.array_equal(np.isinf(got), np.isinf(ref))
+            fin = np.isfinite(ref)
+            np.testing.assert_allclose(got[fin], ref[fin], rtol=1e-12)
+    assert np.isinf(big[0][1::5]).all() and np.isfinite(big[1]).all()

@@ -67,8 +67,9 @@ def test_kernel_helpers_are_compiled_once():
     for the literal ``False`` of ``T_c_at``'s kernel, the height-field contact's
     ``_refine`` for a literal -1. And once more for a writable array where its other
     callers pass a read-only one: ``factor`` and ``partition_factored``, called by the
-    one-item, lane, impact, frictional and ``T_c_at`` kernels, have one compiled version
-    (``T_c_at``'s passes its arrays through ``partition.readonly``). Checked on the helpers
+    one-item, lane, impact, frictional, effective-mass and ``T_c_at`` kernels, have one
+    compiled version (``T_c_at``'s and the effective-mass kernel pass their writable arrays
+    through ``partition.readonly``). Checked on the helpers
     this process compiled (none when the kernels came from numba's cache, as after a first
     run; CI starts from an empty one)."""
     from numba import types
@@ -82,6 +83,7 @@ def test_kernel_helpers_are_compiled_once():
     frictional_impact(M, [0.2, -1.0, 0.1], [[0.0, 1.0, 0.0]], [[[1.0, 0.0, 0.0]]], 0.5)
     ri.active_set(M, [0.0, -1.0, -1.0], [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     ri.partition(M, [0.0, 1.0, 0.0], [0.2, -1.0, 0.1])
+    assert ri.effective_mass(M, [0.0, 1.0, 1.0], held=[0.0, 0.0, 1.0]) == pytest.approx(3.0)
     setup = ImpactSetup.from_scenario(ri.Scenario.model_validate({
         "model": {"name": "rover2d"}, "velocity": {"u": 0.5},
         "obstacle": {"wheel": "front", "beta_deg": 45.0}}))

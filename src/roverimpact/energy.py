@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _validation
+from ._kernels import masses as _masses
 from ._kernels import partition as _one
 from ._kernels.lanes_jit import lanes_kernel
 from ._validation import InputError, as_array, broadcast_batch, fmt_index
@@ -448,6 +449,117 @@ def _held_complement(L, W, held, rtol):
     return W - U @ (np.swapaxes(U, -1, -2) @ W)
 
 
+def row_masses(M, a, held=None, *, rtol: float = RTOL):
+    r"""Effective masses of single rows with and without held rows, in one pass.
+
+    ``(m_eff, m_eff_free)``: :func:`effective_mass` ``(M, a, held=held,
+    single_row=True)`` and ``(M, a, single_row=True)`` (``m_eff`` is ``m_eff_free``
+    without ``held``), from one factorisation of each mass matrix: with
+    :math:`w = L^{-1} a^T` (:math:`M = L L^T`), :math:`a M^{-1} a^T = |w|^2`, and
+    :math:`a N a^T` is twice the admissible energy :math:`T_a` that :func:`partition`
+    gives the velocity :math:`M^{-1} a^T` with the rows ``held`` (the same checks and rank
+    decision). Batches of ``LANES_MIN_BATCH`` items or more run in the compiled kernel
+    :mod:`roverimpact._kernels.masses` (the factor reused while consecutive items share
+    ``M``); smaller ones compute ``w`` and :math:`M^{-1} a^T` with numpy's LAPACK and
+    call :func:`partition`. Both agree to rounding (``tests/test_energy.py``).
+
+    Parameters
+    ----------
+    M : (..., n, n) array_like
+        Symmetric positive-definite mass matrices.
+    a : (..., n) array_like
+        One row per batch item.
+    held : (..., p, n) or (n,) array_like, optional
+        Rows held persistent through the impact (redundant rows allowed).
+    rtol : float, optional
+        Relative tolerance of the rank decision of the held rows, as in :func:`partition`.
+
+    Returns
+    -------
+    m_eff, m_eff_free : float or (...) ndarray
+        [kg] for unit directions of a point velocity; ``inf`` where the held rows block
+        ``a`` (:math:`a N a^T \le 10^{-12}\, a M^{-1} a^T`).
+
+    Raises
+    ------
+    InputError
+        For bad shapes, NaN or inf, a ``M`` that is not symmetric positive definite
+        (naming the input and the batch index) and a row ``a`` that is zero.
+    """
+    if not 0.0 < rtol < 1.0:  # NaN and inf fail it too
+        raise InputError(f"rtol must be in (0, 1), got {rtol}")
+    M, a, _, _, n, _ = prepare(M, np.asarray(a)[..., None, :])
+    a = a[..., 0, :]
+    _validation.check_finite(a, "A", 1)
+    if held is None:
+        B = np.zeros((0, n))
+    else:
+        B = as_array(held, "held", min_ndim=1)
+        if B.ndim == 1:
+            B = B[None, :]
+        if B.shape[-1] != n:
+            raise InputError(f"held must have shape (..., p, n) with n = {n}, got {B.shape}")
+        _validation.check_finite(B, "held", 2)
+    batch = broadcast_batch(M=M.shape[:-2], A=a.shape[:-1], held=B.shape[:-2])
+    grams = None
+    if _size(batch) < LANES_MIN_BATCH:
+        grams = _row_grams_small(M, a, B, batch, n, rtol)
+    if grams is None:
+        grams = _row_grams_kernel(M, a, B, batch, n, rtol)
+    g_free, g = grams
+    if not np.all(g_free > 0.0):
+        zero = np.flatnonzero(~(g_free > 0.0))[0]
+        idx = tuple(int(i) for i in np.unravel_index(zero, batch)) if batch else ()
+        raise InputError(f"A is a zero row ({fmt_index(idx)}): no direction to measure")
+    m_eff_free = 1.0 / g_free
+    if held is None:
+        m_eff = m_eff_free
+    else:
+        blocked = g <= 1e-12 * g_free
+        with np.errstate(divide="ignore"):
+            m_eff = np.where(blocked, np.inf, 1.0 / np.where(blocked, 1.0, g))
+    return scalarize(m_eff, batch), scalarize(m_eff_free, batch)
+
+
+def _row_grams_kernel(M, a, B, batch, n, rtol):
+    """``a M^-1 a^T`` and ``a N a^T`` (flat over ``batch``) by the compiled kernel
+    :func:`roverimpact._kernels.masses.masses_kernel`; M's checks raise here (``a`` and
+    ``B`` are checked finite)."""
+    p = B.shape[-2]
+    index = np.empty((3, _size(batch)), dtype=np.int64)
+    iM = index[0] = flat_index(M.shape[:-2], batch)
+    index[1] = flat_index(a.shape[:-1], batch)
+    index[2] = flat_index(B.shape[:-2], batch)
+    out = np.empty((index.shape[1], 4))
+    _masses.masses_kernel.get()(
+        np.ascontiguousarray(M.reshape(-1, n)), np.ascontiguousarray(a.reshape(-1, n)),
+        np.ascontiguousarray(B.reshape(-1, n)), index, p, float(rtol), out)
+    status = out[:, _masses.OUT_STATUS]
+    if np.count_nonzero(status):
+        bad = int(np.flatnonzero(status)[0])
+        raise _validation.mass_matrix_error(M, int(iM[bad]), int(status[bad]))
+    return out[:, _masses.OUT_FREE], out[:, _masses.OUT_HELD]
+
+
+def _row_grams_small(M, a, B, batch, n, rtol):
+    """What :func:`_row_grams_kernel` gives, for a batch below ``LANES_MIN_BATCH`` items,
+    without that kernel (whose compile, 1.6 s after the partition kernel's, a fresh
+    install's one-scenario commands would pay): ``w = L^{-1} a^T`` and ``v = L^{-T} w``
+    by numpy's LAPACK, ``a N a^T = 2 T_a`` of :func:`partition` ``(M, B, v)`` (the kernel's
+    steps, the same rank decision; tested to agree to rounding), which also checks ``M``
+    (without held rows too: ``B`` then has none). None where numpy's Cholesky fails (the
+    kernel then names the problem)."""
+    try:
+        L = np.linalg.cholesky(np.broadcast_to(M, (*batch, n, n)))
+    except np.linalg.LinAlgError:
+        return None
+    w = np.linalg.solve(L, np.broadcast_to(a, (*batch, n))[..., None])
+    g_free = np.sum(w[..., 0] * w[..., 0], axis=-1).reshape(-1)
+    v = np.linalg.solve(np.swapaxes(L, -1, -2), w)[..., 0]
+    p = partition(M, B, v, rtol=rtol, want_velocities=False)
+    return g_free, 2.0 * np.reshape(p.T_a, -1)
+
+
 def effective_mass(M, A, *, held=None, single_row: bool | None = None, rtol: float = RTOL):
     r"""Effective mass of the constrained directions, :math:`(A M^{-1} A^T)^{-1}`.
 
@@ -466,6 +578,10 @@ def effective_mass(M, A, *, held=None, single_row: bool | None = None, rtol: flo
     and a single row that :math:`B` already blocks (:math:`a N a^T \le 10^{-12}\,
     a M^{-1} a^T`) has :math:`m_{eff} = \infty`.
 
+    Single rows (a 1-D ``A``, or ``single_row``) are computed by :func:`row_masses` (the
+    held rows' rank decided as in :func:`partition`); several rows by numpy's Cholesky
+    and SVD.
+
     Parameters
     ----------
     M : (..., n, n) array_like
@@ -474,7 +590,7 @@ def effective_mass(M, A, *, held=None, single_row: bool | None = None, rtol: flo
         Constraint rows. A 1-D ``A`` returns a scalar (per batch item).
     held : (..., p, n) array_like, optional
         Rows held persistent through the impact; redundant rows allowed. A ``held``
-        without batch axes is factorised once for the whole batch.
+        without batch axes (several rows) is factorised once for the whole batch.
     single_row : bool, optional
         Read ``A`` as a batch of single rows ``(..., n)`` (one scalar per batch item);
         default: only a 1-D ``A`` is a single row.
@@ -502,27 +618,14 @@ def effective_mass(M, A, *, held=None, single_row: bool | None = None, rtol: flo
     8.333333333333
     """
     single = np.ndim(A) == 1 if single_row is None else bool(single_row)
-    if single and np.ndim(A) > 1:
-        A = np.asarray(A)[..., None, :]
+    if single:
+        m_eff, m_eff_free = row_masses(M, A, held, rtol=rtol)
+        return m_eff_free if held is None else m_eff
     M, A, _, batch, n, m = prepare(M, A)
     _validation.check_mass_matrix(M)        # on M's own batch shape: a shared M once
     _validation.check_finite(A, "A", 2)
     L = np.linalg.cholesky(M)
     W = np.broadcast_to(_solve_lower(L, np.swapaxes(A, -1, -2)), (*batch, n, m))
-    if single:
-        g_free = np.sum(W * W, axis=(-1, -2))
-        if np.any(g_free == 0.0):
-            bad = np.atleast_1d(g_free == 0.0)
-            idx = tuple(int(i) for i in np.argwhere(bad)[0]) if batch else ()
-            raise InputError(f"A is a zero row ({fmt_index(idx)}): no direction to measure")
-        if held is None:
-            return 1.0 / g_free
-        Wp = _held_complement(L, W, held, rtol)
-        g = np.sum(Wp * Wp, axis=(-1, -2))
-        blocked = g <= 1e-12 * g_free
-        with np.errstate(divide="ignore"):
-            out = np.where(blocked, np.inf, 1.0 / np.where(blocked, 1.0, g))
-        return out[()] if out.ndim == 0 else out
     if held is not None:
         W = _held_complement(L, W, held, rtol)
     _, s, Vt = np.linalg.svd(W, full_matrices=False)

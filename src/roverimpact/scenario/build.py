@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..energy import RTOL, effective_mass, partition
+from ..energy import RTOL, partition, row_masses
 from ..exceptions import ConfigError, InputError, ModelError
 from ..unilateral import active_set
 from .schema import (
@@ -910,8 +910,7 @@ def _energy(M, A, v, obstacle_row: int) -> ImpactEnergy:
     a = A[..., obstacle_row, :]
     v_n = -(a @ v)
     others = np.delete(A, obstacle_row, axis=-2)
-    m_eff = effective_mass(M, a, held=others, single_row=True)
-    m_eff_free = effective_mass(M, a, single_row=True)
+    m_eff, m_eff_free = row_masses(M, a, others)
 
     def sc(x):
         return x[()] if np.ndim(x) == 0 else x

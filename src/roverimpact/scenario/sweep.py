@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..energy import effective_mass, partition
+from ..energy import partition, row_masses
 from ..exceptions import InputError
 from .build import (
     ImpactEnergy,
@@ -21,24 +21,14 @@ __all__ = ["sweep_energy"]
 
 def _energy_sweep(M, A, v, obstacle_row: int, keep) -> ImpactEnergy:
     """:func:`~.build._energy` for a stack of candidate rows ``A`` (k, m, n), one ``M`` and
-    ``v``, and the active rows of each item ``keep`` (k, m).
-
-    Only the obstacle row differs between items, so the items with the same active set
-    share the other rows: each such group calls :func:`roverimpact.effective_mass` once
-    with those rows held (factorised once) for all of its obstacle rows.
-    """
-    p = partition(M, A * keep[..., None], v, want_velocities=False)  # inactive rows: zero
+    ``v``, and the active rows of each item ``keep`` (k, m): one partition and one
+    :func:`roverimpact.energy.row_masses` call for all items (``M`` factorised once;
+    inactive rows are zero rows, which neither counts)."""
+    Ak = A * keep[..., None]  # inactive rows: zero
+    p = partition(M, Ak, v, want_velocities=False)
     rows = A[:, obstacle_row, :]
     v_n = -(rows @ v)
-    m_eff_free = effective_mass(M, rows, single_row=True)
-    m_eff = np.empty_like(m_eff_free)
-    others = np.delete(keep, obstacle_row, axis=1)
-    sets, group = np.unique(others, axis=0, return_inverse=True)
-    group = group.reshape(-1)
-    for gid, held in enumerate(sets):
-        sel = np.flatnonzero(group == gid)
-        B = np.delete(A[sel[0]], obstacle_row, axis=0)[held]
-        m_eff[sel] = effective_mass(M, rows[sel], held=B, single_row=True)
+    m_eff, m_eff_free = row_masses(M, rows, np.delete(Ak, obstacle_row, axis=1))
     return ImpactEnergy(T=p.T, T_c_minus=p.T_c, T_a=p.T_a, m_eff=m_eff,
                         m_eff_free=m_eff_free, v_n=v_n, rank=p.rank)
 

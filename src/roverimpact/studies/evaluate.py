@@ -412,7 +412,7 @@ class _OwnCases:
     """The partition of cases that each have their own setup, batched: ``M``, ``A``, ``v``
     of up to :attr:`BLOCK` cases of the same shape are stacked (the setups themselves are
     not kept) and go through one batched :func:`roverimpact.partition` and
-    :func:`roverimpact.effective_mass` call, the same quantities as
+    :func:`roverimpact.energy.row_masses` call, the same quantities as
     :meth:`ImpactSetup.partition` (tested to 1e-12 against it). Cases come one setup at
     a time (:meth:`add`) or as a block of a model family
     (:meth:`add_block`: :func:`roverimpact.scenario.block.impact_block`)."""
@@ -460,7 +460,7 @@ class _OwnCases:
             self._run(key, self.pending.pop(key)[0])
 
     def _run(self, key, parts) -> None:
-        from ..energy import effective_mass, partition
+        from ..energy import partition, row_masses
 
         obstacle_row = key[2]
         idx = np.concatenate([pt[0] for pt in parts])
@@ -470,8 +470,7 @@ class _OwnCases:
         p = partition(M, A, v, want_velocities=False)
         a = A[:, obstacle_row, :]
         others = np.delete(A, obstacle_row, axis=1)
-        m_eff = np.asarray(effective_mass(M, a, held=others, single_row=True), float)
-        m_eff_free = np.asarray(effective_mass(M, a, single_row=True), float)
+        m_eff, m_eff_free = row_masses(M, a, others)
         v_n = -np.einsum("kn,kn->k", a, v)
         T, me, mf, vn = self.out
         T[idx], me[idx], mf[idx], vn[idx] = p.T_c, m_eff, m_eff_free, v_n
