@@ -343,6 +343,46 @@ def test_model_changing_cases_match_a_fresh_build_per_case(monkeypatch):
     assert len(set(np.round(got["m_total"], 9))) > 10  # the model did change
 
 
+def test_model_changing_cases_made_from_their_numbers_are_their_scenarios(monkeypatch):
+    """After the first case of a model family, a case is made from its numbers, not a
+    scenario of its own: ints, floats, numpy floats and a parameter the first case set
+    give the outputs of a validated scenario per case; a bad case (an angle above 90
+    degrees, a parameter the model refuses) gives the error its own scenario gives."""
+    from roverimpact.exceptions import RoverImpactError
+    from roverimpact.studies import ScenarioEvaluator, evaluate_case
+    from roverimpact.studies.config import apply_overrides
+
+    p = "model.params."
+    overrides = [{p + "chassis_mass": 12.0, "velocity.u": 0.2, "obstacle.beta_deg": 30.0},
+                 {p + "chassis_mass": 15, "velocity.u": 1, "obstacle.beta_deg": 90},
+                 {p + "chassis_mass": np.float64(11.5), "velocity.u": np.float64(0.35),
+                  "obstacle.beta_deg": 0.0},
+                 {p + "chassis_mass": 13.0, "velocity.u": 0.3, "obstacle.beta_deg": 45.0,
+                  p + "chassis_com_above_pivot": 0.15},
+                 {p + "chassis_mass": 14.0, "velocity.u": 0.25, "obstacle.beta_deg": 60.0,
+                  p + "chassis_com_above_pivot": 0.05}]
+    from roverimpact.studies import evaluate
+
+    validated = []
+    real = evaluate.scenario_from_dict
+    monkeypatch.setattr(evaluate, "scenario_from_dict",
+                        lambda raw: validated.append(raw) or real(raw))
+    got = ScenarioEvaluator().evaluate(ROVER, overrides)
+    monkeypatch.undo()
+    assert len(validated) == 3  # the first case of each family, and the contact law
+    for i, ov in enumerate(overrides):
+        ref = evaluate_case(apply_overrides(ROVER, ov))
+        for col in ("T_c_minus", "m_eff", "v_n", "m_total", "m_eff_free"):
+            assert got[col][i] == pytest.approx(ref[col], rel=1e-12, abs=1e-15), (i, col)
+    for bad in ({p + "chassis_mass": 12.5, "velocity.u": 0.2, "obstacle.beta_deg": 95.0},
+                {p + "chassis_mass": -3.0, "velocity.u": 0.2, "obstacle.beta_deg": 30.0}):
+        with pytest.raises(RoverImpactError) as own:
+            evaluate_case(apply_overrides(ROVER, bad))
+        with pytest.raises(RoverImpactError) as in_block:
+            ScenarioEvaluator().evaluate(ROVER, [overrides[0], bad, overrides[2]])
+        assert str(in_block.value) == str(own.value)
+
+
 @pytest.mark.parametrize("design", [
     {"grid": {"obstacle.beta_deg": {"start": 10, "stop": 90, "num": 17},
               "model.params.com_height": [0.2, 0.3, 0.45]}},

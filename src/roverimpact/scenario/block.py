@@ -13,7 +13,7 @@ same candidate rows, ``M``, ``A``, ``v`` and active set (tested to 1e-12).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,7 +33,7 @@ from .build import (
 )
 from .schema import Scenario
 
-__all__ = ["ImpactBlock", "block_key", "impact_block"]
+__all__ = ["ImpactBlock", "block_key", "impact_block", "member_block"]
 
 #: The tables of a scenario that make its impact setup (the others: the contact law, the
 #: simulation, the band, do not change M, A, v).
@@ -123,9 +123,6 @@ def impact_block(scenarios: Sequence[Scenario], *, base_dir: str | Path | None =
         :meth:`~roverimpact.scenario.ImpactSetup.from_scenario` raises for one of them
         (a bad parameter set, an impact problem without solution, ...).
     """
-    from ..models.family import ModelFamily, family_numbers
-    from ..models.kinematics import ConstraintSet
-
     scenarios = list(scenarios)
     if not scenarios:
         raise InputError("impact_block needs at least one scenario")
@@ -136,8 +133,28 @@ def impact_block(scenarios: Sequence[Scenario], *, base_dir: str | Path | None =
             key = None
     if key is None:
         raise InputError("impact_block: the scenarios are not one block (block_key)")
-    numbers = family_numbers(sc0.model.name, sc0.model.preset,
-                             [sc.model.params for sc in scenarios])
+    beta = (None if sc0.obstacle.normal is not None
+            else [sc.obstacle.beta_deg for sc in scenarios])
+    return member_block(sc0, [sc.model.params for sc in scenarios],
+                        [sc.velocity.u for sc in scenarios], beta, base_dir=base_dir)
+
+
+def member_block(first: Scenario, params: Sequence[Mapping], u: Sequence[float],
+                 beta_deg: Sequence[float] | None = None, *,
+                 base_dir: str | Path | None = None) -> ImpactBlock:
+    """:func:`impact_block` of the scenarios that are ``first`` but for their numbers:
+    member ``i`` has ``model.params = params[i]``, ``velocity.u = u[i]`` and, unless
+    ``beta_deg`` is None (``first``'s obstacle for all), ``obstacle.beta_deg =
+    beta_deg[i]``; no scenario object is made for them (a study's model-changing cases:
+    :class:`roverimpact.studies.ScenarioEvaluator`). The numbers must be what a scenario
+    takes (a ``beta_deg`` in [0, 90], the parameters ``first`` sets); a parameter set
+    the model refuses raises as :func:`impact_block` does.
+    """
+    from ..models.family import ModelFamily, family_numbers
+    from ..models.kinematics import ConstraintSet
+
+    sc0 = first
+    numbers = family_numbers(sc0.model.name, sc0.model.preset, params)
     mbm = scenario_model(sc0, base_dir)  # a member: the family's model, rewritten below
     family = ModelFamily(mbm, numbers)
     Q = configuration(mbm, sc0.configuration, q_nominal=numbers.q_nominal)
@@ -148,15 +165,17 @@ def impact_block(scenarios: Sequence[Scenario], *, base_dir: str | Path | None =
             raise InputError("impact_block: the members' base orientations differ")
     q0 = Q[0]
     heading = base_heading(mbm, q0)
-    u = np.array([sc.velocity.u for sc in scenarios], dtype=float)
+    u = np.array(u, dtype=float)
     v = velocity(mbm, q0, sc0.velocity, u=u, wheel_radius=numbers.wheel_radius)
     obs = sc0.obstacle
-    if obs.normal is not None:
-        normal = np.asarray(obs.normal, float)
-        normals = np.broadcast_to(normal / np.linalg.norm(normal), (len(scenarios), 3))
+    if beta_deg is None:
+        if obs.normal is not None:
+            normal = np.asarray(obs.normal, float)
+            normals = np.broadcast_to(normal / np.linalg.norm(normal), (len(u), 3))
+        else:
+            normals = normal_from_beta(np.full(len(u), np.deg2rad(obs.beta_deg)), heading)
     else:
-        beta = np.array([sc.obstacle.beta_deg for sc in scenarios], dtype=float)
-        normals = normal_from_beta(np.deg2rad(beta), heading)
+        normals = normal_from_beta(np.deg2rad(np.array(beta_deg, dtype=float)), heading)
     cons = candidate_constraints(mbm, obs, sc0.contacts, normals[0])
     cs = ConstraintSet(mbm, cons)
     M, A = cs.evaluate_members(family, Q, normals={len(cons) - 1: normals})

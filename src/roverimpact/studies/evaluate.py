@@ -50,14 +50,14 @@ engine's carry its name as a suffix (``F_max_mujoco``, ``contact_whole_window_mu
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from ..contact import peak_force
 from ..exceptions import RoverImpactError
 from ..scenario import ImpactSetup, Scenario, scenario_from_dict, sweep_energy
-from ..scenario.block import block_key, impact_block, is_number
+from ..scenario.block import block_key, is_number, member_block
 from ..scenario.build import jam_total_mass, model_key, warn_jammed
 from ..simulate import SimulationConfig, simulate_scenario
 from ..simulate.engines import check_engine
@@ -331,19 +331,33 @@ class ScenarioEvaluator:
         own = _OwnCases(T, m_eff, m_eff_free, v_n)
         models: dict[str, Any] = {}  # built models of this call, by what builds them
         pending: list[tuple[list[int], ImpactSetup]] = []  # refined / simulated cases
-        blocks: dict[str, list[tuple[int, Scenario]]] = {}  # cases of one model family
-        family_keys: dict[str, str | None] = {}  # block_key by _family_key
+        # cases of one model family: their numbers (_Member), by block_key; the first
+        # case of each (validated) by block_key and by _family_key
+        blocks: dict[str, list[_Member]] = {}
+        firsts: dict[str, Scenario] = {}
+        family: dict[str, tuple[str | None, Scenario]] = {}
         for idx in groups.values():
-            sc = scenario_from_dict(apply_overrides(base, overrides[idx[0]]))
-            if len(idx) == 1 and not (engines or sc.band is not None):
+            ov = overrides[idx[0]]
+            fkey = None
+            if len(idx) == 1 and not engines:
                 # a case of its own (a model-changing design): computed with the other
-                # cases of its model family, in blocks
-                fkey = _family_key(overrides[idx[0]])
-                if fkey not in family_keys:
-                    family_keys[fkey] = block_key(sc)
-                bkey = family_keys[fkey]
+                # cases of its model family, in blocks; after the first, from its numbers
+                # (no scenario of its own, unless they need the full validation)
+                fkey = _family_key(ov)
+                bkey, first = family.get(fkey, (None, None))
                 if bkey is not None:
-                    blocks.setdefault(bkey, []).append((idx[0], sc))
+                    member = _member(idx[0], first, ov)
+                    if member is not None:
+                        blocks[bkey].append(member)
+                        continue
+            sc = scenario_from_dict(apply_overrides(base, ov))
+            if fkey is not None and sc.band is None:
+                if fkey not in family:
+                    family[fkey] = (block_key(sc), sc)
+                bkey = family[fkey][0]
+                if bkey is not None:
+                    firsts.setdefault(bkey, sc)
+                    blocks.setdefault(bkey, []).append(_member_of(idx[0], sc))
                     continue
             setup = self._setup(sc, models)
             m_total[idx] = _total_mass(setup.model)
@@ -366,19 +380,23 @@ class ScenarioEvaluator:
             m_eff_free[idx] = en.m_eff_free
             v_n[idx] = en.v_n
         for bkey, members in blocks.items():
+            first = firsts[bkey]
             for s in range(0, len(members), _OwnCases.BLOCK):
                 part = members[s:s + _OwnCases.BLOCK]
-                idx = [i for i, _ in part]
+                idx = [m.index for m in part]
                 try:
-                    blk = impact_block([sc for _, sc in part], key=bkey)
+                    blk = member_block(first, [m.params for m in part], [m.u for m in part],
+                                       None if first.obstacle.beta_deg is None
+                                       else [m.beta_deg for m in part])
                 except RoverImpactError:
                     blk = None  # case by case below: the same error, from its own case
                 if blk is not None:
                     m_total[idx] = blk.total_mass
                     own.add_block(idx, blk)
                     continue
-                for i, sc in part:
-                    setup = self._setup(sc, models)
+                for i in idx:
+                    setup = self._setup(scenario_from_dict(apply_overrides(base, overrides[i])),
+                                        models)
                     m_total[i] = _total_mass(setup.model)
                     own.add(i, setup)
         own.flush()
@@ -503,6 +521,50 @@ class _CaseKeys:
             plan = self._plans[names] = (group, law)
         group, law = plan
         return (repr([(k, ov[k]) for k in group]), repr([(k, ov[k]) for k in law]))
+
+
+class _Member(NamedTuple):
+    """A case of a model family in a block: its index and the numbers that make it
+    (:func:`~roverimpact.scenario.block.member_block`)."""
+
+    index: int
+    params: dict[str, Any]
+    u: float
+    beta_deg: float | None
+
+
+def _member_of(index: int, sc: Scenario) -> _Member:
+    return _Member(index, sc.model.params, sc.velocity.u, sc.obstacle.beta_deg)
+
+
+def _member(index: int, first: Scenario, ov: Mapping[str, Any]) -> _Member | None:
+    """The numbers of the case ``ov`` of ``first``'s :func:`_family_key`: its overrides
+    differ from ``first``'s in numbers of ``model.params``, ``velocity.u`` and
+    ``obstacle.beta_deg`` only, so the rest of ``first`` (validated) is the case's. The
+    values as the schema makes them (a parameter's int stays an int, ``u`` and
+    ``beta_deg`` floats; ``tests/test_study_scale.py`` checks the results against a
+    validated scenario per case). None where the case needs its own validation: a
+    ``beta_deg`` outside [0, 90] degrees, which it rejects."""
+    params = first.model.params
+    changed = False
+    for k, v in ov.items():
+        if k.startswith("model.params.") and is_number(v):
+            if not changed:
+                params, changed = dict(params), True
+            params[k[_PARAMS:]] = int(v) if isinstance(v, int) else float(v)
+    u = ov.get("velocity.u")
+    u = float(u) if is_number(u) else first.velocity.u
+    beta = ov.get(_BETA)
+    if is_number(beta):
+        if not 0.0 <= beta <= 90.0 or first.obstacle.normal is not None:
+            return None
+        beta = float(beta)
+    else:
+        beta = first.obstacle.beta_deg
+    return _Member(index, params, u, beta)
+
+
+_PARAMS = len("model.params.")
 
 
 def _family_key(ov: Mapping[str, Any]) -> str:
