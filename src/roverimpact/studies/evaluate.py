@@ -277,7 +277,11 @@ class ScenarioEvaluator:
     contact law share one ``ImpactSetup.from_scenario`` (Pinocchio evaluates ``M``, ``A``, ``v``
     once) and get T_c^- for all their angles from one stacked
     :func:`roverimpact.scenario.sweep_energy` call; the predicted peak force is one
-    vectorized ``peak_force`` call per law. Simulations run one per case.
+    vectorized ``peak_force`` call per law. Cases that each change a built-in rover's
+    numbers (parameters, speed, angle: a model-changing design) are computed in blocks of
+    their model family (:func:`roverimpact.scenario.block.member_block`): the first case
+    of each family is validated, the others are made from their numbers. Simulations run
+    one per case.
     """
 
     name = "scenario"
