@@ -285,17 +285,20 @@ def test_least_risk_suspension_per_segment(tmp_path):
 
 
 @pytest.mark.parametrize("model, workers, scheduler, start, sent, here", [
-    ("weight", None, None, "fork", ["impact_kernel", "stiff_peaks"], ["LANES", "rk4_peaks"]),
-    ("closed-form", None, None, "fork", ["impact_kernel"], ["LANES"]),
-    ("closed-form", 2, None, "fork", ["impact_kernel"], ["LANES", "impact_kernel"]),
+    ("weight", None, None, "fork", ["impact_kernel", "stiff_peaks"],
+     ["LANES", "masses_kernel", "rk4_peaks"]),
+    ("closed-form", None, None, "fork", ["impact_kernel"], ["LANES", "masses_kernel"]),
+    ("closed-form", 2, None, "fork", ["impact_kernel"],
+     ["LANES", "masses_kernel", "impact_kernel"]),
     ("weight", 2, None, "spawn", [], []),
     ("weight", None, "tcp://127.0.0.1:1", "fork", [], []),
 ])
 def test_traverse_compile_plan(tmp_path, monkeypatch, compile_plan, model, workers, scheduler,
                                start, sent, here):
     """On a fresh install the command compiles on two cores: Lemke's kernel (and the stiff
-    pair when the weight model needs forces) in a second process, the lane partition (and
-    the Runge-Kutta kernel) here, also before forking local workers (they inherit them);
+    pair when the weight model needs forces) in a second process, the lane partition, the
+    effective masses (and the Runge-Kutta kernel) here, also before forking local workers
+    (they inherit them);
     nothing for spawned workers or a scheduler's; a bad file fails before any of it."""
     from roverimpact.cli import _traverse
 

@@ -543,8 +543,8 @@ def _row_grams_kernel(M, a, B, batch, n, rtol):
 
 def _row_grams_small(M, a, B, batch, n, rtol):
     """What :func:`_row_grams_kernel` gives, for a batch below ``LANES_MIN_BATCH`` items,
-    without that kernel (whose compile, 1.6 s after the partition kernel's, a fresh
-    install's one-scenario commands would pay): ``w = L^{-1} a^T`` and ``v = L^{-T} w``
+    without that kernel (whose compile a fresh install's one-scenario commands would
+    pay; ``benchmarks/bench_startup.py --kernels``): ``w = L^{-1} a^T`` and ``v = L^{-T} w``
     by numpy's LAPACK, ``a N a^T = 2 T_a`` of :func:`partition` ``(M, B, v)`` (the kernel's
     steps, the same rank decision; tested to agree to rounding), which also checks ``M``
     (without held rows too: ``B`` then has none). None where numpy's Cholesky fails (the

@@ -40,7 +40,8 @@ def _compile_plan(config: Path, workers, scheduler) -> tuple:
     """On a fresh install, for a traverse run in this process: Lemke's impact kernel (6 s
     of compile) and the stiff Runge-Kutta pair (4.6 s) go to a second process, and the
     kernels returned (the lane-parallel partition, 8.6 s with the one-item kernel it
-    requires, and the Runge-Kutta kernel) are compiled here before the work
+    requires, the effective masses of single rows and the Runge-Kutta kernel) are
+    compiled here before the work
     (``compile_ahead``): a first ``roverimpact traverse examples/traverse_rocky.toml``
     took 31-33 s in one process, 22.4 s so (benchmarks/bench_startup.py --full). With
     local (forked) workers, the second process's kernels are then loaded here too, so
@@ -48,6 +49,7 @@ def _compile_plan(config: Path, workers, scheduler) -> tuple:
     before any compile."""
     from .._kernels.lanes_jit import LANES
     from .._kernels.lemke import impact_kernel
+    from .._kernels.masses import masses_kernel
     from .._kernels.reduced import rk4_peaks, stiff_peaks
     from ..traverse.schema import load_traverse
 
@@ -59,7 +61,7 @@ def _compile_plan(config: Path, workers, scheduler) -> tuple:
     forces = cfg.limits.F_allow is not None and cfg.limits.model == "weight"
     later = (impact_kernel, *((stiff_peaks,) if forces else ()))
     compile_ahead(*later)
-    here = (LANES, *((rk4_peaks,) if forces else ()))
+    here = (LANES, masses_kernel, *((rk4_peaks,) if forces else ()))
     # forked workers do all the work: have every kernel loaded here before they fork
     return here if workers is None else (*here, *later)
 
