@@ -447,6 +447,10 @@ def test_row_masses_batches_and_broadcasting():
     assert grid[0][1, 2] == pytest.approx(row_masses(M[5], a[5], B[0])[0], rel=1e-14)
     m_eff, m_free = row_masses(M[0], a[0])
     assert isinstance(m_eff, np.float64) and m_eff == m_free
+    for k in (3, 70):  # no held rows (an empty set): the free mass exactly, on both paths
+        got = row_masses(M[:k], a[:k], np.zeros((k, 0, n)))
+        np.testing.assert_array_equal(got[0], got[1])
+        np.testing.assert_array_equal(got[1], row_masses(M[:k], a[:k])[1])
 
 
 def _stack(good, bad, k):

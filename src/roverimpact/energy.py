@@ -512,7 +512,7 @@ def row_masses(M, a, held=None, *, rtol: float = RTOL):
         idx = tuple(int(i) for i in np.unravel_index(zero, batch)) if batch else ()
         raise InputError(f"A is a zero row ({fmt_index(idx)}): no direction to measure")
     m_eff_free = 1.0 / g_free
-    if held is None:
+    if B.shape[-2] == 0:  # nothing held: the same number, not its rounding through T_a
         m_eff = m_eff_free
     else:
         blocked = g <= 1e-12 * g_free

@@ -437,7 +437,7 @@ class _OwnCases:
     :func:`roverimpact.energy.row_masses` call, the same quantities as
     :meth:`ImpactSetup.partition` (tested to 1e-12 against it). Cases come one setup at
     a time (:meth:`add`) or as a block of a model family
-    (:meth:`add_block`: :func:`roverimpact.scenario.block.impact_block`)."""
+    (:meth:`add_block`: :func:`roverimpact.scenario.block.member_block`)."""
 
     BLOCK = 256
 
