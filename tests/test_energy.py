@@ -473,6 +473,8 @@ def _stack(good, bad, k):
     (lambda M, a, B, k: (M, np.ones((k, 4)), B), "A must have shape"),
     (lambda M, a, B, k: (M[None].repeat(k, 0), a[None].repeat(k + 1, 0), B),
      "batch shapes do not broadcast"),
+    (lambda M, a, B, k: (M, _stack(a, 1e200, k), B),
+     "a M^-1 a^T of row A overflows float64 (batch index 1)"),
 ])
 def test_row_masses_bad_input(call, message, k):
     """One clear error naming the input and the item, from both paths."""

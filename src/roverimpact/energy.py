@@ -537,7 +537,14 @@ def _row_grams_kernel(M, a, B, batch, n, rtol):
     status = out[:, _masses.OUT_STATUS]
     if np.count_nonzero(status):
         bad = int(np.flatnonzero(status)[0])
-        raise _validation.mass_matrix_error(M, int(iM[bad]), int(status[bad]))
+        code = int(status[bad])
+        if code in (_validation.STATUS_NONFINITE_M, _validation.STATUS_ASYMMETRIC_M,
+                    _validation.STATUS_NOT_PD):
+            raise _validation.mass_matrix_error(M, int(iM[bad]), code)
+        # a and B are finite: a M^-1 a^T or M^-1 a^T overflowed
+        where = fmt_index(tuple(int(i) for i in np.unravel_index(bad, batch)) if batch else ())
+        raise InputError(f"a M^-1 a^T of row A overflows float64 ({where}): check the units "
+                         "of M and A")
     return out[:, _masses.OUT_FREE], out[:, _masses.OUT_HELD]
 
 
@@ -547,15 +554,18 @@ def _row_grams_small(M, a, B, batch, n, rtol):
     pay; ``benchmarks/bench_startup.py --kernels``): ``w = L^{-1} a^T`` and ``v = L^{-T} w``
     by numpy's LAPACK, ``a N a^T = 2 T_a`` of :func:`partition` ``(M, B, v)`` (the kernel's
     steps, the same rank decision; tested to agree to rounding), which also checks ``M``
-    (without held rows too: ``B`` then has none). None where numpy's Cholesky fails (the
-    kernel then names the problem)."""
+    (without held rows too: ``B`` then has none). None where numpy's Cholesky fails or
+    a number overflows (the kernel then names the problem)."""
     try:
         L = np.linalg.cholesky(np.broadcast_to(M, (*batch, n, n)))
     except np.linalg.LinAlgError:
         return None
-    w = np.linalg.solve(L, np.broadcast_to(a, (*batch, n))[..., None])
-    g_free = np.sum(w[..., 0] * w[..., 0], axis=-1).reshape(-1)
-    v = np.linalg.solve(np.swapaxes(L, -1, -2), w)[..., 0]
+    with np.errstate(over="ignore", invalid="ignore"):
+        w = np.linalg.solve(L, np.broadcast_to(a, (*batch, n))[..., None])
+        g_free = np.sum(w[..., 0] * w[..., 0], axis=-1).reshape(-1)
+        v = np.linalg.solve(np.swapaxes(L, -1, -2), w)[..., 0]
+    if not (np.isfinite(g_free).all() and np.isfinite(v).all()):
+        return None
     p = partition(M, B, v, rtol=rtol, want_velocities=False)
     return g_free, 2.0 * np.reshape(p.T_a, -1)
 
