@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import as_array
-from ..energy import effective_mass
+from ..energy import row_masses
 from ..exceptions import InputError, ModelError
 from .iso_ts_15066 import BodyRegion, body_region, iso_robot_mass, max_transient_speed
 
@@ -122,7 +122,8 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
 
     .. math::  m_u = \frac{1}{u^T J_p(q) M(q)^{-1} J_p(q)^T u}
 
-    computed with :func:`roverimpact.effective_mass` on the row :math:`a = u^T J_p`.
+    computed with :func:`roverimpact.energy.row_masses` (``m_eff_free``, as
+    :func:`roverimpact.effective_mass`) on the rows :math:`a = u^T J_p`.
 
     Parameters
     ----------
@@ -162,7 +163,7 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
     moving = np.linalg.norm(A, axis=1) > rtol * max(np.linalg.norm(Jp), 1e-300)
     out = np.full(len(u), np.inf)
     if moving.any():
-        out[moving] = effective_mass(M, A[moving][:, None, :])[..., 0, 0]
+        out[moving] = row_masses(M, A[moving])[1]
     return float(out[0]) if single else out
 
 
