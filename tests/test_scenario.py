@@ -288,3 +288,34 @@ def test_T_c_at_equals_evaluate_then_partition(model):
     bad[0] = np.nan
     with pytest.raises(InputError, match="q contains NaN"):
         setup.T_c_at(bad)
+
+
+def test_setup_from_state_takes_columns_and_lists():
+    """``from_state`` with q and v as columns of matrices (``Q[:, i]``, not C-contiguous)
+    or lists gives the same setup, and ``T_c_at`` works on it (numba refused the column
+    as the kernel's v); a setup made with ``dataclasses.replace`` and such a v too. NaN in
+    q is named as such (it was "heading has no horizontal component")."""
+    import dataclasses
+
+    from roverimpact.exceptions import InputError
+
+    sc = Scenario.model_validate({"model": {"name": "rocker_bogie"}, "velocity": {"u": 0.2},
+                                  "obstacle": {"wheel": "left_front", "beta_deg": 30.0}})
+    ref = ri.ImpactSetup.from_scenario(sc)
+    Q = np.zeros((len(ref.q), 3))
+    V = np.zeros((len(ref.v), 3))
+    Q[:, 1], V[:, 1] = ref.q, ref.v
+    expected = ref.T_c_at(ref.q)
+    for q, v in ((Q[:, 1], V[:, 1]), (list(ref.q), list(ref.v))):
+        setup = ri.ImpactSetup.from_state(ref.model, q, v, obstacle=sc.obstacle,
+                                          contacts=sc.contacts)
+        assert setup.labels == ref.labels
+        assert setup.T_c_at(Q[:, 1]) == pytest.approx(expected, rel=1e-13)
+        assert float(setup.partition().T_c_minus) == pytest.approx(expected, rel=1e-12)
+    replaced = dataclasses.replace(ref, v=V[:, 1])
+    assert replaced.v.flags.c_contiguous
+    assert replaced.T_c_at(ref.q) == pytest.approx(expected, rel=1e-13)
+    bad = ref.q.copy()
+    bad[3] = np.nan
+    with pytest.raises(InputError, match="q contains NaN"):
+        ri.ImpactSetup.from_state(ref.model, bad, ref.v, obstacle=sc.obstacle)

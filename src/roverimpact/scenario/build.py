@@ -146,6 +146,13 @@ class ImpactSetup:
     _active: Any = field(default=None, repr=False, compare=False)
     _heading: Any = field(default=None, repr=False, compare=False)
 
+    def __post_init__(self):
+        # T_c_at hands v to a compiled kernel as it is: a C float64 array, whatever the
+        # caller gave (a column of a matrix, V[:, i], made numba refuse it)
+        v = self.v
+        if not (isinstance(v, np.ndarray) and v.dtype == np.float64 and v.flags.c_contiguous):
+            object.__setattr__(self, "v", np.ascontiguousarray(v, dtype=float))
+
     def partition(self) -> ImpactEnergy:
         """T, T_c^-, T_a, m_eff along the normal and v_n of this setup.
 
@@ -270,8 +277,12 @@ class ImpactSetup:
         """
         from ..models.kinematics import ConstraintSet
 
-        q = np.asarray(q, dtype=float)
-        v = np.asarray(v, dtype=float)
+        # C arrays: T_c_at hands v to a compiled kernel as it is (a column of a matrix,
+        # V[:, i], made numba refuse it)
+        q = np.ascontiguousarray(q, dtype=float)
+        v = np.ascontiguousarray(v, dtype=float)
+        if q.ndim == 1 and not np.isfinite(q).all():
+            raise InputError(f"q contains NaN or inf: {q}")
         heading = base_heading(mbm, q)
         if obstacle.normal is not None:
             normal = np.asarray(obstacle.normal, float)
