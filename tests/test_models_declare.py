@@ -75,3 +75,132 @@ def test_a_declared_loop_the_configuration_leaves_open_is_refused():
     with pytest.raises(ConfigError, match=r"loop:turnbuckle_right:\w is open by"):
         ImpactSetup.from_scenario(sc.model_copy(update={"configuration": cfg}))
     ImpactSetup.from_scenario(sc)                                # closed: accepted
+
+
+_INERTIAL = ('<inertial><mass value="{m}"/><inertia ixx="{i}" ixy="0" ixz="0" iyy="{i}" '
+             'iyz="0" izz="{i}"/></inertial>')
+
+
+def _two_wheel_urdf(path: Path, front_axis: str) -> Path:
+    links = "".join(f'<link name="{n}">{_INERTIAL.format(m=m, i=i)}</link>'
+                    for n, m, i in (("base", 10, 0.2), ("wheel_f", 1, 0.01),
+                                    ("wheel_r", 1, 0.01)))
+    joints = "".join(
+        f'<joint name="{n}" type="continuous"><origin xyz="{x} 0 -0.1"/><parent link="base"/>'
+        f'<child link="{c}"/><axis xyz="{a}"/></joint>'
+        for n, x, c, a in (("spin_f", 0.3, "wheel_f", front_axis),
+                           ("spin_r", -0.3, "wheel_r", "0 1 0")))
+    path.write_text(f'<?xml version="1.0"?><robot name="two">{links}{joints}</robot>')
+    return path
+
+
+def test_wheels_on_hinges_about_negative_axes(tmp_path):
+    """Wheels whose hinge axis is not exactly +x, +y or +z (Pinocchio's "unaligned"
+    joints: a URDF continuous joint about "0 -1 0", an MJCF hinge about "0 -1 0"), as files
+    are often written: the same rover as with "0 1 0" (it crashed reading the axis). The
+    wheel's world spin axis is the file's; T_c^- and both effective masses equal the +y
+    rover's (the wheel turns the other way, the motion is the same); the MJCF model's M
+    is MuJoCo's mj_fullM."""
+    from roverimpact.scenario import ImpactSetup
+
+    def energies(model, wheels, base=None):
+        d = {"model": {"file": str(model), "wheels": wheels}, "velocity": {"u": 0.5},
+             "obstacle": {"wheel": "front", "beta_deg": 40.0}}
+        if base:
+            d["model"]["base"] = base
+            d["configuration"] = {"base": {"z": 0.2}}
+        setup = ImpactSetup.from_scenario(Scenario.model_validate(d))
+        return setup, setup.partition()
+
+    flipped = tmp_path / "rover_neg.xml"
+    flipped.write_text(XML.read_text().replace('<joint type="hinge" axis="0 1 0"/>',
+                                               '<joint type="hinge" axis="0 -1 0"/>'))
+    urdf_pos = _two_wheel_urdf(tmp_path / "pos.urdf", "0 1 0")
+    urdf_neg = _two_wheel_urdf(tmp_path / "neg.urdf", "0 -1 0")
+    wheels_mj = {"front": {"frame": "front_tire"}, "rear": {"frame": "rear_wheel"}}
+    wheels_urdf = {"front": {"frame": "wheel_f", "radius": 0.1},
+                   "rear": {"frame": "wheel_r", "radius": 0.1}}
+    for pos, neg, wheels, base in ((XML, flipped, wheels_mj, None),
+                                   (urdf_pos, urdf_neg, wheels_urdf, {"kind": "floating"})):
+        (sp, ep), (sn, en) = energies(pos, wheels, base), energies(neg, wheels, base)
+        for f in ("T", "T_c_minus", "m_eff", "m_eff_free", "v_n"):
+            assert float(getattr(en, f)) == pytest.approx(float(getattr(ep, f)), rel=1e-12)
+        assert float(en.T_c_minus) > 0
+        w = {x.name: x for x in sn.model.wheels}["front"]
+        data = sn.model.model.createData()
+        pin.framesForwardKinematics(sn.model.model, data, sn.q)
+        R = data.oMf[sn.model.model.getFrameId(w.frame)].rotation
+        np.testing.assert_allclose(R @ np.asarray(w.axis), [0.0, -1.0, 0.0], atol=1e-12)
+        # the front wheel turns the other way
+        iv = sn.model.model.joints[sn.model.model.getJointId(w.spin)].idx_v
+        assert sn.v[iv] == pytest.approx(-sp.v[iv], rel=1e-12)
+        assert sn.v[iv] != 0
+    mj = mujoco.MjModel.from_xml_path(str(flipped))
+    sn, _ = energies(flipped, wheels_mj)
+    d = mujoco.MjData(mj)
+    d.qpos[:] = sn.q  # slide x, slide z, hinge pitch, two wheel hinges: same coordinates
+    mujoco.mj_forward(mj, d)
+    full = np.zeros((mj.nv, mj.nv))
+    mujoco.mj_fullM(mj, d, full)
+    np.testing.assert_allclose(sn.M, full, rtol=1e-12, atol=1e-12)
+    # the rear wheel rolls: its ground contact point does not slide (it slid at 2 u)
+    d.qvel[:] = sn.v
+    mujoco.mj_forward(mj, d)
+    body = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_BODY, "rear_wheel")
+    point = d.xpos[body] - [0.0, 0.0, {w.name: w for w in sn.model.wheels}["rear"].radius]
+    jac = np.zeros((3, mj.nv))
+    mujoco.mj_jac(mj, d, jac, None, point, body)
+    np.testing.assert_allclose(jac @ sn.v, 0.0, atol=1e-12)
+
+
+def test_planar_root_chain_with_negative_axes_and_an_arm_about_minus_z(tmp_path):
+    """detect_base on root chains whose joints are "unaligned": a slide about -x, a slide
+    about z and a hinge about -y is a planar base; a 3-joint arm whose first hinge turns
+    about "0 0 -1" is a fixed base, and an obstacle on its last link has T_c^- = 1/2 m v^2
+    of the point hit (the velocity along the normal of a single body in a chain held
+    nowhere else: here the end link alone, moving along the normal at 1 rad/s * 0.7 m)."""
+    from roverimpact import load_robot
+    from roverimpact.models.declare import detect_base
+    from roverimpact.scenario import ImpactSetup
+
+    def chain(name, axes, kinds):
+        links = "".join(f'<link name="l{i}">{_INERTIAL.format(m=m, i=0.01)}</link>'
+                        for i, m in enumerate((5, 1, 1, 1)))
+        joints = "".join(
+            f'<joint name="j{i + 1}" type="{k}"><origin xyz="{0.3 if i else 0} 0 0"/>'
+            f'<parent link="l{i}"/><child link="l{i + 1}"/><axis xyz="{a}"/>'
+            '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+            for i, (a, k) in enumerate(zip(axes, kinds, strict=True)))
+        p = tmp_path / f"{name}.urdf"
+        p.write_text(f'<?xml version="1.0"?><robot name="{name}">{links}{joints}</robot>')
+        return p
+
+    planar = chain("planar", ("-1 0 0", "0 0 1", "0 -1 0"),
+                   ("prismatic", "prismatic", "revolute"))
+    info = detect_base(pin.buildModelFromUrdf(str(planar)))
+    assert (info.kind, info.joints) == ("planar", ("j1", "j2", "j3"))
+    arm = chain("arm", ("0 0 -1", "0 1 0", "0 1 0"), ("revolute",) * 3)
+    assert detect_base(load_robot(arm).model).kind == "fixed"
+    sc = Scenario.model_validate({
+        "model": {"file": str(arm)}, "velocity": {"joints": {"j1": 1.0}},
+        "obstacle": {"frame": "l3", "point": [0.1, 0.0, 0.0], "normal": [0.0, 1.0, 0.0]}})
+    setup = ImpactSetup.from_scenario(sc)
+    # the point hit is 0.7 m from the j1 axis and moves along -y at 0.7 m/s (j1 about -z)
+    assert float(setup.partition().v_n) == pytest.approx(0.7, rel=1e-12)
+
+
+def test_a_declared_spin_joint_must_be_a_hinge_carrying_the_wheel():
+    """[model.wheels.NAME] spin = a slide joint, or another wheel's hinge: one ModelError
+    (the wheel was "rolled" by driving the base slide at u / r: T = 133 J for 3.25 J)."""
+    from roverimpact.exceptions import ModelError
+
+    for spin, match in (("x", r"front\.spin: joint 'x' is a prismatic \(slide\) joint"),
+                        ("wheel_rear", r"front\.spin: joint 'wheel_rear' does not carry the "
+                                       r"wheel's frame 'front_wheel'")):
+        sc = _spec({"front": {"frame": "front_wheel", "spin": spin},
+                    "rear": {"frame": "rear_wheel"}})
+        with pytest.raises(ModelError, match=match):
+            make_model(sc.model)
+    sc = _spec({"front": {"frame": "front_tire", "spin": "wheel_front"},
+                "rear": {"frame": "rear_wheel"}})
+    assert {w.name: w.spin for w in make_model(sc.model).wheels}["front"] == "wheel_front"

@@ -56,16 +56,21 @@ def _axis(model, j: int) -> np.ndarray | None:
         return np.array([0.0, 1.0, 0.0])
     if s in ("PZ", "RZ"):
         return np.array([0.0, 0.0, 1.0])
-    if s in ("PrismaticUnaligned", "RevoluteUnaligned"):
-        return np.asarray(model.joints[j].axis, dtype=float)
+    if s in ("PrismaticUnaligned", "RevoluteUnaligned", "RevoluteUnboundedUnaligned"):
+        # any axis but +x, +y, +z (a URDF's "0 -1 0", an MJCF hinge "0 0 -1"): read from
+        # the joint's motion subspace S = (linear, angular), which every joint type has
+        # (the Python JointModel of an unbounded unaligned joint has no .axis)
+        jm = model.joints[j]
+        jd = jm.createData()
+        jm.calc(jd, pin.neutral(model))
+        S = np.asarray(jd.S, dtype=float).reshape(6, -1)[:, 0]
+        return S[:3].copy() if s == "PrismaticUnaligned" else S[3:].copy()
     if s == "RUBY":  # continuous about y
         return np.array([0.0, 1.0, 0.0])
     if s == "RUBX":
         return np.array([1.0, 0.0, 0.0])
     if s == "RUBZ":
         return np.array([0.0, 0.0, 1.0])
-    if s == "RevoluteUnboundedUnaligned":
-        return np.asarray(model.joints[j].axis, dtype=float)
     return None
 
 
@@ -158,6 +163,24 @@ def _frame_joint(model, fid: int) -> int:
     return int(model.frames[fid].parentJoint)
 
 
+def _check_spin(model, name: str, spin: str, jid: int, frame: str) -> None:
+    """A declared spin joint must be a hinge (revolute or continuous) that carries the
+    wheel's frame: the frame's own joint or one of its ancestors. A slide or another
+    wheel's hinge would be driven at u / r while the wheel itself does not turn."""
+    sj = model.getJointId(spin)
+    if not _is_revolute(model, sj):
+        kind = "prismatic (slide)" if _is_prismatic(model, sj) else _short(model, sj)
+        raise ModelError(f"model.wheels.{name}.spin: joint {spin!r} is a {kind} joint; a "
+                         "wheel spins about a hinge (revolute or continuous joint)")
+    k = jid
+    while k > 0 and k != sj:
+        k = model.parents[k]
+    if k != sj:
+        raise ModelError(f"model.wheels.{name}.spin: joint {spin!r} does not carry the "
+                         f"wheel's frame {frame!r} (that frame moves with joint "
+                         f"{model.names[jid]!r}); give the hinge the wheel turns on")
+
+
 def declare_wheels(mbm: MultibodyModel, specs: dict) -> None:
     """Set ``mbm.wheels`` from ``[model.wheels.NAME]`` declarations.
 
@@ -183,6 +206,8 @@ def declare_wheels(mbm: MultibodyModel, specs: dict) -> None:
         if spin is not None and not model.existJointName(spin):
             raise ModelError(f"model.wheels.{name}.spin: unknown joint {spin!r}; joints: "
                              f"{list(model.names[1:])}")
+        if spin is not None and sp.spin is not None:
+            _check_spin(model, name, spin, jid, sp.frame)
         axis = sp.axis
         if axis is None:
             if spin is not None:
