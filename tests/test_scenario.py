@@ -319,3 +319,45 @@ def test_setup_from_state_takes_columns_and_lists():
     bad[3] = np.nan
     with pytest.raises(InputError, match="q contains NaN"):
         ri.ImpactSetup.from_state(ref.model, bad, ref.v, obstacle=sc.obstacle)
+
+
+def test_no_approach_no_impact_energy(tmp_path):
+    """A rover driving away from the face (u < 0, v_n < 0) has no impact: T_c^- = 0 and
+    T_a = T from energy_of, sweep_energy and a study (one-scenario cases, angle groups and
+    model-changing blocks), as the predicted peak force (0) and the traverse have it.
+    Before, the partition's T_c^- of the receding velocity (1.47 J here, more than the
+    approaching rover's 1.39 J) was reported. Reference: the unilateral impact map of the
+    obstacle row, which finds no impact (T_c^- = 0, no impulse) for a receding contact."""
+    from roverimpact.exceptions import InputError
+    from roverimpact.studies import load_results, run_study
+    from roverimpact.unilateral import unilateral_impact
+
+    def sc(u, beta=45.0, **model):
+        return Scenario.model_validate({"model": {"name": "rover2d", **model},
+                                        "velocity": {"u": u},
+                                        "obstacle": {"wheel": "front", "beta_deg": beta}})
+
+    ahead, back = energy_of(sc(0.5)), energy_of(sc(-0.5))
+    assert float(back.v_n) == pytest.approx(-float(ahead.v_n)) and float(ahead.v_n) > 0
+    assert float(ahead.T_c_minus) > 0
+    assert float(back.T_c_minus) == 0.0 and float(back.T_a) == float(back.T)
+    setup = ri.ImpactSetup.from_scenario(sc(-0.5))
+    imp = unilateral_impact(setup.M, setup.v, setup.A[[setup.obstacle_row]])
+    assert not imp.impact and float(imp.T_c_minus) == 0.0 and float(imp.impulse[0]) == 0.0
+    with pytest.raises(InputError, match="no impact"):
+        unilateral_impact(setup.M, setup.v, setup.A[[setup.obstacle_row]], obstacle=0)
+    betas = np.radians([20.0, 45.0, 70.0])
+    sw_back, sw_ahead = sweep_energy(sc(-0.5), betas), sweep_energy(sc(0.5), betas)
+    np.testing.assert_array_equal(sw_back.T_c_minus, 0.0)
+    np.testing.assert_array_equal(sw_back.T_a, sw_back.T)
+    assert (sw_ahead.T_c_minus > 0).all()
+    study = {"name": "reverse", "base": sc(0.5).model_dump(exclude_none=True),
+             "cases": [{"velocity.u": u, "obstacle.beta_deg": b, "model.params.h": h}
+                       for u in (0.5, -0.5) for b in (30.0, 60.0) for h in (0.3, 0.35)]}
+    df = load_results(run_study(study, tmp_path / "out").out_dir)[0]
+    assert (df.loc[df["velocity.u"] < 0, "T_c_minus"] == 0.0).all()
+    assert (df.loc[df["velocity.u"] > 0, "T_c_minus"] > 0.0).all()
+    for _, row in df.iterrows():
+        own = energy_of(sc(row["velocity.u"], row["obstacle.beta_deg"],
+                           params={"h": row["model.params.h"]}))
+        assert row["T_c_minus"] == pytest.approx(float(own.T_c_minus), rel=1e-12, abs=0.0)

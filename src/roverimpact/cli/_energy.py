@@ -62,6 +62,9 @@ def energy_cmd(
         t.add_row(f"peak force ({sc.contact_law.name})", f"{f_max:.6g} N")
     t.add_row("active rows / rank", f"{len(setup.labels)} / {e.rank}")
     console.print(t)
+    if not e.v_n > 0:
+        console.print(f"no impact: the contact does not approach the face (v_n = {e.v_n:.3g} "
+                      "m/s), so T_c^- = 0", highlight=False)
     console.print("rows: " + ", ".join(setup.labels), highlight=False)
     if sc.constraints == "auto":
         console.print("contacts that hold through the impact (auto): "

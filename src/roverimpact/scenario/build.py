@@ -69,9 +69,10 @@ class ImpactEnergy:
     T : float or (k,) array
         Kinetic energy 1/2 v^T M v [J].
     T_c_minus : float or (k,) array
-        Effective kinetic energy T_c^- (constrained part, obstacle row included) [J].
+        Effective kinetic energy T_c^- (constrained part, obstacle row included) [J];
+        0 where the contact does not approach (``v_n <= 0``: no impact).
     T_a : float or (k,) array
-        Admissible part T - T_c^- [J].
+        Admissible part T - T_c^- [J] (``T`` where ``v_n <= 0``).
     m_eff : float or (k,) array
         Effective mass along the impact normal with the other active rows held
         (persistent) [kg]: 1 / (a N a^T), N = M^-1 - M^-1 B^T (B M^-1 B^T)^+ B M^-1.
@@ -971,8 +972,20 @@ def _energy(M, A, v, obstacle_row: int) -> ImpactEnergy:
     def sc(x):
         return x[()] if np.ndim(x) == 0 else x
 
-    return ImpactEnergy(T=p.T, T_c_minus=p.T_c, T_a=p.T_a, m_eff=sc(m_eff),
+    T_c, T_a = no_approach(p.T_c, p.T_a, p.T, v_n)
+    return ImpactEnergy(T=p.T, T_c_minus=sc(T_c), T_a=sc(T_a), m_eff=sc(m_eff),
                         m_eff_free=sc(m_eff_free), v_n=sc(v_n), rank=p.rank)
+
+
+def no_approach(T_c, T_a, T, v_n):
+    """``(T_c^-, T_a)`` with no impact where the obstacle contact does not approach
+    (``v_n <= 0``: the wheel moves along or away from the face): T_c^- = 0 and T_a = T
+    there, as the traverse and the predicted peak force (0) have it. The partition's
+    T_c of such a velocity is the energy a bilateral row would take, not an impact's."""
+    hit = np.asarray(v_n) > 0.0
+    if hit.all():
+        return T_c, T_a
+    return np.where(hit, T_c, 0.0), np.where(hit, T_a, T)
 
 
 def energy_of(scenario: Scenario | ImpactSetup) -> ImpactEnergy:

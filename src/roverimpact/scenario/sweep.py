@@ -11,6 +11,7 @@ from .build import (
     ImpactSetup,
     active_mask,
     friction_of,
+    no_approach,
     normal_from_beta,
     warn_if_jammed,
 )
@@ -29,7 +30,8 @@ def _energy_sweep(M, A, v, obstacle_row: int, keep) -> ImpactEnergy:
     rows = A[:, obstacle_row, :]
     v_n = -(rows @ v)
     m_eff, m_eff_free = row_masses(M, rows, np.delete(Ak, obstacle_row, axis=1))
-    return ImpactEnergy(T=p.T, T_c_minus=p.T_c, T_a=p.T_a, m_eff=m_eff,
+    T_c, T_a = no_approach(p.T_c, p.T_a, p.T, v_n)
+    return ImpactEnergy(T=p.T, T_c_minus=T_c, T_a=T_a, m_eff=m_eff,
                         m_eff_free=m_eff_free, v_n=v_n, rank=p.rank)
 
 

@@ -495,7 +495,8 @@ class _OwnCases:
         m_eff, m_eff_free = row_masses(M, a, others)
         v_n = -np.einsum("kn,kn->k", a, v)
         T, me, mf, vn = self.out
-        T[idx], me[idx], mf[idx], vn[idx] = p.T_c, m_eff, m_eff_free, v_n
+        T[idx], me[idx], mf[idx], vn[idx] = np.where(v_n > 0.0, p.T_c, 0.0), m_eff, \
+            m_eff_free, v_n  # no approach, no impact (build.no_approach)
         s = 0
         for pt in parts:
             n, labels, total = len(pt[0]), pt[4], pt[5]
