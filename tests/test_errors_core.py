@@ -65,6 +65,86 @@ def test_effective_mass_zero_row():
         ri.effective_mass(M2, [0.0, 0.0])
 
 
+def test_a_mass_matrix_singular_to_working_precision_is_one_rule():
+    """M = diag(1000, 1, ..., 1, 1e-12) (n = 18) has a numpy Cholesky factor, but its
+    smallest pivot is below the compiled kernels' floor n eps max M_ii = 4e-12: every
+    function refuses it with the same message, which says why (partition said "not
+    positive definite, smallest eigenvalue 1e-12" while projector and several-row
+    effective_mass accepted it); 1e-11 passes everywhere."""
+    n = 18
+    A = np.zeros((2, n))
+    A[0, 0] = A[1, 1] = 1.0
+    v = np.ones(n)
+    for low, ok in ((1e-12, False), (1e-11, True)):
+        M = np.diag([1000.0] + [1.0] * (n - 2) + [low])
+        np.linalg.cholesky(M)  # numpy factors both
+        calls = (lambda M=M: ri.partition(M, A, v), lambda M=M: ri.projector(M, A),
+                 lambda M=M: ri.effective_mass(M, A), lambda M=M: ri.effective_mass(M, A[0]),
+                 lambda M=M: ri.impulsive_impact(M, A, v),
+                 lambda M=M: ri.unilateral_impact(M, -v, A))
+        for call in calls:
+            if ok:
+                call()
+            else:
+                with pytest.raises(ri.InputError, match=r"M is singular to working precision "
+                                   r"\(unbatched\): its smallest eigenvalue 1e-12 is below "
+                                   r"n \* eps \* max M_ii = 4e-12"):
+                    call()
+
+
+@pytest.mark.parametrize("rtol", [float("nan"), 0.0, -1.0, 2.0, None, "1e-9", [1e-9, 1e-8]])
+def test_rtol_is_checked_everywhere(rtol):
+    """A bad rtol is one InputError in every function that takes one (projector and
+    several-row effective_mass returned zero matrices for NaN, None was a TypeError)."""
+    calls = (lambda: ri.partition(M2, A2, v2, rtol=rtol),
+             lambda: ri.projector(M2, A2, rtol=rtol),
+             lambda: ri.effective_mass(M2, A2, rtol=rtol),
+             lambda: ri.effective_mass(M2, A2[0], rtol=rtol),
+             lambda: ri.impulsive_impact(M2, A2, v2, rtol=rtol),
+             lambda: ri.unilateral_impact(M2, -v2, A2, rtol=rtol),
+             lambda: ri.unilateral_impact(M2, -v2, A2, tol=rtol),
+             lambda: ri.impact_1dof(ri.contact.get_law("hertz", k=1e6), 1.0, 0.5, rtol=rtol))
+    for call in calls:
+        with pytest.raises(ri.InputError, match=r"tol must be"):
+            call()
+
+
+def test_impact_1dof_refuses_what_would_hang_or_mislead():
+    """rtol = 0 or NaN and max_duration = NaN made the integrator run forever, a negative
+    max_duration returned a zero force; arrays of m_eff raised a bare TypeError."""
+    law = ri.contact.get_law("hertz", k=1e6)
+    for bad in (float("nan"), -1.0, 0.0, float("inf"), "10", None):
+        with pytest.raises(ri.InputError, match="max_duration must be a finite number > 0"):
+            ri.impact_1dof(law, 1.0, 0.5, max_duration=bad)
+    with pytest.raises(ri.InputError, match="integrates one impact: pass scalars"):
+        ri.impact_1dof(law, [1.0, 2.0], 0.5)
+    assert ri.impact_1dof(law, 1.0, 0.5, max_duration=50.0).peak_force > 0
+
+
+def test_edge_inputs_of_the_core_functions():
+    """No rows at all is no constraint (projector 0, the impact map leaves v); a missing v,
+    a ragged A and a scalar row are one InputError each; max_transient_speed with force
+    and m_R of shapes that do not broadcast too."""
+    M = np.diag([1.0, 2.0, 3.0])
+    v = np.array([1.0, -1.0, 0.5])
+    none = np.zeros((0, 3))
+    np.testing.assert_array_equal(ri.projector(M, none), 0.0)
+    imp = ri.impulsive_impact(M, none, v)
+    np.testing.assert_array_equal(imp.v_plus, v)
+    assert float(imp.energy_lost) == 0.0
+    for call, match in ((lambda: ri.partition(M, none[:1] + 1, None), "v is required"),
+                        (lambda: ri.impulsive_impact(M, none[:1] + 1, None), "v is required"),
+                        (lambda: ri.effective_mass(M, [[1, 0, 0], [0, 1]]),
+                         "A must be an array of real numbers"),
+                        (lambda: ri.effective_mass([[2.0]], 1.0, single_row=True),
+                         "at least 1 dimension"),
+                        (lambda: ri.max_transient_speed("hands_fingers", [1.0, 2.0],
+                                                        force=[100, 200, 300]),
+                         "do not broadcast")):
+        with pytest.raises(ri.InputError, match=match):
+            call()
+
+
 # --- CLI ------------------------------------------------------------------------------
 
 

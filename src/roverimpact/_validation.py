@@ -93,10 +93,42 @@ def mass_matrix_error(M: np.ndarray, flat_index: int, code: int, name: str = "M"
             f"{asym[i, j]:.3g}; a mass matrix must be symmetric"
         )
     lam = smallest_eigenvalue(item)
+    floor = pd_floor(item)
+    if lam > 0:  # positive, but below what a Cholesky factor resolves
+        return InputError(
+            f"{name} is singular to working precision ({where}): its smallest eigenvalue "
+            f"{lam:.3g} is below n * eps * max {name}_ii = {floor:.3g}, the resolution of "
+            "its Cholesky factor; check for a body with (almost) no mass or inertia on a "
+            "joint, or coordinates of very different scales"
+        )
     return InputError(
         f"{name} is not positive definite ({where}, smallest eigenvalue {lam:.3g}): "
         "check for zero or negative masses or inertias, or a body with no mass"
     )
+
+
+def check_rtol(rtol, name: str = "rtol", upper: float = 1.0) -> float:
+    """``rtol`` as a float in (0, ``upper``) (``upper`` included when it is below 1), or
+    one InputError naming it (NaN, inf, None, strings and arrays fail)."""
+    if isinstance(rtol, (bool, str, bytes)) or np.ndim(rtol) != 0:
+        raise InputError(f"{name} must be a number in (0, {upper:g}"
+                         f"{')' if upper >= 1.0 else ']'}, got {rtol!r}")
+    try:
+        r = float(rtol)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a number, got {rtol!r}") from None
+    ok = 0.0 < r < upper if upper >= 1.0 else 0.0 < r <= upper
+    if not ok:
+        raise InputError(f"{name} must be in (0, {upper:g}{')' if upper >= 1.0 else ']'}, "
+                         f"got {rtol}")
+    return r
+
+
+def pd_floor(M: np.ndarray) -> np.ndarray:
+    """``n * eps * max_i |M_ii|`` of (..., n, n) ``M``: a Cholesky pivot ``L_jj^2`` at or
+    below it counts as zero (the compiled kernels' test, ``_kernels.partition.factor``)."""
+    n = M.shape[-1]
+    return n * np.finfo(np.float64).eps * np.abs(np.diagonal(M, axis1=-2, axis2=-1)).max(axis=-1)
 
 
 # Status codes shared with the compiled kernels.
@@ -122,10 +154,16 @@ def check_mass_matrix(M: np.ndarray, name: str = "M") -> None:
         raise mass_matrix_error(M, int(np.argmax(asym)), STATUS_ASYMMETRIC_M, name)
     # Cholesky item by item only on failure: the batched call tells us that one failed.
     try:
-        np.linalg.cholesky(flat)
+        L = np.linalg.cholesky(flat)
     except np.linalg.LinAlgError:
         for b in range(flat.shape[0]):
             try:
                 np.linalg.cholesky(flat[b])
             except np.linalg.LinAlgError:
                 raise mass_matrix_error(M, b, STATUS_NOT_PD, name) from None
+        raise  # pragma: no cover - the batch failed, so one item does
+    # pivots at or below the compiled kernels' floor: singular to working precision there
+    pivots = np.diagonal(L, axis1=-2, axis2=-1) ** 2
+    low = ~(pivots > pd_floor(flat)[:, None]).all(axis=-1)
+    if low.any():
+        raise mass_matrix_error(M, int(np.argmax(low)), STATUS_NOT_PD, name)

@@ -216,8 +216,12 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     >>> round(float(p.T), 12), round(float(p.T_c), 12), round(float(p.T_a), 12), int(p.rank)
     (25.0, 9.0, 16.0, 1)
     """
-    if not 0.0 < rtol < 1.0:  # NaN and inf fail it too
-        raise InputError(f"rtol must be in (0, 1), got {rtol}")
+    try:
+        ok = 0.0 < rtol < 1.0  # NaN and inf fail it too
+    except (TypeError, ValueError):  # None, a string, an array
+        ok = False
+    if not ok:
+        rtol = _validation.check_rtol(rtol)  # says what is wrong (or a 1-item array)
     if (type(M) is _NDARRAY and type(A) is _NDARRAY and type(v) is _NDARRAY
             and M.ndim == 2 and A.ndim == 2 and v.ndim == 1
             and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8):
@@ -231,6 +235,8 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
             single = None
         if single is not None:
             return single
+    if v is None:
+        raise InputError("v is required: the generalized velocity (..., n)")
     M, A, v, batch, n, m = prepare(M, A, v)
     Mf = np.ascontiguousarray(M.reshape(_size(M.shape[:-2]), n, n))
     Af = np.ascontiguousarray(A.reshape(_size(A.shape[:-2]), m, n))
@@ -376,7 +382,7 @@ def whitened(M, A, rtol):
     L = np.linalg.cholesky(M)
     W = np.linalg.solve(L, np.swapaxes(A, -1, -2))
     cn = np.linalg.norm(W, axis=-2, keepdims=True)
-    cmax = cn.max(axis=-1, keepdims=True)
+    cmax = cn.max(axis=-1, keepdims=True, initial=0.0)  # no rows: 0
     keep = (cn > rtol * cmax) & (cmax > 0)
     Wn = np.where(keep, W / np.where(keep, cn, 1.0), 0.0)
     U, s, _ = np.linalg.svd(Wn, full_matrices=False)
@@ -404,6 +410,7 @@ def projector(M, A, *, rtol: float = RTOL) -> np.ndarray:
     P_c : (..., n, n) ndarray
         Satisfies ``P_c @ P_c = P_c``, ``A (I - P_c) = 0`` and ``M P_c`` symmetric.
     """
+    rtol = _validation.check_rtol(rtol)
     M, A, _, batch, n, m = prepare(M, A)
     M = np.broadcast_to(M, (*batch, n, n))
     A = np.broadcast_to(A, (*batch, m, n))
@@ -486,9 +493,8 @@ def row_masses(M, a, held=None, *, rtol: float = RTOL):
         For bad shapes, NaN or inf, a ``M`` that is not symmetric positive definite
         (naming the input and the batch index) and a row ``a`` that is zero.
     """
-    if not 0.0 < rtol < 1.0:  # NaN and inf fail it too
-        raise InputError(f"rtol must be in (0, 1), got {rtol}")
-    M, a, _, _, n, _ = prepare(M, np.asarray(a)[..., None, :])
+    rtol = _validation.check_rtol(rtol)
+    M, a, _, _, n, _ = prepare(M, as_array(a, "a", min_ndim=1)[..., None, :])
     a = a[..., 0, :]
     _validation.check_finite(a, "A", 1)
     if held is None:
@@ -627,7 +633,9 @@ def effective_mass(M, A, *, held=None, single_row: bool | None = None, rtol: flo
     >>> round(float(ri.effective_mass(3 * np.eye(3), [0.0, 0.6, 0.8], held=[0, 0, 1])), 12)
     8.333333333333
     """
-    single = np.ndim(A) == 1 if single_row is None else bool(single_row)
+    rtol = _validation.check_rtol(rtol)
+    A = as_array(A, "A", min_ndim=1)
+    single = A.ndim == 1 if single_row is None else bool(single_row)
     if single:
         m_eff, m_eff_free = row_masses(M, A, held, rtol=rtol)
         return m_eff_free if held is None else m_eff

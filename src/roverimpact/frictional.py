@@ -293,10 +293,8 @@ def _directions(ntan: tuple[int, ...], facets: int):
 
 def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
            want_vplus, ntan=None):
-    if not (math.isfinite(tol) and 0.0 < tol <= 1e-3):
-        raise InputError(f"tol must be in (0, 1e-3], got {tol}")
-    if not (math.isfinite(rtol) and 0.0 < rtol < 1.0):
-        raise InputError(f"rtol must be in (0, 1), got {rtol}")
+    tol = _validation.check_rtol(tol, "tol", 1e-3)
+    rtol = _validation.check_rtol(rtol)
     if isinstance(facets, bool) or not isinstance(facets, (int, np.integer)) or facets < 3:
         raise InputError(f"facets must be an integer >= 3 (friction directions of a 3-D "
                          f"contact), got {facets!r}")

@@ -117,6 +117,8 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     >>> np.round(r.v_plus, 12).tolist(), round(float(r.energy_lost), 12)
     ([0.0, 2.0], 0.0)
     """
+    if v is None:
+        raise InputError("v is required: the generalized velocity (..., n) before impact")
     M, A, v, batch, n, m = prepare(M, A, v)
     if persistent is not None:
         B = as_array(persistent, "persistent", min_ndim=1)

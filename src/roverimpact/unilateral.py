@@ -67,7 +67,7 @@ import numpy as np
 
 from . import _validation
 from ._kernels.lemke import STATUS_INFEASIBLE, STATUS_LOCKED, STATUS_MAXITER, impact_kernel
-from ._validation import as_array, broadcast_batch, fmt_index
+from ._validation import as_array, broadcast_batch, check_rtol, fmt_index
 from .energy import RTOL, flat_index, scalarize
 from .exceptions import InputError, SolverError
 
@@ -177,10 +177,8 @@ def check_rows(x, name, n):
 def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, want_vplus):
     if law not in _LAWS:
         raise InputError(f"law must be one of {_LAWS}, got {law!r}")
-    if not (math.isfinite(tol) and 0.0 < tol <= 1e-3):
-        raise InputError(f"tol must be in (0, 1e-3], got {tol}")
-    if not (math.isfinite(rtol) and 0.0 < rtol < 1.0):
-        raise InputError(f"rtol must be in (0, 1), got {rtol}")
+    tol = check_rtol(tol, "tol", 1e-3)
+    rtol = check_rtol(rtol)
     M = as_array(M, "M", min_ndim=2)
     if M.shape[-1] != M.shape[-2] or M.shape[-1] == 0:
         raise InputError(f"M must have shape (..., n, n) with n >= 1, got {M.shape}")

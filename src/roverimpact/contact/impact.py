@@ -10,11 +10,13 @@ speed is the speed at that instant.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import SolverError
+from .._validation import check_rtol
+from ..exceptions import InputError, SolverError
 from .base import ContactLaw, check_law, positive_array
 
 __all__ = ["ImpactHistory", "impact_1dof"]
@@ -90,10 +92,21 @@ def impact_1dof(
     """
     from scipy import integrate, optimize
     check_law(law)
+    if np.ndim(m_eff) or np.ndim(v_n):
+        raise InputError("impact_1dof integrates one impact: pass scalars m_eff and v_n "
+                         f"(got shapes {np.shape(m_eff)} and {np.shape(v_n)})")
     m = float(positive_array(m_eff, "m_eff [kg]"))
     v = float(positive_array(v_n, "v_n [m/s]"))
-    if np.ndim(m_eff) or np.ndim(v_n):
-        raise SolverError("impact_1dof integrates one impact: pass scalars m_eff and v_n")
+    rtol = check_rtol(rtol)
+    try:
+        ok = (not isinstance(max_duration, (bool, str)) and np.ndim(max_duration) == 0
+              and math.isfinite(float(max_duration)) and float(max_duration) > 0)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise InputError(f"max_duration must be a finite number > 0 (Hertz times), got "
+                         f"{max_duration!r}")
+    max_duration = float(max_duration)
     n, k = law.n, law.k
     d_H = ((n + 1.0) * m * v * v / (2.0 * k)) ** (1.0 / (n + 1.0))
     F_H = k * d_H**n

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import as_array
+from .._validation import as_array, check_rtol
 from ..energy import row_masses
 from ..exceptions import InputError, ModelError
 from .iso_ts_15066 import BodyRegion, body_region, iso_robot_mass, max_transient_speed
@@ -146,6 +146,7 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
     m_u : float or (k,) ndarray
         [kg]; ``inf`` where the point cannot move along the direction.
     """
+    rtol = check_rtol(rtol)
     model, q = _arm(model, q)
     u = as_array(direction, "direction", min_ndim=1)
     single = u.ndim == 1

@@ -282,5 +282,9 @@ def max_transient_speed(region: str | BodyRegion, m_R, *, force=None, pressure=N
         F = np.minimum(F, _positive(pressure, "pressure") * _positive(contact_area,
                                                                       "contact_area"))
     mu = reduced_mass(r.m_H, m_R)
-    out = F / np.sqrt(mu * r.K)
+    try:
+        out = F / np.sqrt(mu * r.K)
+    except ValueError:
+        raise InputError(f"force {np.shape(F)} and m_R {np.shape(mu)} do not broadcast "
+                         "together: give one force, or one per m_R") from None
     return out[()] if np.ndim(out) == 0 else out
