@@ -38,6 +38,7 @@ from .schema import (
     ObstacleSpec,
     Scenario,
     VelocitySpec,
+    as_scenario,
     is_example_robot_name,
 )
 
@@ -221,6 +222,7 @@ class ImpactSetup:
         ``contacts.loops`` and ``[configuration]`` (:func:`model_key`), reused instead of
         building it again (the model is not modified).
         """
+        scenario = as_scenario(scenario)
         mbm = scenario_model(scenario, base_dir) if model is None else model
         q = configuration(mbm, scenario.configuration)
         normals = None
@@ -262,14 +264,14 @@ class ImpactSetup:
             Configuration.
         v : (nv,) array_like
             Generalized velocity just before impact.
-        obstacle : ObstacleSpec
+        obstacle : ObstacleSpec or dict
             The impact contact and the face normal (``beta_deg`` relative to the heading
             of the base at ``q``, or ``normal``).
-        contacts : ContactsSpec
+        contacts : ContactsSpec or dict
             Ground wheels, no-slip rows, locked joints, loop closure.
-        constraints : "auto", "all" or list of str
+        constraints : "auto", "all", a pattern or list of patterns
             Which candidate rows are active (:func:`choose_active_rows`).
-        also_hit : sequence of str
+        also_hit : str or sequence of str
             Further wheels touching the same face at the same instant (a symmetric rover's
             two front wheels): their obstacle rows join the candidates.
         scenario : Scenario, optional
@@ -284,8 +286,22 @@ class ImpactSetup:
         # V[:, i], made numba refuse it)
         q = np.ascontiguousarray(q, dtype=float)
         v = np.ascontiguousarray(v, dtype=float)
-        if q.ndim == 1 and not np.isfinite(q).all():
+        nq, nv = mbm.model.nq, mbm.model.nv
+        if q.shape != (nq,):
+            raise ModelError(f"q must have shape ({nq},) for model {mbm.name!r} (one "
+                             f"configuration), got {q.shape}")
+        if v.shape != (nv,):
+            raise ModelError(f"v must have shape ({nv},) for model {mbm.name!r} (one "
+                             f"velocity), got {v.shape}")
+        if not np.isfinite(q).all():
             raise InputError(f"q contains NaN or inf: {q}")
+        from .._schema import validate
+
+        obstacle = validate(ObstacleSpec, obstacle, "obstacle")
+        contacts = validate(ContactsSpec, contacts, "contacts")
+        if isinstance(constraints, str) and constraints not in ("auto", "all"):
+            constraints = [constraints]  # one pattern
+        also_hit = [also_hit] if isinstance(also_hit, str) else list(also_hit)
         heading = base_heading(mbm, q)
         if obstacle.normal is not None:
             normal = np.asarray(obstacle.normal, float)
@@ -988,8 +1004,10 @@ def no_approach(T_c, T_a, T, v_n):
     return np.where(hit, T_c, 0.0), np.where(hit, T_a, T)
 
 
-def energy_of(scenario: Scenario | ImpactSetup) -> ImpactEnergy:
-    """Effective kinetic energy T_c^-, T, T_a, m_eff and v_n of a scenario.
+def energy_of(scenario: Scenario | ImpactSetup | dict | str | Path) -> ImpactEnergy:
+    """Effective kinetic energy T_c^-, T, T_a, m_eff and v_n of a scenario (a
+    :class:`Scenario`, its dict as read from TOML, the path of its TOML file, or a built
+    :class:`ImpactSetup`).
 
     Examples
     --------

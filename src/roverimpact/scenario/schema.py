@@ -660,3 +660,16 @@ def scenario_from_dict(raw: dict | Scenario, *, where: str = "scenario") -> Scen
     if not isinstance(raw, (dict, Scenario)):
         raise ConfigError(f"{where}: a scenario is a table of tables, got {type(raw).__name__}")
     return validate(Scenario, raw, where, "invalid scenario: ")
+
+
+def as_scenario(scenario, *, where: str = "scenario") -> Scenario:
+    """A :class:`Scenario` from a scenario, a dict (as read from TOML) or the path of a
+    scenario TOML file: one :class:`~roverimpact.exceptions.ConfigError` otherwise."""
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, dict):
+        return scenario_from_dict(scenario, where=where)
+    if isinstance(scenario, (str, Path)):
+        return load_scenario(scenario)
+    raise ConfigError(f"{where}: expected a Scenario, a dict or the path of a scenario TOML "
+                      f"file, got {type(scenario).__name__}")

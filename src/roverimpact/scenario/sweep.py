@@ -61,7 +61,7 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
 
     Parameters
     ----------
-    scenario : Scenario or ImpactSetup
+    scenario : Scenario, dict, path or ImpactSetup
         The obstacle normal of the scenario is replaced; the configuration is kept.
     beta : (k,) array_like
         Impact angles [rad] in [0, pi/2].
