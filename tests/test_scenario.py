@@ -361,3 +361,48 @@ def test_no_approach_no_impact_energy(tmp_path):
         own = energy_of(sc(row["velocity.u"], row["obstacle.beta_deg"],
                            params={"h": row["model.params.h"]}))
         assert row["T_c_minus"] == pytest.approx(float(own.T_c_minus), rel=1e-12, abs=0.0)
+
+
+def test_scenario_functions_take_dicts_paths_and_single_strings(tmp_path):
+    """energy_of, ImpactSetup.from_scenario and sweep_energy take a Scenario, its dict or
+    its TOML file (a dict raised AttributeError), with the same numbers; a typo in the
+    dict is one ConfigError. from_state: q or v of another shape is one ModelError (an
+    IndexError or a numpy matmul error before), obstacle and contacts may be dicts, and
+    constraints = "ground:*" or also_hit = "rear" given as one string are one pattern /
+    one wheel (they were iterated character by character: "'g' matches no candidate
+    row")."""
+    raw = {"model": {"name": "rover2d"}, "velocity": {"u": 0.4},
+           "obstacle": {"wheel": "front", "beta_deg": 50.0}}
+    path = tmp_path / "s.toml"
+    path.write_text('[model]\nname = "rover2d"\n[velocity]\nu = 0.4\n'
+                    '[obstacle]\nwheel = "front"\nbeta_deg = 50.0\n')
+    ref = energy_of(Scenario.model_validate(raw))
+    for given in (raw, path, str(path)):
+        assert float(energy_of(given).T_c_minus) == float(ref.T_c_minus)
+        assert ri.ImpactSetup.from_scenario(given).labels == \
+            ri.ImpactSetup.from_scenario(Scenario.model_validate(raw)).labels
+    np.testing.assert_array_equal(sweep_energy(raw, np.radians([30.0, 50.0])).T_c_minus,
+                                  sweep_energy(path, np.radians([30.0, 50.0])).T_c_minus)
+    with pytest.raises(ConfigError, match="beta"):
+        energy_of({**raw, "obstacle": {"wheel": "front", "beta": 50.0}})
+    with pytest.raises(ConfigError, match="expected a Scenario, a dict or the path"):
+        energy_of(None)
+    setup = ri.ImpactSetup.from_scenario(raw)
+    sc = setup.scenario
+    for q, v, match in ((setup.q[None], setup.v, r"q must have shape \(5,\)"),
+                        (setup.q, setup.v[None], r"v must have shape \(5,\)")):
+        with pytest.raises(ModelError, match=match):
+            ri.ImpactSetup.from_state(setup.model, q, v, obstacle=sc.obstacle)
+    as_dicts = ri.ImpactSetup.from_state(setup.model, setup.q, setup.v,
+                                         obstacle=raw["obstacle"], contacts={})
+    assert as_dicts.labels == setup.labels
+    one = ri.ImpactSetup.from_state(setup.model, setup.q, setup.v, obstacle=sc.obstacle,
+                                     constraints="ground:*")
+    listed = ri.ImpactSetup.from_state(setup.model, setup.q, setup.v, obstacle=sc.obstacle,
+                                       constraints=["ground:*"])
+    assert one.labels == listed.labels and "ground:rear:normal" in one.labels
+    both = ri.ImpactSetup.from_state(setup.model, setup.q, setup.v, obstacle=sc.obstacle,
+                                     also_hit="rear")
+    assert both.candidate_labels == ri.ImpactSetup.from_state(
+        setup.model, setup.q, setup.v, obstacle=sc.obstacle, also_hit=["rear"]
+    ).candidate_labels
