@@ -532,6 +532,28 @@ def _strip_roverimpact(path: Path) -> str | None:
     return ET.tostring(root, encoding="unicode") if found else None
 
 
+def _include_files(text: str, base: Path, found: dict | None = None) -> dict[str, bytes]:
+    """``{file: contents}`` of the ``<include file=...>`` elements of ``text`` and of the
+    files they include, read relative to ``base`` (the model file's directory, as MuJoCo
+    resolves them), for ``MjSpec.from_string``. A missing file is left to MuJoCo's own
+    message."""
+    found = {} if found is None else found
+    for el in ET.fromstring(text).iter("include"):
+        name = el.get("file")
+        if not name or name in found:
+            continue
+        f = base / name
+        if not f.is_file():
+            continue
+        data = f.read_bytes()
+        found[name] = data
+        try:
+            _include_files(data.decode(), base, found)
+        except (ET.ParseError, UnicodeDecodeError):
+            pass  # MuJoCo says what is wrong with it
+    return found
+
+
 def compile_mjcf(path: str | Path, *, floating_base: bool | None = None):
     """Compile an MJCF file with MuJoCo (``MjSpec.from_file(...).compile()``).
 
@@ -555,10 +577,14 @@ def compile_mjcf(path: str | Path, *, floating_base: bool | None = None):
 def _compile(mujoco, path: Path, floating_base):
     try:
         text = _strip_roverimpact(path)
-        if text is None:
+        if text is None and path.suffix.lower() == ".xml":
             spec = mujoco.MjSpec.from_file(str(path))
-        else:
-            spec = mujoco.MjSpec.from_string(text)
+        else:  # without roverimpact's elements, or a ".mjcf" file (MuJoCo's file reader
+            # picks its decoder by the suffix): from the text, its includes handed over
+            if text is None:
+                text = path.read_text()
+            spec = mujoco.MjSpec.from_string(text, include=_include_files(text, path.parent)
+                                             or None)
             spec.modelfiledir = str(path.parent) + "/"
         if floating_base:
             tops = [b for b in spec.worldbody.bodies]
