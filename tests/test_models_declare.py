@@ -204,3 +204,28 @@ def test_a_declared_spin_joint_must_be_a_hinge_carrying_the_wheel():
     sc = _spec({"front": {"frame": "front_tire", "spin": "wheel_front"},
                 "rear": {"frame": "rear_wheel"}})
     assert {w.name: w.spin for w in make_model(sc.model).wheels}["front"] == "wheel_front"
+
+
+def test_a_ball_joint_in_the_root_chain_is_a_fixed_base(tmp_path):
+    """An arm whose third joint from the root is a ball joint (no axis): a fixed base (it
+    crashed with numpy's ValueError in detect_base); the point hit 0.65 m from the first
+    hinge, turning at 1 rad/s, approaches at 0.65 m/s."""
+    from roverimpact import load_robot
+    from roverimpact.models.declare import detect_base
+    from roverimpact.scenario import ImpactSetup
+
+    xml = tmp_path / "arm_ball.xml"
+    xml.write_text(
+        '<mujoco model="arm_ball"><worldbody><body name="l1">'
+        '<joint name="j1" type="hinge" axis="0 0 1"/>'
+        '<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>'
+        '<body name="l2" pos="0.3 0 0"><joint name="j2" type="hinge" axis="0 1 0"/>'
+        '<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>'
+        '<body name="hand" pos="0.3 0 0"><joint name="wrist" type="ball"/>'
+        '<geom type="box" size="0.05 0.05 0.05"/></body></body></body></worldbody></mujoco>')
+    assert detect_base(load_robot(xml).model).kind == "fixed"
+    sc = Scenario.model_validate({
+        "model": {"file": str(xml)}, "velocity": {"joints": {"j1": 1.0}},
+        "obstacle": {"frame": "hand", "point": [0.05, 0.0, 0.0], "normal": [0.0, -1.0, 0.0]}})
+    assert float(ImpactSetup.from_scenario(sc).partition().v_n) == pytest.approx(0.65,
+                                                                               rel=1e-12)

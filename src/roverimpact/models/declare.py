@@ -105,10 +105,9 @@ def detect_base(model) -> BaseInfo:
     if model.njoints > 1 and _short(model, 1) == "FreeFlyer":
         return BaseInfo("floating", (model.names[1],))
     if model.njoints > 3 and [model.parents[j] for j in (1, 2, 3)] == [0, 1, 2]:
-        try:
-            ax = [_world_axis(model, j) for j in (1, 2, 3)]
-        except TypeError:  # a joint without an axis
+        if any(_axis(model, j) is None for j in (1, 2, 3)):  # a ball, a free joint, ...
             return BaseInfo("fixed")
+        ax = [_world_axis(model, j) for j in (1, 2, 3)]
         want = (np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]),
                 np.array([0.0, 1.0, 0.0]))
         kinds = (_is_prismatic(model, 1), _is_prismatic(model, 2), _is_revolute(model, 3))
