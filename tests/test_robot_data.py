@@ -51,3 +51,14 @@ def test_load_robot_takes_both_spellings():
     np.testing.assert_array_equal(Ma, pin.crba(b, b.createData(), q))
     with pytest.raises(ri.ModelError, match="no such URDF/MJCF file"):
         ri.load_robot("/nonexistent.urdf")
+
+
+def test_stems_of_urdfs_kept_under_robots_folders():
+    """The docstring's own example, "solo", and the other URDFs the package keeps under
+    ``<robot>_description/robots/`` (solo12, tiago, kinova, talos_*) are found by stem (only
+    ``*/urdf/`` was searched)."""
+    for name in ("solo", "solo12", "kinova"):
+        path = example_robot_urdf(name)
+        assert path.name == f"{name}.urdf" and path.parent.name == "robots"
+    model = ri.load_robot("erd:solo").model
+    assert model.nv >= 8

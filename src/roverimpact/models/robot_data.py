@@ -90,7 +90,7 @@ def example_robot_urdf(name: str) -> Path:
     path = root / ROBOTS.get(name, name.lstrip("/"))
     if path.is_file():
         return path
-    for pattern in (f"*/urdf/{name}.urdf", f"*/urdf/{name}_robot.urdf"):
+    for pattern in (f"*/urdf/{name}.urdf", f"*/robots/{name}.urdf", f"*/urdf/{name}_robot.urdf"):
         hits = sorted(root.glob(pattern))
         if hits:
             return hits[0]
