@@ -240,6 +240,19 @@ def test_bad_files(tmp_path):
         ri.ImpactSetup.from_scenario(sc(ROVER2D, model={"params": {"wheel_mass": -2.0}}))
     with pytest.raises(ModelError, match="wheel_radius"):
         ri.ImpactSetup.from_scenario(sc(RB, model={"params": {"wheel_radius": -0.1}}))
+    # parameters of any sign, and switches: a string or None is one ModelError (numpy's
+    # TypeError escaped), the string "false" is not false (it built a middle wheel)
+    for model, match in (
+            ({"params": {"com_x": "0.05 m"}}, r"com_x must be a finite number, got '0\.05 m' "
+                                              r"\(write a plain number in SI units\)"),
+            ({"params": {"middle_wheel": "false"}}, "middle_wheel must be true or false"),
+    ):
+        with pytest.raises(ModelError, match=match):
+            ri.ImpactSetup.from_scenario(sc(ROVER2D, model=model))
+    with pytest.raises(ModelError, match="front_x must be a finite number"):
+        ri.ImpactSetup.from_scenario(sc(RB, model={"params": {"front_x": "0.3"}}))
+    with pytest.raises(ModelError, match="chassis_com_above_pivot must be a finite number"):
+        rocker_bogie(chassis_com_above_pivot=None)
 
 
 def test_held_rows_heavier_than_the_vehicle_warn():

@@ -31,6 +31,28 @@ def check_positive(params: object, names: tuple[str, ...], *, allow_zero: tuple[
             raise ModelError(f"{cls}.{name} must be a finite number {rel}, got {val!r}")
 
 
+def check_finite(params: object, names: tuple[str, ...]):
+    """Raise :class:`ModelError` if one of ``params.<name>`` is not a finite number (any
+    sign)."""
+    cls = type(params).__name__
+    for name in names:
+        val = getattr(params, name)
+        if (isinstance(val, bool) or not isinstance(val, (int, float, np.floating, np.integer))
+                or not np.isfinite(val)):
+            hint = " (write a plain number in SI units)" if isinstance(val, str) else ""
+            raise ModelError(f"{cls}.{name} must be a finite number, got {val!r}{hint}")
+
+
+def check_bool(params: object, names: tuple[str, ...]):
+    """Raise :class:`ModelError` if one of ``params.<name>`` is not a bool (the string
+    "false" is not False)."""
+    cls = type(params).__name__
+    for name in names:
+        val = getattr(params, name)
+        if not isinstance(val, (bool, np.bool_)):
+            raise ModelError(f"{cls}.{name} must be true or false, got {val!r}")
+
+
 def diag3(a, b, c) -> np.ndarray:
     """Diagonal 3 x 3 matrices ``diag(a, b, c)`` (..., 3, 3) of numbers or arrays (one
     matrix per item of a batch of parameters; for numbers, ``np.diag([a, b, c])``)."""

@@ -42,6 +42,7 @@ from ._build import (
     LinearLoopClosure,
     add_bodies,
     box_inertia,
+    check_finite,
     check_positive,
     rod_inertia,
     wheel_inertia,
@@ -101,9 +102,7 @@ class RockerBogieParams:
 
     def __post_init__(self):
         check_positive(self, _POSITIVE, allow_zero=())
-        for name in _FINITE:
-            if not np.isfinite(getattr(self, name)):
-                raise ModelError(f"RockerBogieParams.{name} must be finite")
+        check_finite(self, _FINITE)
         if not _axles_ordered(self):
             raise ModelError(
                 "RockerBogieParams needs rear_x < middle_x < front_x, got "

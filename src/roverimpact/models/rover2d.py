@@ -49,7 +49,15 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelError
-from ._build import add_body, box_inertia, check_positive, rod_inertia, wheel_inertia
+from ._build import (
+    add_body,
+    box_inertia,
+    check_bool,
+    check_finite,
+    check_positive,
+    rod_inertia,
+    wheel_inertia,
+)
 from .base import MultibodyModel, Wheel
 
 __all__ = ["Rover2DParams", "rover2d"]
@@ -117,8 +125,8 @@ class Rover2DParams:
             "chassis_length", "chassis_height", "chassis_width", "rocker_mass",
             "rocker_pivot_height", "strut_mass",
         ))
-        if not np.isfinite(self.com_x):
-            raise ModelError(f"Rover2DParams.com_x must be finite, got {self.com_x!r}")
+        check_finite(self, ("com_x",))
+        check_bool(self, ("middle_wheel",))
         if self.suspension not in ("rigid", "rocker", "prismatic"):
             raise ModelError(
                 f"Rover2DParams.suspension must be 'rigid', 'rocker' or 'prismatic', "
