@@ -244,7 +244,9 @@ class ImpactSetup:
             normals, v = ground_on_terrain(mbm, terrain, q, v, ground=ground, spec=ts,
                                            follow=follow and not ts.pose,
                                            loop_rows=scenario.contacts.loop_closure)
-        if scenario.contacts.loops and scenario.contacts.loop_closure:
+        if scenario.contacts.loop_closure and mbm.loop_closure is not None:
+            if not scenario.contacts.loops:  # declared loops are checked where attached
+                _check_loop_closed(mbm, q)
             _check_loop_rates(mbm, q, v)
         return cls.from_state(mbm, q, v, obstacle=scenario.obstacle,
                               contacts=scenario.contacts, constraints=scenario.constraints,
@@ -396,6 +398,30 @@ def make_model(spec: ModelSpec, base_dir: str | Path | None = None, *,
                                            lp.frame_b, tuple(lp.point_b), lp.length)
                                  for lp in loops], q_ref)
     return mbm
+
+
+def _loop_joints(mbm, row) -> list[str]:
+    """Names of the joints a loop-closure row ``row`` (nv,) involves."""
+    model = mbm.model
+    cols = set(np.flatnonzero(np.abs(row) > 1e-12 * max(np.abs(row).max(), 1e-300)).tolist())
+    return [model.names[j] for j in range(1, model.njoints)
+            if cols & set(range(model.joints[j].idx_v,
+                                model.joints[j].idx_v + model.joints[j].nv))]
+
+
+def _check_loop_closed(mbm, q, atol: float = 1e-9) -> None:
+    """Refuse a configuration whose joint values open a built-in closed loop (the
+    rocker-bogie's differential: one rocker turned, the other not), named by loop row;
+    the loop-closure rows would otherwise hold a mechanism that cannot be assembled."""
+    phi, J = mbm.loop_closure(q)
+    bad = np.flatnonzero(np.abs(phi) > atol)
+    if bad.size:
+        i = int(bad[0])
+        raise ConfigError(
+            f"configuration: the joint values open the loop {mbm.loop_names[i]!r} by "
+            f"{abs(float(phi[i])):.3g} (rad or m); its joints {_loop_joints(mbm, J[i])} move "
+            "together: set them all, to values that close it (the rocker-bogie's "
+            "differential turns its rockers by opposite angles)")
 
 
 def _check_loop_rates(mbm, q, v, rtol: float = 1e-6) -> None:
