@@ -145,7 +145,8 @@ def _scenario(tmp_path, phi1, xdot, w1, n_xz, with_coupler, **over):
     return ri.Scenario.model_validate(raw)
 
 
-CASES = [(-1.0, 0.3, 1.5, 20.0), (-0.4, -0.2, 2.0, 70.0), (-2.0, 0.5, -1.0, 135.0),
+# each normal faces the motion of the point hit (v_n > 0): a receding point is no impact
+CASES = [(-1.0, 0.3, 1.5, 200.0), (-0.4, -0.2, 2.0, 70.0), (-2.0, 0.5, -1.0, 135.0),
          (-1.3, 0.0, 0.8, 250.0)]
 
 
@@ -156,6 +157,7 @@ def test_loop_equals_hand_elimination(tmp_path, with_coupler, phi1, xdot, w1, no
     m_ref, T_ref = by_hand(phi1, xdot, w1, n_xz, with_coupler)
     sc = _scenario(tmp_path, phi1, xdot, w1, n_xz, with_coupler)
     en = ri.energy_of(sc)
+    assert float(en.v_n) > 0
     assert float(en.m_eff) == pytest.approx(m_ref, rel=1e-9)
     assert float(en.T_c_minus) == pytest.approx(T_ref, rel=1e-9)
     # and the whole kinetic energy, from the same hand model

@@ -31,7 +31,7 @@ from .base import MultibodyModel, Wheel
 from .constraints import point_jacobian
 
 __all__ = ["BaseInfo", "FrameLoop", "attach_frame_loops", "base_info", "declare_wheels",
-           "detect_base"]
+           "detect_base", "joint_axis"]
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,7 @@ def _short(model, j: int) -> str:
     return model.joints[j].shortname().removeprefix("JointModel")
 
 
-def _axis(model, j: int) -> np.ndarray | None:
+def joint_axis(model, j: int) -> np.ndarray | None:
     """Unit axis (in the joint frame) of a 1-DoF prismatic/revolute joint, else None."""
     s = _short(model, j)
     if s in ("PX", "RX"):
@@ -79,7 +79,8 @@ def _is_prismatic(model, j):
 
 
 def _is_revolute(model, j):
-    return model.joints[j].nv == 1 and not _is_prismatic(model, j) and _axis(model, j) is not None
+    return (model.joints[j].nv == 1 and not _is_prismatic(model, j)
+            and joint_axis(model, j) is not None)
 
 
 def _world_axis(model, j: int) -> np.ndarray:
@@ -93,7 +94,7 @@ def _world_axis(model, j: int) -> np.ndarray:
         k = model.parents[k]
     for k in reversed(chain):
         R = R @ model.jointPlacements[k].rotation
-    return R @ _axis(model, j)
+    return R @ joint_axis(model, j)
 
 
 def detect_base(model) -> BaseInfo:
@@ -105,7 +106,7 @@ def detect_base(model) -> BaseInfo:
     if model.njoints > 1 and _short(model, 1) == "FreeFlyer":
         return BaseInfo("floating", (model.names[1],))
     if model.njoints > 3 and [model.parents[j] for j in (1, 2, 3)] == [0, 1, 2]:
-        if any(_axis(model, j) is None for j in (1, 2, 3)):  # a ball, a free joint, ...
+        if any(joint_axis(model, j) is None for j in (1, 2, 3)):  # a ball, a free joint, ...
             return BaseInfo("fixed")
         ax = [_world_axis(model, j) for j in (1, 2, 3)]
         want = (np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]),
@@ -214,7 +215,7 @@ def declare_wheels(mbm: MultibodyModel, specs: dict) -> None:
                 # the spin axis in the wheel frame: joint axis mapped by the frame placement
                 R = model.frames[fid].placement.rotation if model.frames[fid].parentJoint == sj \
                     else np.eye(3)
-                axis = tuple(float(x) for x in R.T @ _axis(model, sj))
+                axis = tuple(float(x) for x in R.T @ joint_axis(model, sj))
             else:
                 axis = (0.0, 1.0, 0.0)
         radius = sp.radius

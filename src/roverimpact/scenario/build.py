@@ -603,13 +603,13 @@ def _rolling_sign(mbm, data, q, spin: str, heading) -> float:
     written about -y. 1 when the wheel does not roll along the heading (a vertical axis, an
     axis along the heading) or ``spin`` is not a plain hinge. ``data`` holds the joint
     placements at ``q`` (``pin.forwardKinematics``)."""
-    from ..models.declare import _axis
+    from ..models.declare import joint_axis
 
     model = mbm.model
     j = model.getJointId(spin)
     if j >= model.njoints or model.joints[j].nv != 1:
         return 1.0
-    a = _axis(model, j)
+    a = joint_axis(model, j)
     if a is None:
         return 1.0
     w = data.oMi[j].rotation @ a
