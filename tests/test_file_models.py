@@ -241,3 +241,38 @@ def test_builtin_rover_as_plain_urdf_equals_the_builtin(tmp_path, name, wheel):
     e_file, e_builtin = ri.sweep_energy(s_file, beta), ri.sweep_energy(s_builtin, beta)
     np.testing.assert_allclose(e_file.T_c_minus, e_builtin.T_c_minus, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(e_file.m_eff, e_builtin.m_eff, rtol=1e-12)
+
+
+def test_urdf_numbers_urdfdom_would_drop_and_massless_joints(tmp_path):
+    """A <mass value="8,0"> (a decimal comma) or "nan" is one ModelError naming the link:
+    urdfdom dropped the whole <inertial> and the model was built without it, silently (a
+    safety analysis then reported 1 kg of moving parts for 3.5). An <origin xyz> of two
+    numbers likewise. A revolute joint whose link has no <inertial> moves no mass: one
+    ModelError naming it (numpy's LinAlgError escaped from `safety arm`)."""
+    from roverimpact import load_robot
+    from roverimpact.exceptions import ModelError
+
+    def arm(mass="2.5", xyz="0.4 0 0", tip_inertial=True):
+        inertial = ('<inertial><origin xyz="0.2 0 0"/><mass value="{m}"/><inertia ixx="0.01" '
+                    'iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>')
+        tip = inertial.format(m="1.0") if tip_inertial else ""
+        p = tmp_path / "arm.urdf"
+        p.write_text(
+            f'<robot name="arm"><link name="base"/><link name="l1">{inertial.format(m=mass)}'
+            '</link><joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>'
+            '<axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+            f'<link name="l2">{tip}</link><joint name="j2" type="revolute"><parent link="l1"/>'
+            f'<child link="l2"/><origin xyz="{xyz}"/><axis xyz="0 0 1"/>'
+            '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint></robot>')
+        return p
+
+    mbm = load_robot(arm())
+    assert sum(mbm.model.inertias[j].mass for j in range(1, mbm.model.njoints)) == 3.5
+    for kw, match in (({"mass": "2,5"}, r"link 'l1': <mass value=\"2,5\"> must be a finite "
+                                        r"number \(a decimal point, not a comma"),
+                      ({"mass": "nan"}, r"link 'l1': <mass value=\"nan\">"),
+                      ({"xyz": "0.4 0"}, r"joint 'j2': <origin xyz=\"0.4 0\"> must be 3 "
+                                         "finite numbers"),
+                      ({"tip_inertial": False}, r"joints \['j2'\] move no mass")):
+        with pytest.raises(ModelError, match=match):
+            load_robot(arm(**kw))

@@ -282,6 +282,58 @@ def _parser_stderr(lines: list[str]):
 
 
 
+#: The numbers of a URDF that its dynamics depend on: element -> attributes, and how many
+#: numbers each holds. urdfdom drops an <inertial> whose <mass value="8,0"> it cannot read
+#: and builds the model without it, silently.
+_URDF_NUMBERS = {"mass": {"value": 1},
+                 "inertia": {k: 1 for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")},
+                 "origin": {"xyz": 3, "rpy": 3}, "axis": {"xyz": 3},
+                 "mimic": {"multiplier": 1, "offset": 1}}
+
+
+def _check_urdf_numbers(root, path: Path) -> None:
+    """One ModelError naming the link or joint, the element and the value for a number of
+    a link's <inertial> or of a joint (origin, axis, mimic) that is not a finite number."""
+    for kind in ("link", "joint"):
+        for owner in root.iter(kind):
+            scope = owner.find("inertial") if kind == "link" else owner
+            if scope is None:
+                continue
+            for el in scope:
+                for attr, count in _URDF_NUMBERS.get(el.tag, {}).items():
+                    raw = el.get(attr)
+                    if raw is None:
+                        continue
+                    try:
+                        vals = [float(x) for x in raw.split()]
+                        ok = len(vals) == count and all(np.isfinite(vals))
+                    except ValueError:
+                        ok = False
+                    if not ok:
+                        raise ModelError(
+                            f"{path}: {kind} {owner.get('name')!r}: <{el.tag} {attr}="
+                            f"\"{raw}\"> must be "
+                            f"{f'{count} finite numbers' if count > 1 else 'a finite number'}"
+                            " (a decimal point, not a comma; SI units)")
+
+
+def _check_moving_mass(model, path: Path) -> None:
+    """One ModelError naming the joints that move no mass (their links and every link
+    they carry have no <inertial>): their column of M is zero, so M is singular at every
+    configuration and no impact of the model can be analysed."""
+    M = pin.crba(model, model.createData(), pin.neutral(model))
+    d = np.diag(M)
+    floor = len(d) * np.finfo(np.float64).eps * max(float(np.abs(d).max()), 1e-300)
+    dead = [model.names[j] for j in range(1, model.njoints)
+            if any(d[k] <= floor for k in range(model.joints[j].idx_v,
+                                                 model.joints[j].idx_v + model.joints[j].nv))]
+    if dead:
+        raise ModelError(
+            f"{path}: joints {dead} move no mass (the links they carry have no <inertial>, "
+            "or no inertia about the joint): M is singular; give those links a mass and "
+            "inertia, or make the joints fixed")
+
+
 def _urdf_mimic(root) -> list[list]:
     """``[[joint, leader, multiplier, offset], ...]`` of the URDF's ``<mimic>`` elements."""
     out = []
@@ -367,6 +419,7 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
     else:
         if meta["root"] != "robot":
             raise ModelError(f"{path}: not a URDF file (root element <{meta['root']}>)")
+        _check_urdf_numbers(meta["element"], path)
         args = (str(path), pin.JointModelFreeFlyer()) if floating else (str(path),)
         parser_said: list[str] = []
         try:
@@ -400,6 +453,8 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
             extra["mimic"] = mimic
     if model.nv == 0:
         raise ModelError(f"{path}: the model has no degree of freedom")
+    if suffix == ".urdf":
+        _check_moving_mass(model, path)
     masses = [model.inertias[j].mass for j in range(1, model.njoints)]
     if any(m < 0 for m in masses):
         raise ModelError(f"{path}: a body has negative mass")
