@@ -6,6 +6,7 @@ import os
 import sys
 import tempfile
 import zipfile
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -86,6 +87,50 @@ def check_writable(path: str | Path, *, folder: bool, option: str | None = "-o",
     return path
 
 
+@contextmanager
+def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[str, ...],
+                  what: str):
+    """Write a command's outputs into a new folder beside ``out_dir`` and put them in place
+    only when all of them are written: yields that folder.
+
+    ``out_dir`` may be missing, empty (dot files aside), or hold a previous output of the
+    same command: its ``signature`` files, and nothing but files matching the glob
+    patterns ``owned``; those are replaced as a whole (no file of an earlier run is left
+    beside the new ones). A folder holding anything else is refused before any work, with
+    one ConfigError naming what it holds (``-o .`` next to the input files). An
+    interrupted or failed run removes its staging folder and leaves ``out_dir`` as it
+    was."""
+    import fnmatch
+    import shutil
+
+    out_dir = Path(out_dir)
+    if out_dir.is_dir():
+        entries = [p.name for p in out_dir.iterdir() if not p.name.startswith(".")]
+        ours = entries and all((out_dir / f).exists() for f in signature)
+        foreign = [e for e in entries
+                   if not (ours and any(fnmatch.fnmatch(e, pat) for pat in owned))]
+        if foreign:
+            shown = ", ".join(sorted(foreign)[:4]) + (", ..." if len(foreign) > 4 else "")
+            raise ConfigError(
+                f"{out_dir} holds files that are not the outputs of a previous {what} run "
+                f"({shown}); choose a new or empty folder (nothing was written)")
+    near = out_dir.parent  # the nearest existing folder: nothing is created on the way
+    while not near.is_dir() and near != near.parent:
+        near = near.parent
+    stage = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.partial-", dir=near))
+    try:
+        yield stage
+        out_dir.mkdir(parents=True, exist_ok=True)
+        for old in out_dir.iterdir():
+            if not old.name.startswith(".") and any(fnmatch.fnmatch(old.name, pat)
+                                                    for pat in owned):
+                shutil.rmtree(old) if old.is_dir() else old.unlink()
+        for new in stage.iterdir():
+            os.replace(new, out_dir / new.name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
 def load_system(path: str | Path) -> dict[str, np.ndarray]:
     """Load ``M``, ``A``, ``v`` (and optional ``restitution``, ``persistent``) from a file.
 
@@ -131,4 +176,12 @@ def load_system(path: str | Path) -> dict[str, np.ndarray]:
             raise
         except (TypeError, ValueError):
             raise ConfigError(f"{path}: {k} is not a (rectangular) array of numbers") from None
+    names = out.get("names")
+    if names is not None:
+        names = np.asarray(names)
+        n = np.shape(out["v"])[-1] if np.ndim(out["v"]) else 1
+        if names.ndim != 1 or names.dtype.kind not in "UO" or len(names) != n:
+            raise ConfigError(f"{path}: names must be a list of {n} strings, one per "
+                              f"coordinate of v, got {out['names']!r}")
+        out["names"] = [str(x) for x in names]
     return out

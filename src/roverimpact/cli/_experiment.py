@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 
+from .._io import staged_folder
 from ._app import (
     app,
     check_output,
@@ -16,6 +17,11 @@ from ._app import (
     print_csv,
     print_json,
 )
+
+#: What an experiment run writes: a folder holding these and trials.csv + summary.json is
+#: a previous run, replaced by the next one
+EXPERIMENT_FILES = ("impacts.csv", "trials.csv", "failures.csv", "comparison.csv",
+                    "summary.json", "inputs_*", "overlay.png")
 
 #: The per-trial table: header (with unit) and column of ``ExperimentResult.trials`` (SI:
 #: the CSV gives the duration in s, the table in ms).
@@ -51,16 +57,19 @@ def experiment_cmd(
 
     check_output(outdir, folder=True)
     cfg, base = load_trials(trials)
-    result = run_experiment(cfg, base)
-    result.require_trials()
-    comparison = None
-    if cfg.model is not None:
-        comparison = compare_with_model(result.trials, scenario_model(cfg.model, base))
-    files = write_outputs(result, outdir, comparison=comparison, trials_path=trials)
-    if not no_plot:
-        from ..report.experiment import plot_overlay
+    with staged_folder(outdir, EXPERIMENT_FILES, ("trials.csv", "summary.json"),
+                       "experiment") as work:
+        result = run_experiment(cfg, base)
+        result.require_trials()
+        comparison = None
+        if cfg.model is not None:
+            comparison = compare_with_model(result.trials, scenario_model(cfg.model, base))
+        files = write_outputs(result, work, comparison=comparison, trials_path=trials)
+        if not no_plot:
+            from ..report.experiment import plot_overlay
 
-        files["plot"] = plot_overlay(result.trials, comparison, Path(outdir) / "overlay.png")
+            files["plot"] = plot_overlay(result.trials, comparison, work / "overlay.png")
+    files = {k: Path(outdir) / Path(p).name for k, p in files.items()}
 
     df = result.trials
     if as_json:

@@ -7,7 +7,13 @@ from pathlib import Path
 
 import typer
 
+from .._io import staged_folder
 from ._app import app, check_output, compile_ahead, console, json_text, new_table, print_json
+
+#: What a simulate run writes (the scenario copied under its own name): a folder holding
+#: these and summary.json + config.json is a previous run, replaced by the next one
+SIMULATE_FILES = ("history.parquet", "history.csv", "summary.json", "config.json",
+                  "force_vs_time.png", "*.toml")
 
 
 def _compile_ahead() -> None:
@@ -46,28 +52,29 @@ def simulate_cmd(
         raise typer.BadParameter("use parquet or csv", param_hint="--format")
     check_output(outdir, folder=True)
     sc = load_scenario(file)
-    _compile_ahead()
-    cfg = SimulationConfig.from_scenario(sc, where=str(file))
-    model = scenario_model(sc)
-    result = simulate_scenario(sc, model=model, where=str(file), engine=engine)
-    outdir.mkdir(parents=True, exist_ok=True)
-    table = result.write(outdir / f"history.{fmt}")
-    summary = dict(result.summary())
-    summary |= {"engine": engine, "contact_whole_window": not result.separated,
-                "t_after": cfg.t_after, "A_rows": result.A_rows, "stats": result.stats,
-                "q_minus": result.q_minus, "v_minus": result.v_minus}
-    (outdir / "summary.json").write_text(json_text(summary))
-    (outdir / "config.json").write_text(json_text(cfg.model_dump(mode="json")
-                                                  | {"engine": engine}))
-    shutil.copyfile(file, outdir / Path(file).name)
-    if plot:
-        from ..report.simulation import plot_force_history
+    with staged_folder(outdir, SIMULATE_FILES, ("summary.json", "config.json"),
+                       "simulate") as work:
+        _compile_ahead()
+        cfg = SimulationConfig.from_scenario(sc, where=str(file))
+        model = scenario_model(sc)
+        result = simulate_scenario(sc, model=model, where=str(file), engine=engine)
+        table = outdir / result.write(work / f"history.{fmt}").name
+        summary = dict(result.summary())
+        summary |= {"engine": engine, "contact_whole_window": not result.separated,
+                    "t_after": cfg.t_after, "A_rows": result.A_rows, "stats": result.stats,
+                    "q_minus": result.q_minus, "v_minus": result.v_minus}
+        (work / "summary.json").write_text(json_text(summary))
+        (work / "config.json").write_text(json_text(cfg.model_dump(mode="json")
+                                                    | {"engine": engine}))
+        shutil.copyfile(file, work / Path(file).name)
+        if plot:
+            from ..report.simulation import plot_force_history
 
-        law = build_system(model, cfg).planes[-1].law
-        plot_force_history(result, outdir / "force_vs_time.png", law=law,
-                           title=f"{model.name}: beta = {cfg.beta_deg:g} deg, "
-                                 f"u = {cfg.speed:g} m/s"
-                                 + (" (MuJoCo)" if in_mujoco else ""))
+            law = build_system(model, cfg).planes[-1].law
+            plot_force_history(result, work / "force_vs_time.png", law=law,
+                               title=f"{model.name}: beta = {cfg.beta_deg:g} deg, "
+                                     f"u = {cfg.speed:g} m/s"
+                                     + (" (MuJoCo)" if in_mujoco else ""))
     if as_json:
         print_json(summary)
         return

@@ -10,9 +10,11 @@ from pathlib import Path
 
 import typer
 
+from .._io import staged_folder
 from ._app import (
     app,
     bold,
+    check_output,
     compile_ahead,
     compiles_here,
     console,
@@ -66,6 +68,14 @@ def _compile_plan(config: Path, workers, scheduler) -> tuple:
     return here if workers is None else (*here, *later)
 
 
+#: What a traverse run writes: a folder holding these and manifest.json + traverse.toml is
+#: a previous run, replaced by the next one
+TRAVERSE_FILES = ("poses.parquet", "wheels.parquet", "segments.parquet", "poses.csv",
+                  "wheels.csv", "segments.csv", "traverse.toml", "manifest.json",
+                  "map.png", "map.svg", "map-*.png", "map-*.svg", "speed.png", "speed.svg",
+                  "speed-*.png", "speed-*.svg", "report.html")
+
+
 @app.command("traverse")
 def traverse_cmd(
     config: Path = typer.Argument(..., help="Traverse file (TOML): terrain, path(s), rover, "
@@ -90,12 +100,17 @@ def traverse_cmd(
     from ..traverse.run import run_traverse
 
     now = _compile_plan(config, workers, scheduler)
-    with progress_bar(config.stem, unit="stations", to_stderr=as_json) as update:
-        compile_ahead(now=now)
-        res = run_traverse(config, out, workers=workers, scheduler=scheduler, csv=csv,
-                           progress=update,
-                           note=lambda text: err_console.print(f"note: {text}"))
-    path = traverse_report(out, config=res.config) if report else None
+    check_output(out, folder=True)
+    with staged_folder(out, TRAVERSE_FILES, ("manifest.json", "traverse.toml"),
+                       "traverse") as work:
+        with progress_bar(config.stem, unit="stations", to_stderr=as_json) as update:
+            compile_ahead(now=now)
+            res = run_traverse(config, work, workers=workers, scheduler=scheduler, csv=csv,
+                               progress=update,
+                               note=lambda text: err_console.print(f"note: {text}"))
+        path = traverse_report(work, config=res.config) if report else None
+    path = out / Path(path).name if path is not None else None
+    res.files = {k: out / Path(p).name for k, p in res.files.items()}
     table = summary(res.poses, res.wheels)
     if as_json:
         print_json({"summary": table.to_dict(orient="records"), "elapsed_s": res.elapsed,

@@ -1,0 +1,80 @@
+"""Output folders of simulate, experiment and traverse are written beside the target and
+put in place whole (roverimpact._io.staged_folder): a re-run replaces the previous run's
+files (none is left beside the new ones), a failed or interrupted run leaves the folder as
+it was, and a folder of the user's own files is refused before any work."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from roverimpact._io import staged_folder
+from roverimpact.cli import main
+from roverimpact.exceptions import ConfigError
+
+EX = Path(__file__).resolve().parents[1] / "examples"
+OWNED = ("table.parquet", "table.csv", "summary.json", "*.toml")
+SIGNATURE = ("summary.json",)
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def test_replaced_whole_or_left_as_it_was(tmp_path):
+    out = tmp_path / "a" / "b"
+    with staged_folder(out, OWNED, SIGNATURE, "test") as work:
+        assert not out.exists() and work.parent == tmp_path  # nothing made on the way
+        (work / "table.csv").write_text("1")
+        (work / "summary.json").write_text("{}")
+    assert _snapshot(out) == {"summary.json": b"{}", "table.csv": b"1"}
+    before = _snapshot(out)
+    for exc in (KeyboardInterrupt, ValueError):
+        with pytest.raises(exc), staged_folder(out, OWNED, SIGNATURE, "test") as work:
+            (work / "table.parquet").write_text("new")
+            (work / "summary.json").write_text('{"new": 1}')
+            raise exc
+        assert _snapshot(out) == before
+    with staged_folder(out, OWNED, SIGNATURE, "test") as work:
+        (work / "table.parquet").write_text("2")
+        (work / "summary.json").write_text("{}")
+    assert _snapshot(out) == {"summary.json": b"{}", "table.parquet": b"2"}  # no table.csv
+    assert [p.name for p in tmp_path.iterdir() if "partial" in p.name] == []
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(ConfigError, match=r"not the outputs of a previous test run "
+                                          r"\(notes\.txt\)"), \
+            staged_folder(out, OWNED, SIGNATURE, "test"):
+        pass
+    theirs = tmp_path / "theirs"
+    theirs.mkdir()
+    (theirs / "scenario.toml").write_text("x")  # owned by name, but no signature
+    with pytest.raises(ConfigError, match=r"scenario\.toml"), \
+            staged_folder(theirs, OWNED, SIGNATURE, "test"):
+        pass
+    (theirs / ".hidden").write_text("")  # dot files are not looked at
+    (theirs / "scenario.toml").unlink()
+    with staged_folder(theirs, OWNED, SIGNATURE, "test") as work:
+        (work / "summary.json").write_text("{}")
+    assert sorted(p.name for p in theirs.iterdir()) == [".hidden", "summary.json"]
+
+
+def test_experiment_rerun_replaces_its_outputs(tmp_path, capsys):
+    """The second run, without a model and without a plot, leaves no comparison.csv,
+    overlay.png or inputs of the first beside its own files (they were left before)."""
+    out = tmp_path / "eo"
+    assert main(["experiment", str(EX / "experiment" / "trials.toml"), "-o", str(out)]) == 0
+    first = {p.name for p in out.iterdir()}
+    assert {"comparison.csv", "overlay.png", "inputs_rover.toml"} <= first
+    text = (EX / "experiment" / "trials.toml").read_text()
+    i = text.index("[model]")
+    j = text.find("\n[", i + 1)
+    bare = tmp_path / "trials.toml"
+    bare.write_text(text[:i] + (text[j + 1:] if j > 0 else ""))
+    for f in (EX / "experiment").glob("*.csv"):
+        (tmp_path / f.name).write_bytes(f.read_bytes())
+    assert main(["experiment", str(bare), "-o", str(out), "--no-plot"]) == 0
+    second = {p.name for p in out.iterdir()}
+    assert "comparison.csv" not in second and "overlay.png" not in second
+    assert "inputs_rover.toml" not in second and "trials.csv" in second
+    capsys.readouterr()
