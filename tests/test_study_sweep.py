@@ -154,6 +154,42 @@ def test_interrupted_then_resumed_equals_serial(tmp_path):
         run_study(other, tmp_path / "r", evaluator=ev3, resume=True)
 
 
+def test_a_folder_of_other_files_is_refused_and_overwrite_leaves_no_stale_table(tmp_path):
+    """A folder holding files but no study (``-o .`` beside the study file) is refused
+    before any work, whatever the flags: the study file there was replaced by its
+    normalised copy, and a report.html of the user's overwritten. --overwrite of a study
+    folder removes the discarded study's table and report first: interrupted, it leaves
+    no table of the old study beside the new study file (``report`` then showed the old
+    results as current)."""
+    user = tmp_path / "mine"
+    user.mkdir()
+    (user / "study.toml").write_text("# my notes\n")
+    (user / "report.html").write_text("mine")
+    for kw in ({}, {"overwrite": True}, {"resume": True}):
+        with pytest.raises(ConfigError, match="holds files but no study results"):
+            run_study(_study(), user, evaluator=ScenarioEvaluator(), **kw)
+    assert (user / "study.toml").read_text() == "# my notes\n"
+    assert sorted(p.name for p in user.iterdir()) == ["report.html", "study.toml"]
+    out = tmp_path / "r"
+    run_study(_study(chunk_size=4), out, evaluator=ScenarioEvaluator())
+    from roverimpact.report import build_report
+
+    build_report(out)
+    assert (out / "results.parquet").is_file() and (out / "report.html").is_file()
+
+    def stop(done, total):
+        raise KeyboardInterrupt
+
+    other = _study(chunk_size=4)
+    other["grid"]["model.params.com_height"] = [0.1]
+    with pytest.raises(KeyboardInterrupt):
+        run_study(other, out, evaluator=ScenarioEvaluator(), overwrite=True, progress=stop)
+    for name in ("results.parquet", "report.html", "stats.json", "figure.png"):
+        assert not (out / name).exists(), name
+    with pytest.raises(ConfigError):
+        load_results(out)
+
+
 def test_resumed_with_a_cluster_never_reads_a_damaged_chunk(tmp_path):
     """With a cluster the results table is written while chunks come in: on resume a
     damaged chunk file of the earlier run is recomputed and only then read (a one-worker

@@ -24,7 +24,7 @@ from importlib import resources
 from pathlib import Path
 
 from .._io import read_toml
-from ..exceptions import ConfigError
+from ..exceptions import ConfigError, StudyInterrupted
 from .config import study_from_dict
 from .executors import LazyCluster
 from .store import MANIFEST
@@ -135,5 +135,10 @@ def run_builtin_studies(
             cluster = stack.enter_context(LazyCluster(workers))   # started when worth it
         for stem, study in studies:
             cb = (lambda d, t, s=stem: progress(s, d, t)) if progress else None
-            run_study(study, out_dir / stem, overwrite=True, scheduler=scheduler, progress=cb,
-                      cluster=cluster, note=note)
+            try:
+                run_study(study, out_dir / stem, overwrite=True, scheduler=scheduler,
+                          progress=cb, cluster=cluster, note=note)
+            except StudyInterrupted:  # its "--resume" advice is the sweep command's
+                raise StudyInterrupted(
+                    f"interrupted in study {stem}; {out_dir} is incomplete: run the same "
+                    "`roverimpact reproduce` command again to recompute it") from None

@@ -54,6 +54,11 @@ RESULTS = "results.parquet"
 MANIFEST = "manifest.json"
 STUDY_COPY = "study.toml"
 CHUNKS = "chunks"
+#: What is made from a study's chunks (the results table, the report and its figures,
+#: a trust map): ``--overwrite`` removes them before the new run, so that an interrupted
+#: one leaves no table of the discarded study beside the new study file
+DERIVED = (RESULTS, "results.csv", "stats.json", "report.html", "figure.png", "figure.svg",
+           "trust.parquet", "trust_map.png", "trust_map.svg")
 
 
 def check_out_dir(out_dir: Path) -> None:

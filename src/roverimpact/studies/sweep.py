@@ -43,6 +43,7 @@ from .executors import (
 )
 from .store import (
     CHUNKS,
+    DERIVED,
     MANIFEST,
     RESULTS,
     STUDY_COPY,
@@ -418,7 +419,17 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
                 f"{out_dir} already holds study results; pass --resume to continue them "
                 "or --overwrite to discard them, or choose another folder"
             )
+    elif out_dir.is_dir():
+        entries = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+        if entries:  # -o . beside the study file, a folder of the user's own files
+            shown = ", ".join(entries[:4]) + (", ..." if len(entries) > 4 else "")
+            raise ConfigError(
+                f"{out_dir} holds files but no study results (no {MANIFEST}: {shown}); "
+                "choose a new or empty folder (nothing was written)")
     chunk_dir = out_dir / CHUNKS
+    if overwrite and manifest_path.is_file():
+        for name in DERIVED:
+            (out_dir / name).unlink(missing_ok=True)
     if overwrite and chunk_dir.is_dir():
         for f in chunk_dir.glob("*.parquet"):
             f.unlink()
