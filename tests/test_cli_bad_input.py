@@ -77,6 +77,17 @@ def _write_inputs(d: Path) -> None:
                        '<parent link="a"/><child link="b"/></joint></robot>\n',
         "notxml.urdf": "not xml at all",
         "robot.stl": "solid x",
+        "comma.urdf": '<robot name="x"><link name="a"/><link name="b"><inertial>'
+                      '<mass value="2,5"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" '
+                      'iyz="0"/></inertial></link><joint name="j" type="revolute"><parent '
+                      'link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" '
+                      'upper="1" effort="1" velocity="1"/></joint></robot>\n',
+        "massless.urdf": '<robot name="x"><link name="a"/><link name="b"/><joint name="j" '
+                         'type="revolute"><parent link="a"/><child link="b"/><axis '
+                         'xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/>'
+                         '</joint></robot>\n',
+        "names.toml": 'M = [[1.0, 0.0], [0.0, 1.0]]\nA = [[1.0, 0.0]]\nv = [1.0, 0.0]\n'
+                      'names = ["a", "b", "c"]\n',
         # trials (experiment)
         "trials_gain.toml": TRIALS.replace("250.0,", "-250.0,"),
         "trials_gains_len.toml": TRIALS.replace("    250.0,\n", ""),
@@ -232,6 +243,8 @@ CASES = [
     ("partition-unknown-option", [P, "{ex}/rod_on_ledge.toml", "--bogus"], [], "--bogus",
      None),
     ("partition-no-file", [P], [], "Missing argument", None),
+    ("partition-names", [P, "{d}/names.toml", "--csv"], [], "names must be a list of 2",
+     None),
     # energy
     ("energy-missing", ["energy", "{d}/nope.toml"], [], "no such file", None),
     ("energy-beta", ["energy", "{d}/beta120.toml"], [], "beta_deg", None),
@@ -338,6 +351,19 @@ CASES = [
     ("safety-regions-payload", ["safety", "regions", "--robot-mass", "20", "--payload",
                                 "nan"], [], "--payload", None),
     ("safety-unknown", ["safety", "nope"], [], "nope", None),
+    ("safety-arm-decimal-comma", ["safety", "arm", "{d}/comma.urdf"], [], "decimal point",
+     None),
+    ("safety-arm-massless", ["safety", "arm", "{d}/massless.urdf"], [], "move no mass",
+     None),
+    # a folder of the user's own files as the output folder (-o . beside the inputs)
+    ("simulate-foreign-folder", ["simulate", "{ex}/simulate_rover2d.toml", "-o",
+                                 "{o}/exists"], ["{o}/exists"], "keep.txt", "exists"),
+    ("experiment-foreign-folder", ["experiment", "{ex}/experiment/trials.toml", "-o",
+                                   "{o}/exists"], ["{o}/exists"], "keep.txt", "exists"),
+    ("traverse-foreign-folder", ["traverse", "{d}/trav_good.toml", "-o", "{o}/exists"],
+     ["{o}/exists"], "keep.txt", "exists"),
+    ("sweep-foreign-folder", ["sweep", "{ex}/study_rigid_body.toml", "-o", "{o}/exists",
+                              "--overwrite"], ["{o}/exists"], "no study results", "exists"),
     # sweep
     ("sweep-missing", ["sweep", "{d}/nope.toml", "-o", "{o}/r"], ["{o}/r"], "no such file",
      None),
