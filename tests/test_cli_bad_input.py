@@ -118,6 +118,9 @@ def _write_inputs(d: Path) -> None:
         "trav_wheel.toml": TRAV.replace("[drive]", "[contacts]\nwheels = ['nose']\n[drive]"),
         "trav_unit.toml": TRAV.replace("speed = 0.1 ", 'speed = "0.1 m/s" '),
         "trav_gravity.toml": TRAV.replace("[limits]\n", '[limits]\ngravity = "venus"\n'),
+        "trav_huge.toml": TRAV.replace("size = [44.0, 12.0]", "size = [80000.0, 60000.0]"),
+        "rb_unit.toml": "[model]\nname='rigid_body'\nparams={com_height='0.3 m'}\n"
+                        "[velocity]\nu=0.5\n[obstacle]\nframe='contact'\nbeta_deg=45\n",
         "trav_ground.toml": TRAV.replace("[limits]\n",
                                          "[limits]\nground_law = { name = 'hertz', k = -1 }\n"),
     }
@@ -442,6 +445,9 @@ CASES = [
      "unknown wheel", None),
     ("traverse-unit", ["traverse", "{d}/trav_unit.toml", "-o", "{o}/t"], ["{o}/t"],
      "plain number", None),
+    ("traverse-huge-terrain", ["traverse", "{d}/trav_huge.toml", "-o", "{o}/t"], ["{o}/t"],
+     "check the units of size and spacing", None),
+    ("energy-rigid-body-unit", ["energy", "{d}/rb_unit.toml"], [], "plain number", None),
     ("traverse-gravity", ["traverse", "{d}/trav_gravity.toml", "-o", "{o}/t"], ["{o}/t"],
      "gravity preset", None),
     ("traverse-ground-law", ["traverse", "{d}/trav_ground.toml", "-o", "{o}/t"], ["{o}/t"],

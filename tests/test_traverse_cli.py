@@ -105,6 +105,13 @@ def test_json_and_report_regeneration(short, tmp_path, capfd):
     assert main(["traverse-report", str(tmp_path / "j")]) == 0
     assert (tmp_path / "j" / "report.html").is_file()
     assert (tmp_path / "j" / "map.png").is_file()
+    # an edited copy of the traverse file that no longer parses: one error, exit 2 (a
+    # TOMLDecodeError traceback before)
+    (tmp_path / "j" / "traverse.toml").write_text("[terrain\n")
+    capfd.readouterr()
+    assert main(["traverse-report", str(tmp_path / "j")]) == 2
+    err = capfd.readouterr().err
+    assert "traverse.toml: malformed TOML" in err and "Traceback" not in err
 
 
 def test_dask_equals_serial(short, monkeypatch):

@@ -27,7 +27,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelError
-from ._build import add_body, check_positive
+from ._build import add_body, check_finite, check_positive
 from .base import MultibodyModel
 
 __all__ = ["RigidBodyParams", "rigid_body"]
@@ -56,10 +56,7 @@ class RigidBodyParams:
 
     def __post_init__(self):
         check_positive(self, ("mass", "inertia"))
-        for name in ("com_height", "lever"):
-            if not np.isfinite(getattr(self, name)):
-                raise ModelError(f"RigidBodyParams.{name} must be finite, got "
-                                 f"{getattr(self, name)!r}")
+        check_finite(self, ("com_height", "lever"))
 
 
 def rigid_body(params: RigidBodyParams | None = None, **overrides) -> MultibodyModel:

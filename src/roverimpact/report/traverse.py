@@ -282,7 +282,13 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
 
         if not text:
             raise ConfigError(f"{folder}: traverse.toml missing: cannot redraw the map")
-        config = traverse_from_dict(tomllib.loads(text), where=str(folder / "traverse.toml"))
+        try:
+            raw = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{folder / 'traverse.toml'}: malformed TOML ({exc}); it is the "
+                              "copy of the traverse file the run wrote: restore it, or run "
+                              "the traverse again") from None
+        config = traverse_from_dict(raw, where=str(folder / "traverse.toml"))
     if terrain is None:
         terrain = build_terrain(config.terrain)
     names = list(dict.fromkeys(poses["path"]))

@@ -70,6 +70,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 from pathlib import Path
 from typing import Any, Literal
 
@@ -97,6 +98,28 @@ def _finite_pair(v, what):
     if not all(math.isfinite(x) for x in v):
         raise ValueError(f"{what} must be finite, got {list(v)}")
     return v
+
+
+#: Memory a synthetic terrain takes while it is made, per grid point [bytes]: 34 measured
+#: (tracemalloc peak, examples/traverse_rocky.toml), with a margin
+TERRAIN_BYTES_PER_POINT = 40
+
+
+def _check_grid_memory(size, spacing: float) -> None:
+    """Refuse a synthetic terrain whose grid would not fit in half this machine's memory
+    (a unit slip: size in mm, or spacing in km), before any work."""
+    points = (size[0] / spacing + 1.0) * (size[1] / spacing + 1.0)
+    need = points * TERRAIN_BYTES_PER_POINT
+    try:
+        have = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):  # pragma: no cover - not POSIX
+        return
+    if need > 0.5 * have:
+        raise ValueError(
+            f"size {list(size)} m at spacing {spacing} m is a grid of {points:.3g} "
+            f"points, about {need / 2**30:.3g} GiB to make, more than half of this machine's "
+            f"{have / 2**30:.3g} GiB; check the units of size and spacing (m), or make the "
+            "terrain smaller or coarser")
 
 
 class TerrainSpec(StrictModel):
@@ -132,6 +155,7 @@ class TerrainSpec(StrictModel):
             if not self.d_min < self.d_max:
                 raise ValueError(f"terrain.d_min < d_max needed, got {self.d_min}, "
                                  f"{self.d_max}")
+            _check_grid_memory(self.size, self.spacing)
         else:
             if self.file is None:
                 raise ValueError("kind = 'file' needs terrain.file (.npy, .csv, .tif)")
