@@ -276,3 +276,7 @@ def test_urdf_numbers_urdfdom_would_drop_and_massless_joints(tmp_path):
                       ({"tip_inertial": False}, r"joints \['j2'\] move no mass")):
         with pytest.raises(ModelError, match=match):
             load_robot(arm(**kw))
+    zero_axis = arm().read_text().replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>', 1)
+    (tmp_path / "arm.urdf").write_text(zero_axis)
+    with pytest.raises(ModelError, match=r"joint 'j1': <axis xyz=\"0 0 0\"> is no direction"):
+        load_robot(tmp_path / "arm.urdf")

@@ -448,3 +448,19 @@ def test_the_built_in_differential_cannot_be_opened(tmp_path):
              "obstacle": base["obstacle"]}
     assert float(closed.T_c_minus) == pytest.approx(float(energy_of(plain).T_c_minus),
                                                     rel=1e-9)
+
+
+def test_a_contact_that_cannot_move_along_its_normal_is_named():
+    """An obstacle on a link fixed to the world, or a normal out of a planar rover's plane:
+    the row is zero; one ConfigError names it (the partition said "unilateral row 1 is
+    all zeros" without naming it)."""
+    cases = (
+        ({"model": {"file": "erd:panda"}, "velocity": {"joints": {"panda_joint1": 0.5}},
+          "obstacle": {"frame": "panda_link0", "point": [0, 0, 0], "normal": [0, 0, 1]}},
+         "obstacle:panda_link0:normal"),
+        ({"model": {"name": "rover2d"}, "velocity": {"u": 0.5},
+          "obstacle": {"wheel": "front", "normal": [0, 1, 0]}}, "obstacle:front:normal"),
+    )
+    for raw, label in cases:
+        with pytest.raises(ConfigError, match=rf"contact rows \['{label}'\] are zero"):
+            energy_of(raw)

@@ -309,6 +309,9 @@ def _check_urdf_numbers(root, path: Path) -> None:
                         ok = len(vals) == count and all(np.isfinite(vals))
                     except ValueError:
                         ok = False
+                    if ok and el.tag == "axis" and not any(vals):
+                        raise ModelError(f"{path}: joint {owner.get('name')!r}: <axis xyz="
+                                         f"\"{raw}\"> is no direction (all zero)")
                     if not ok:
                         raise ModelError(
                             f"{path}: {kind} {owner.get('name')!r}: <{el.tag} {attr}="

@@ -316,6 +316,7 @@ class ImpactSetup:
         M, A_all = cs.evaluate(q)
         labels = list(cs.labels)
         obstacle_all = len(labels) - 1
+        _check_contact_rows(A_all, labels)
         active = choose_active_rows(constraints, labels, M, A_all, v,
                                     obstacle_row=obstacle_all, **friction_of(contacts))
         obstacle_row = int(np.flatnonzero(active == obstacle_all)[0])
@@ -398,6 +399,22 @@ def make_model(spec: ModelSpec, base_dir: str | Path | None = None, *,
                                            lp.frame_b, tuple(lp.point_b), lp.length)
                                  for lp in loops], q_ref)
     return mbm
+
+
+def _check_contact_rows(A, labels) -> None:
+    """One ConfigError naming the contacts whose normal row is zero: the point cannot move
+    along the normal at all (a body fixed to the world, a normal out of a planar model's
+    plane), so there is no impact to analyse there (the partition said "unilateral row 1
+    is all zeros" without naming it)."""
+    norms = np.linalg.norm(A, axis=-1)
+    scale = max(float(norms.max(initial=0.0)), 1e-300)
+    dead = [lab for lab, nrm in zip(labels, norms, strict=True)
+            if lab.endswith(":normal") and not nrm > 1e-12 * scale]
+    if dead:
+        raise ConfigError(
+            f"the contact rows {dead} are zero: the point cannot move along its normal at "
+            "all (a body fixed to the world, or a normal out of the plane of a planar "
+            "model); move the contact to a moving body, or give a normal it can move along")
 
 
 def _loop_joints(mbm, row) -> list[str]:
