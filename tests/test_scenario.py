@@ -464,3 +464,34 @@ def test_a_contact_that_cannot_move_along_its_normal_is_named():
     for raw, label in cases:
         with pytest.raises(ConfigError, match=rf"contact rows \['{label}'\] are zero"):
             energy_of(raw)
+
+
+def test_configurations_that_are_not_one_are_refused():
+    """q whose base quaternion is not of unit norm (Pinocchio reads it as a rotation
+    scaled by its squared norm: T_c_at gave 0.0793 J for 0.0542 with a quaternion of norm
+    2, and took a zero quaternion for the identity) is one ModelError naming the joint, in
+    T_c_at, evaluate (one item or a batch) and from_state; NaN in q passed to evaluate is
+    one InputError (it returned M and A full of NaN). A quaternion off by 1e-9 (rounding)
+    is accepted."""
+    from roverimpact.exceptions import InputError
+
+    setup = ri.ImpactSetup.from_scenario(sc(RB))
+    ref = setup.T_c_at(setup.q)
+    for scale in (2.0, 1.0001, 0.0):
+        q = setup.q.copy()
+        q[3:7] *= scale
+        for call in (lambda q=q: setup.T_c_at(q), lambda q=q: setup.evaluate(q),
+                     lambda q=q: setup.evaluate(np.stack([setup.q, q])),
+                     lambda q=q: ri.ImpactSetup.from_state(setup.model, q, setup.v,
+                                                           obstacle=setup.scenario.obstacle)):
+            with pytest.raises(ModelError, match=r"the quaternion of joint 'root_joint' has "
+                                                 rf"norm {scale * 1.0:g}"):
+                call()
+    q = setup.q.copy()
+    q[3:7] *= 1 + 1e-9
+    assert setup.T_c_at(q) == pytest.approx(ref, rel=1e-8)
+    bad = setup.q.copy()
+    bad[0] = np.nan
+    for call in (lambda: setup.evaluate(bad), lambda: setup.evaluate(bad[None])):
+        with pytest.raises(InputError, match="q contains NaN"):
+            call()

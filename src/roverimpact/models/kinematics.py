@@ -17,6 +17,7 @@ from ..exceptions import ModelError
 from ._assemble import RowPlan
 from .base import MultibodyModel
 from .constraints import GroundContact, LockedJoint, LoopClosure, PointContact
+from .joints import UNIT_TOL, check_configuration
 
 __all__ = ["ConstraintSet"]
 
@@ -136,6 +137,7 @@ class ConstraintSet:
         if q.ndim == 0 or q.shape[-1] != nq:
             raise ModelError(f"q must have shape (..., {nq}) for model {self.mbm.name!r}, "
                              f"got {q.shape}")
+        check_configuration(self.mbm.model, q)
         plan = self._plan if self._plan is not None else self._row_plan()
         if q.ndim == 1:
             return plan.evaluate(q)
@@ -150,6 +152,8 @@ class ConstraintSet:
         Returns the partition's status code (0: done; otherwise the checks of
         :func:`roverimpact.partition` failed, and :meth:`evaluate` gives the arrays to name
         the problem)."""
+        if not pin.isNormalized(self.mbm.model, q, UNIT_TOL):  # 0.3 us; NaN fails it too
+            check_configuration(self.mbm.model, q)  # says what is wrong
         plan = self._plan if self._plan is not None else self._row_plan()
         return plan.partition_at(q, rows, v, rtol, res)
 
