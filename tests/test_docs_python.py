@@ -32,6 +32,19 @@ for f in sorted((ROOT / "docs").glob("*.md")):
         PAGES[f.name] = blocks
 
 
+@pytest.fixture(autouse=True)
+def _law_registry_restored():
+    """A page may register a law of its own (contact.md's "linear-spring"): it is taken
+    out again, so that tests which go through every registered law do not meet it (the
+    doc-number tests failed when they ran after this file)."""
+    from roverimpact.contact.registry import LAWS
+
+    saved = dict(LAWS)
+    yield
+    LAWS.clear()
+    LAWS.update(saved)
+
+
 @pytest.mark.parametrize("page", sorted(PAGES))
 def test_python_blocks_of_the_page_run(page, tmp_path, monkeypatch):
     (tmp_path / "examples").symlink_to(ROOT / "examples", target_is_directory=True)
