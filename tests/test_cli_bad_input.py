@@ -365,6 +365,9 @@ CASES = [
                                    "{o}/exists"], ["{o}/exists"], "keep.txt", "exists"),
     ("traverse-foreign-folder", ["traverse", "{d}/trav_good.toml", "-o", "{o}/exists"],
      ["{o}/exists"], "keep.txt", "exists"),
+    ("sweep-resume-and-overwrite", ["sweep", "{ex}/study_rigid_body.toml", "-o", "{o}/res",
+                                    "--resume", "--overwrite"], ["{o}/res"], "not both",
+     "results"),
     ("sweep-foreign-folder", ["sweep", "{ex}/study_rigid_body.toml", "-o", "{o}/exists",
                               "--overwrite"], ["{o}/exists"], "no study results", "exists"),
     # sweep

@@ -361,9 +361,12 @@ def _raise_status(out, M, iM, batch):
         if code == STATUS_INFEASIBLE:
             raise SolverError(
                 f"the frictional impact problem has no solution ({where}): no contact "
-                "impulses stop every contact from closing. Check the signs of the normal "
-                "rows (N v < 0 must mean approaching) and the bilateral rows, which may "
-                "force a contact to penetrate"
+                "impulses stop every contact from closing. Either a sign is wrong (N v < 0 "
+                "must mean approaching; the bilateral rows may force a contact to "
+                "penetrate), or, with restitution e > 0 at several contacts with friction, "
+                "Newton's restitution law has no solution for this state (a known property "
+                "of Newton's law with Coulomb friction): try e = 0, or mu = 0 at the "
+                "contacts that slide"
             )
         if code == STATUS_LOCKED:
             raise SolverError(

@@ -287,6 +287,9 @@ def run_study(
         holding another study's results.
     """
     t0 = time.perf_counter()
+    if resume and overwrite:
+        raise ConfigError("give either --resume (continue the results in the folder) or "
+                          "--overwrite (discard them), not both")
     if workers is not None and scheduler is not None:
         raise ConfigError("give either --workers or --scheduler, not both")
     if workers is not None and workers < 1:
