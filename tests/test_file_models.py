@@ -280,3 +280,42 @@ def test_urdf_numbers_urdfdom_would_drop_and_massless_joints(tmp_path):
     (tmp_path / "arm.urdf").write_text(zero_axis)
     with pytest.raises(ModelError, match=r"joint 'j1': <axis xyz=\"0 0 0\"> is no direction"):
         load_robot(tmp_path / "arm.urdf")
+
+
+def test_malformed_roverimpact_elements_are_one_error_each(tmp_path):
+    """roverimpact's own elements in an exported URDF, edited by hand: each impossible
+    value is one ModelError naming the element (a negative radius, an unknown lockable
+    joint or a JSON list of parameters were accepted; a two-number axis or a coefficient
+    count that does not match failed later in numpy)."""
+    import re
+
+    from roverimpact import load_robot
+    from roverimpact.exceptions import ModelError
+    from roverimpact.models import export_urdf, rocker_bogie
+
+    text = export_urdf(rocker_bogie(), tmp_path / "rb.urdf").read_text()
+    load_robot(tmp_path / "rb.urdf")
+    edits = (
+        (lambda t: re.sub(r'(<roverimpact_wheel name="left_middle"[^>]*?radius=")[^"]*',
+                          r"\g<1>-0.1", t), "radius must be > 0 m, got -0.1"),
+        (lambda t: t.replace('axis="0 1 0"', 'axis="0 1"', 1), "axis must be 3 numbers"),
+        (lambda t: t.replace('name="left_rear"', 'name="left_middle"', 1),
+         "two roverimpact_wheel elements are named 'left_middle'"),
+        (lambda t: re.sub(r'coefficients="[^"]*"', 'coefficients="1"', t),
+         "1 coefficients for 2 joints"),
+        (lambda t: t.replace('<roverimpact_lockable joint="rocker_left"',
+                             '<roverimpact_lockable joint="nope"'),
+         "roverimpact_lockable names unknown joint 'nope'"),
+        (lambda t: re.sub(r"<roverimpact_params>.*</roverimpact_params>",
+                          "<roverimpact_params>[1, 2]</roverimpact_params>", t, flags=re.S),
+         "must hold a JSON object"),
+        (lambda t: re.sub(r'"q_nominal": \[[^\]]*\]', '"q_nominal": [0, 0]', t),
+         "q_nominal must be 17 numbers"),
+    )
+    for k, (edit, match) in enumerate(edits):
+        edited = edit(text)
+        assert edited != text, k
+        p = tmp_path / f"rb{k}.urdf"
+        p.write_text(edited)
+        with pytest.raises(ModelError, match=re.escape(match)):
+            load_robot(p)

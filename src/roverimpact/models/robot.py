@@ -255,7 +255,36 @@ def _parse_meta(path: Path) -> dict:
             meta["params"] = json.loads(p.text)
     except (TypeError, ValueError, AttributeError) as exc:
         raise ModelError(f"{path}: malformed roverimpact_* element ({exc})") from None
+    _check_meta(meta, path)
     return meta
+
+
+def _check_meta(meta: dict, path: Path) -> None:
+    """One ModelError naming the element for values roverimpact's own elements cannot
+    have (they were accepted, or failed later in numpy)."""
+    def bad(what: str) -> ModelError:
+        return ModelError(f"{path}: {what}")
+
+    names = [w.name for w in meta["wheels"]]
+    for w in meta["wheels"]:
+        if not w.name or not w.frame:
+            raise bad("a roverimpact_wheel needs name and frame")
+        if not (np.isfinite(w.radius) and w.radius > 0):
+            raise bad(f"roverimpact_wheel {w.name!r}: radius must be > 0 m, got {w.radius}")
+        if not (np.isfinite(w.width) and w.width >= 0):
+            raise bad(f"roverimpact_wheel {w.name!r}: width must be >= 0 m, got {w.width}")
+        if len(w.axis) != 3 or not all(np.isfinite(w.axis)) or not any(w.axis):
+            raise bad(f"roverimpact_wheel {w.name!r}: axis must be 3 numbers, not all zero, "
+                      f"got {list(w.axis)}")
+        if names.count(w.name) > 1:
+            raise bad(f"two roverimpact_wheel elements are named {w.name!r}")
+    for name, joints, coeffs in meta["loops"]:
+        if len(coeffs) != len(joints):
+            raise bad(f"roverimpact_loop {name!r}: {len(coeffs)} coefficients for "
+                      f"{len(joints)} joints")
+    if not isinstance(meta["params"], dict):
+        raise bad("roverimpact_params must hold a JSON object ({...}), got "
+                  f"{type(meta['params']).__name__}")
 
 
 @contextmanager
@@ -479,6 +508,18 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
     for w in meta["wheels"]:
         if not model.existFrame(w.frame):
             raise ModelError(f"{path}: wheel {w.name!r} names unknown frame {w.frame!r}")
+    for jn in meta["lockable"]:
+        if not (jn and model.existJointName(jn)):
+            raise ModelError(f"{path}: roverimpact_lockable names unknown joint {jn!r}")
+    qn = meta["params"].get("q_nominal")
+    if qn is not None:
+        try:
+            ok = np.shape(np.asarray(qn, dtype=float)) == (model.nq,)
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ModelError(f"{path}: roverimpact_params q_nominal must be {model.nq} "
+                             f"numbers, got {qn!r}")
     params = dict(meta["params"]) | extra | {"source": str(path)}
     mbm = MultibodyModel(model=model, name=model.name or path.stem, wheels=meta["wheels"],
                          loop_closure=loop, loop_names=names, lockable_joints=meta["lockable"],
