@@ -100,7 +100,7 @@ from . import _validation
 from ._kernels.friction import MU_INF, friction_kernel
 from ._kernels.lemke import STATUS_INFEASIBLE, STATUS_LOCKED, STATUS_MAXITER
 from ._validation import as_array, broadcast_batch, fmt_index
-from .energy import RTOL, flat_index, scalarize
+from .energy import RTOL, flat_index, raise_overflow, scalarize
 from .exceptions import InputError, SolverError
 from .unilateral import TOL, check_residual, check_rows
 
@@ -348,6 +348,8 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
     friction_kernel.get()(*flat, *idx, ntan, nd, coef, math.cos(math.pi / int(facets)),
                           float(rtol), float(tol), bool(want_vplus), *out.values())
     _raise_status(out, M, idx[0], batch)
+    if not np.isfinite(out["Tm"]).all():  # finite M and v, 1/2 v^T M v above float64
+        raise_overflow(out["Tm"], M, v, idx[0], idx[4], batch)
     return out, batch, dict(M=M, v=v, N=N, Tg=Tg, B=B, n=n, k=k, tm=tm, pb=pb)
 
 

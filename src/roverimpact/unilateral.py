@@ -68,7 +68,7 @@ import numpy as np
 from . import _validation
 from ._kernels.lemke import STATUS_INFEASIBLE, STATUS_LOCKED, STATUS_MAXITER, impact_kernel
 from ._validation import as_array, broadcast_batch, check_rtol, fmt_index
-from .energy import RTOL, flat_index, scalarize
+from .energy import RTOL, flat_index, raise_overflow, scalarize
 from .exceptions import InputError, SolverError
 
 #: Default tolerance of the complementarity decisions (relative to ``sqrt(2 T^-)``).
@@ -280,6 +280,8 @@ def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, w
                 "degenerate; remove redundant contact rows or loosen tol"
             )
         raise _validation.mass_matrix_error(M, int(iM[bad]), code)
+    if not np.isfinite(out["Tm"]).all():  # finite M and v, 1/2 v^T M v above float64
+        raise_overflow(out["Tm"], M, v, iM, iv, batch)
     check_residual(out["resid"], batch)
     if obstacle is not None:
         if not (isinstance(obstacle, (int, np.integer)) and -k <= obstacle < k):
