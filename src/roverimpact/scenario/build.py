@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import fnmatch
 import functools
-import threading
-import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -596,42 +594,43 @@ def _spin_joint(mbm, wheel) -> str | None:
     return wheel.frame if mbm.model.existJointName(wheel.frame) else None
 
 
-_SCRATCH = threading.local()
-
-
-def _scratch_data(model):
-    """A Pinocchio ``Data`` of ``model`` for this thread, made once (``createData`` costs
-    about 70 us for the rocker-bogie, more than the kinematics it is needed for)."""
-    cache = getattr(_SCRATCH, "data", None)
-    if cache is None:
-        cache = _SCRATCH.data = weakref.WeakKeyDictionary()
-    data = cache.get(model)
-    if data is None or len(data.oMi) != model.njoints:
-        data = cache[model] = model.createData()
-    return data
-
-
-def _rolling_sign(mbm, data, q, spin: str, heading) -> float:
-    """+1 or -1: the sign of the spin rate ``u / r`` that rolls a wheel on hinge ``spin``
-    forward along ``heading`` on the ground below it (z up). At a unit rate the wheel
-    turns at ``w`` (the hinge's axis in world axes) and the rim point below its centre
-    moves at ``-r w x z``, which must cancel the drive: forward when ``(w x z) . heading =
-    w_y h_x - w_x h_y > 0`` (a hinge about +y for a rover heading +x), backward for a hinge
-    written about -y. 1 when the wheel does not roll along the heading (a vertical axis, an
-    axis along the heading) or ``spin`` is not a plain hinge. ``data`` holds the joint
-    placements at ``q`` (``pin.forwardKinematics``)."""
-    from ..models.declare import joint_axis
+def _rolling_signs(mbm) -> dict[str, float]:
+    """``{spin joint: +1 or -1}`` for the wheels of ``mbm``: the sign of the spin rate
+    ``u / r`` that rolls a wheel on that hinge forward along the base's heading (its x
+    axis) on the ground below it (the base's z axis up). At a unit rate the wheel turns at
+    ``w`` and the rim point below its centre moves at ``-r w x z``, which must cancel the
+    drive: forward when ``(w x z) . x = w_y > 0`` in the base's axes (a hinge about +y),
+    backward for a hinge written about -y. The hinge's axis is taken through the joint
+    placements from the base at zero joint angles (a suspension would have to turn by
+    more than 90 degrees to flip it); 1 for a joint that is not a plain hinge. Computed
+    once per model."""
+    signs = mbm.__dict__.get("_rolling_signs")
+    if signs is not None:
+        return signs
+    from ..models.declare import base_info, joint_axis
 
     model = mbm.model
-    j = model.getJointId(spin)
-    if j >= model.njoints or model.joints[j].nv != 1:
-        return 1.0
-    a = joint_axis(model, j)
-    if a is None:
-        return 1.0
-    w = data.oMi[j].rotation @ a
-    g = float(w[1] * heading[0] - w[0] * heading[1])
-    return -1.0 if g < -1e-9 else 1.0
+    base = base_info(mbm).joints
+    stop = model.getJointId(base[-1]) if base else 0
+    parents, placements = model.parents, model.jointPlacements
+    signs = {}
+    for w in mbm.wheels:
+        spin = _spin_joint(mbm, w)
+        if spin is None or spin in signs:
+            continue
+        signs[spin] = 1.0
+        j = model.getJointId(spin)
+        a = joint_axis(model, j) if j < model.njoints and model.joints[j].nv == 1 else None
+        if a is None:
+            continue
+        k = j
+        while k > 0 and k != stop:  # the axis in the parent's frame, up to the base's
+            a = placements[k].rotation @ a
+            k = parents[k]
+        if a[1] < -1e-9:
+            signs[spin] = -1.0
+    mbm.__dict__["_rolling_signs"] = signs
+    return signs
 
 
 def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None) -> np.ndarray:
@@ -667,16 +666,12 @@ def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None) -> np.nda
         raise ConfigError("velocity: u/base_linear/base_angular need a moving base; this model "
                           "has a fixed base (set joint rates in velocity.joints)")
     if np.any(u != 0):
-        data = None
+        signs = _rolling_signs(mbm)
         for k, w in enumerate(mbm.wheels):
             spin = _spin_joint(mbm, w)
             if spin is not None:
-                if data is None:
-                    data = _scratch_data(model)
-                    pin.forwardKinematics(model, data, q)
                 r = w.radius if wheel_radius is None else wheel_radius[..., k]
-                sign = _rolling_sign(mbm, data, q, spin, heading)
-                v = _as_config_error(set_joint_rate, mbm, v, spin, sign * u / r,
+                v = _as_config_error(set_joint_rate, mbm, v, spin, signs[spin] * u / r,
                                      what=f"wheel {w.name!r}")
     for name, val in spec.joints.items():
         if isinstance(val, list):
