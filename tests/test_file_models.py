@@ -309,8 +309,8 @@ def test_malformed_roverimpact_elements_are_one_error_each(tmp_path):
         (lambda t: re.sub(r"<roverimpact_params>.*</roverimpact_params>",
                           "<roverimpact_params>[1, 2]</roverimpact_params>", t, flags=re.S),
          "must hold a JSON object"),
-        (lambda t: re.sub(r'"q_nominal": \[[^\]]*\]', '"q_nominal": [0, 0]', t),
-         "q_nominal must be 17 numbers"),
+        (lambda t: re.sub(r'"q_nominal": \[[^\]]*\]', '"q_nominal": "abc"', t),
+         "q_nominal must be a list of numbers"),
     )
     for k, (edit, match) in enumerate(edits):
         edited = edit(text)

@@ -155,10 +155,11 @@ def test_wheels_on_hinges_about_negative_axes(tmp_path):
 
 def test_planar_root_chain_with_negative_axes_and_an_arm_about_minus_z(tmp_path):
     """detect_base on root chains whose joints are "unaligned": a slide about -x, a slide
-    about z and a hinge about -y is a planar base; a 3-joint arm whose first hinge turns
-    about "0 0 -1" is a fixed base, and an obstacle on its last link has T_c^- = 1/2 m v^2
-    of the point hit (the velocity along the normal of a single body in a chain held
-    nowhere else: here the end link alone, moving along the normal at 1 rad/s * 0.7 m)."""
+    about z and a hinge about -y would be a planar base driven backwards (its coordinates
+    are read as world x, z and pitch about +y): one ModelError naming the flipped joints;
+    written about +x, +z, +y (through rotated placements or not) it is planar. A 3-joint
+    arm whose first hinge turns about "0 0 -1" is a fixed base; the point hit 0.7 m from
+    that hinge turning at 1 rad/s approaches its face at 0.7 m/s."""
     from roverimpact import load_robot
     from roverimpact.models.declare import detect_base
     from roverimpact.scenario import ImpactSetup
@@ -175,7 +176,13 @@ def test_planar_root_chain_with_negative_axes_and_an_arm_about_minus_z(tmp_path)
         p.write_text(f'<?xml version="1.0"?><robot name="{name}">{links}{joints}</robot>')
         return p
 
-    planar = chain("planar", ("-1 0 0", "0 0 1", "0 -1 0"),
+    from roverimpact.exceptions import ModelError
+
+    flipped = chain("flipped", ("-1 0 0", "0 0 1", "0 -1 0"),
+                    ("prismatic", "prismatic", "revolute"))
+    with pytest.raises(ModelError, match=r"planar base: joints \['j1', 'j3'\] move along"):
+        detect_base(pin.buildModelFromUrdf(str(flipped)))
+    planar = chain("planar", ("1 0 0", "0 0 1", "0 1 0"),
                    ("prismatic", "prismatic", "revolute"))
     info = detect_base(pin.buildModelFromUrdf(str(planar)))
     assert (info.kind, info.joints) == ("planar", ("j1", "j2", "j3"))

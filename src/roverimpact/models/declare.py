@@ -114,6 +114,7 @@ def detect_base(model) -> BaseInfo:
         kinds = (_is_prismatic(model, 1), _is_prismatic(model, 2), _is_revolute(model, 3))
         if all(kinds) and all(abs(abs(a @ w) - 1.0) < 1e-9 for a, w in zip(ax, want,
                                                                           strict=True)):
+            _check_planar_signs(model, (1, 2, 3))
             return BaseInfo("planar", tuple(model.names[j] for j in (1, 2, 3)))
     return BaseInfo("fixed")
 
@@ -156,7 +157,22 @@ def declare_base(mbm: MultibodyModel, kind: str, joints: Sequence[str] | None = 
     if not ok:
         raise ModelError(f"model.base: a planar base needs an x slide, a z slide and a y hinge; "
                          f"joints {names} are not (give model.base.joints in that order)")
+    _check_planar_signs(model, ids)
     mbm.params["base"] = {"kind": "planar", "joints": names}
+
+
+def _check_planar_signs(model, ids) -> None:
+    """A planar base's coordinates are read as world x, z and the pitch about +y: a slide
+    or hinge written about -x, -z or -y would drive the rover backwards (and pose it
+    mirrored) while its wheels roll forwards, so it is one ModelError."""
+    want = ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0])
+    flipped = [model.names[j] for j, w in zip(ids, want, strict=True)
+               if _world_axis(model, j) @ np.asarray(w) < 0]
+    if flipped:
+        raise ModelError(
+            f"planar base: joints {flipped} move along -x, -z or about -y; roverimpact reads "
+            "a planar base's coordinates as world x, z and the pitch about +y: write their "
+            "axes as 1 0 0, 0 0 1 and 0 1 0")
 
 
 def _frame_joint(model, fid: int) -> int:

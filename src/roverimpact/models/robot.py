@@ -512,13 +512,13 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         if not (jn and model.existJointName(jn)):
             raise ModelError(f"{path}: roverimpact_lockable names unknown joint {jn!r}")
     qn = meta["params"].get("q_nominal")
-    if qn is not None:
+    if qn is not None:  # (another length is ignored: floating_base=False drops the base)
         try:
-            ok = np.shape(np.asarray(qn, dtype=float)) == (model.nq,)
+            ok = np.ndim(qn) == 1 and bool(np.isfinite(np.asarray(qn, dtype=float)).all())
         except (TypeError, ValueError):
             ok = False
         if not ok:
-            raise ModelError(f"{path}: roverimpact_params q_nominal must be {model.nq} "
+            raise ModelError(f"{path}: roverimpact_params q_nominal must be a list of "
                              f"numbers, got {qn!r}")
     params = dict(meta["params"]) | extra | {"source": str(path)}
     mbm = MultibodyModel(model=model, name=model.name or path.stem, wheels=meta["wheels"],
