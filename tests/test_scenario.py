@@ -495,3 +495,31 @@ def test_configurations_that_are_not_one_are_refused():
     for call in (lambda: setup.evaluate(bad), lambda: setup.evaluate(bad[None])):
         with pytest.raises(InputError, match="q contains NaN"):
             call()
+
+
+def test_coupled_joints_given_values_that_disagree(tmp_path):
+    """Two joints coupled by a MuJoCo joint equality (jb = 0.2 - ja) both given in
+    [configuration.joints] or [velocity.joints] with values that disagree: one ConfigError
+    (the last one written won silently: ja = 0.3 became -0.1, its rate 1.0 became -1.0);
+    values that agree are accepted."""
+    xml = tmp_path / "eq.xml"
+    xml.write_text(
+        '<mujoco model="eq"><worldbody><body name="a"><joint name="ja" type="hinge" '
+        'axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.02"/></body>'
+        '<body name="b" pos="1 0 0"><joint name="jb" type="hinge" axis="0 1 0"/><geom '
+        'type="capsule" fromto="0 0 0 -0.5 0 0" size="0.02"/></body></worldbody><equality>'
+        '<joint joint1="jb" joint2="ja" polycoef="0.2 -1 0 0 0"/></equality></mujoco>')
+    base = {"model": {"file": str(xml)}, "contacts": {"ground_wheels": []},
+            "obstacle": {"frame": "b", "point": [-0.5, 0, 0], "normal": [0, 0, 1]}}
+    with pytest.raises(ConfigError, match=r"configuration\.joints: ja = 0\.3 was changed to "
+                                          r"-0\.1"):
+        ri.ImpactSetup.from_scenario({**base, "configuration": {"joints": {"ja": 0.3,
+                                                                           "jb": 0.3}},
+                                      "velocity": {"joints": {"ja": 1.0}}})
+    with pytest.raises(ConfigError, match=r"velocity\.joints: ja = 1 was changed to -1"):
+        ri.ImpactSetup.from_scenario({**base, "velocity": {"joints": {"ja": 1.0, "jb": 1.0}}})
+    ok = ri.ImpactSetup.from_scenario({**base, "configuration": {"joints": {"ja": 0.3,
+                                                                            "jb": -0.1}},
+                                       "velocity": {"joints": {"ja": 1.0, "jb": -1.0}}})
+    ia, ib = (ok.model.model.joints[ok.model.model.getJointId(n)].idx_q for n in ("ja", "jb"))
+    assert ok.q[ia] == pytest.approx(0.3) and ok.q[ib] == pytest.approx(-0.1)

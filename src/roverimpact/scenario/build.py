@@ -560,7 +560,30 @@ def configuration(mbm, spec: ConfigurationSpec, q_nominal=None) -> np.ndarray:
         else:
             q = _as_config_error(set_joint_value, mbm, q, name, val,
                                  what="configuration.joints")
+    _check_kept(mbm, spec.joints, q, "configuration.joints")
     return q
+
+
+def _check_kept(mbm, given: dict, x, what: str) -> None:
+    """Refuse joint values (or rates) that a later one changed through a coupling (a
+    mimic, a MuJoCo joint equality): ``ja = 0.3`` and ``jb = 0.3`` with ``jb = 0.2 - ja``
+    became ja = -0.1, silently."""
+    from ..models.joints import joint_coordinate, joint_value
+
+    for name, val in given.items():
+        if isinstance(val, list):
+            continue
+        jc = joint_coordinate(mbm, name)
+        got = (joint_value(mbm, x, name) if what.startswith("configuration")
+               else x[..., jc.idx_v])
+        d = np.asarray(got, dtype=float) - val
+        if jc.kind == "continuous" and what.startswith("configuration"):
+            d = (d + np.pi) % (2.0 * np.pi) - np.pi
+        if np.any(np.abs(d) > 1e-9 * max(1.0, abs(val))):
+            raise ConfigError(
+                f"{what}: {name} = {val:g} was changed to {float(np.ravel(got)[0]):.6g} by "
+                "another joint set after it through their coupling (a mimic joint or a "
+                "joint equality): give one joint of a coupling, or values that agree")
 
 
 def _as_config_error(fn, *args, **kwargs):
@@ -687,6 +710,7 @@ def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None) -> np.nda
             v[..., j.idx_v:j.idx_v + j.nv] = rates
         else:
             v = _as_config_error(set_joint_rate, mbm, v, name, val, what="velocity.joints")
+    _check_kept(mbm, spec.joints, v, "velocity.joints")
     return v
 
 
