@@ -31,7 +31,7 @@ from .base import MultibodyModel, Wheel
 from .constraints import point_jacobian
 
 __all__ = ["BaseInfo", "FrameLoop", "attach_frame_loops", "base_info", "declare_wheels",
-           "detect_base", "joint_axis"]
+           "detect_base", "joint_axis", "placed_axis"]
 
 
 @dataclass(frozen=True)
@@ -83,18 +83,17 @@ def _is_revolute(model, j):
             and joint_axis(model, j) is not None)
 
 
-def _world_axis(model, j: int) -> np.ndarray:
-    """Axis of joint ``j`` in world axes at the neutral configuration of its ancestors
-    (valid for a root chain whose joints are placed without rotation)."""
-    R = np.eye(3)
+def placed_axis(model, j: int, frame: int = 0) -> np.ndarray | None:
+    """Axis of 1-DoF joint ``j`` (:func:`joint_axis`) in the axes of joint ``frame``, an
+    ancestor (0: the world), through the joint placements at zero angles of the joints
+    between them (None for a joint without an axis)."""
+    a = joint_axis(model, j)
+    parents, placements = model.parents, model.jointPlacements
     k = j
-    chain = []
-    while k > 0:
-        chain.append(k)
-        k = model.parents[k]
-    for k in reversed(chain):
-        R = R @ model.jointPlacements[k].rotation
-    return R @ joint_axis(model, j)
+    while a is not None and k > 0 and k != frame:
+        a = placements[k].rotation @ a  # into the parent joint's axes
+        k = parents[k]
+    return a
 
 
 def detect_base(model) -> BaseInfo:
@@ -108,13 +107,13 @@ def detect_base(model) -> BaseInfo:
     if model.njoints > 3 and [model.parents[j] for j in (1, 2, 3)] == [0, 1, 2]:
         if any(joint_axis(model, j) is None for j in (1, 2, 3)):  # a ball, a free joint, ...
             return BaseInfo("fixed")
-        ax = [_world_axis(model, j) for j in (1, 2, 3)]
+        ax = [placed_axis(model, j) for j in (1, 2, 3)]
         want = (np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0]),
                 np.array([0.0, 1.0, 0.0]))
         kinds = (_is_prismatic(model, 1), _is_prismatic(model, 2), _is_revolute(model, 3))
         if all(kinds) and all(abs(abs(a @ w) - 1.0) < 1e-9 for a, w in zip(ax, want,
                                                                           strict=True)):
-            _check_planar_signs(model, (1, 2, 3))
+            _check_planar_signs(model, (1, 2, 3), ax)
             return BaseInfo("planar", tuple(model.names[j] for j in (1, 2, 3)))
     return BaseInfo("fixed")
 
@@ -150,24 +149,25 @@ def declare_base(mbm: MultibodyModel, kind: str, joints: Sequence[str] | None = 
     ok = (len(ids) == 3 and _is_prismatic(model, ids[0]) and _is_prismatic(model, ids[1])
           and _is_revolute(model, ids[2]))
     if ok:
-        ax = [_world_axis(model, j) for j in ids]
+        ax = [placed_axis(model, j) for j in ids]
         want = ([1, 0, 0], [0, 0, 1], [0, 1, 0])
         ok = all(abs(abs(a @ np.asarray(w, float)) - 1.0) < 1e-9 for a, w in zip(ax, want,
                                                                                 strict=True))
     if not ok:
         raise ModelError(f"model.base: a planar base needs an x slide, a z slide and a y hinge; "
                          f"joints {names} are not (give model.base.joints in that order)")
-    _check_planar_signs(model, ids)
+    _check_planar_signs(model, ids, ax)
     mbm.params["base"] = {"kind": "planar", "joints": names}
 
 
-def _check_planar_signs(model, ids) -> None:
+def _check_planar_signs(model, ids, axes) -> None:
     """A planar base's coordinates are read as world x, z and the pitch about +y: a slide
-    or hinge written about -x, -z or -y would drive the rover backwards (and pose it
-    mirrored) while its wheels roll forwards, so it is one ModelError."""
+    or hinge written about -x, -z or -y (``axes``: the world axes of joints ``ids``) would
+    drive the rover backwards (and pose it mirrored) while its wheels roll forwards, so it
+    is one ModelError."""
     want = ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0])
-    flipped = [model.names[j] for j, w in zip(ids, want, strict=True)
-               if _world_axis(model, j) @ np.asarray(w) < 0]
+    flipped = [model.names[j] for j, a, w in zip(ids, axes, want, strict=True)
+               if a @ np.asarray(w) < 0]
     if flipped:
         raise ModelError(
             f"planar base: joints {flipped} move along -x, -z or about -y; roverimpact reads "

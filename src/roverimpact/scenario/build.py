@@ -243,9 +243,8 @@ class ImpactSetup:
                                            follow=follow and not ts.pose,
                                            loop_rows=scenario.contacts.loop_closure)
         if scenario.contacts.loop_closure and mbm.loop_closure is not None:
-            if not scenario.contacts.loops:  # declared loops are checked where attached
-                _check_loop_closed(mbm, q)
-            _check_loop_rates(mbm, q, v)
+            # declared loops' positions are checked where they are attached
+            _check_loops(mbm, q, v, positions=not scenario.contacts.loops)
         return cls.from_state(mbm, q, v, obstacle=scenario.obstacle,
                               contacts=scenario.contacts, constraints=scenario.constraints,
                               scenario=scenario, ground_normals=normals)
@@ -424,11 +423,20 @@ def _loop_joints(mbm, row) -> list[str]:
                                 model.joints[j].idx_v + model.joints[j].nv))]
 
 
-def _check_loop_closed(mbm, q, atol: float = 1e-9) -> None:
+def _check_loops(mbm, q, v, *, positions: bool) -> None:
+    """:func:`_check_loop_closed` (if ``positions``) and :func:`_check_loop_rates` on one
+    evaluation of the loop-closure residual and rows."""
+    phi, J = mbm.loop_closure(q)
+    if positions:
+        _check_loop_closed(mbm, phi, J)
+    _check_loop_rates(mbm, J, v)
+
+
+def _check_loop_closed(mbm, phi, J, atol: float = 1e-9) -> None:
     """Refuse a configuration whose joint values open a built-in closed loop (the
     rocker-bogie's differential: one rocker turned, the other not), named by loop row;
-    the loop-closure rows would otherwise hold a mechanism that cannot be assembled."""
-    phi, J = mbm.loop_closure(q)
+    the loop-closure rows would otherwise hold a mechanism that cannot be assembled.
+    ``phi, J``: the loop closure's residual and rows at that configuration."""
     bad = np.flatnonzero(np.abs(phi) > atol)
     if bad.size:
         i = int(bad[0])
@@ -439,10 +447,10 @@ def _check_loop_closed(mbm, q, atol: float = 1e-9) -> None:
             "differential turns its rockers by opposite angles)")
 
 
-def _check_loop_rates(mbm, q, v, rtol: float = 1e-6) -> None:
-    """Refuse joint rates that pull a closed loop apart (``J_loop v`` not 0): the state
-    of a mechanism other than the one declared. Named by loop row."""
-    _, J = mbm.loop_closure(q)
+def _check_loop_rates(mbm, J, v, rtol: float = 1e-6) -> None:
+    """Refuse joint rates that pull a closed loop apart (``J_loop v`` not 0, ``J`` the
+    loop-closure rows): the state of a mechanism other than the one declared. Named by
+    loop row."""
     rate = J @ v
     scale = np.linalg.norm(J, axis=1) * np.linalg.norm(v)
     bad = np.flatnonzero(np.abs(rate) > rtol * scale + 1e-12)
@@ -630,28 +638,20 @@ def _rolling_signs(mbm) -> dict[str, float]:
     signs = mbm.__dict__.get("_rolling_signs")
     if signs is not None:
         return signs
-    from ..models.declare import base_info, joint_axis
+    from ..models.declare import base_info, placed_axis
 
     model = mbm.model
     base = base_info(mbm).joints
     stop = model.getJointId(base[-1]) if base else 0
-    parents, placements = model.parents, model.jointPlacements
     signs = {}
     for w in mbm.wheels:
         spin = _spin_joint(mbm, w)
         if spin is None or spin in signs:
             continue
-        signs[spin] = 1.0
         j = model.getJointId(spin)
-        a = joint_axis(model, j) if j < model.njoints and model.joints[j].nv == 1 else None
-        if a is None:
-            continue
-        k = j
-        while k > 0 and k != stop:  # the axis in the parent's frame, up to the base's
-            a = placements[k].rotation @ a
-            k = parents[k]
-        if a[1] < -1e-9:
-            signs[spin] = -1.0
+        a = placed_axis(model, j, stop) if j < model.njoints and model.joints[j].nv == 1 \
+            else None
+        signs[spin] = -1.0 if a is not None and a[1] < -1e-9 else 1.0
     mbm.__dict__["_rolling_signs"] = signs
     return signs
 
