@@ -620,6 +620,33 @@ def test_floating_base_on_mjcf(files, tmp_path):
         load_robot(tmp_path / "two.xml", floating_base=True)
 
 
+def test_floating_base_false_welds_free_bodies(files, tmp_path):
+    """floating_base=False on a file whose bodies have free joints: they are removed and
+    the bodies stay where the file puts them. Reference: MuJoCo's mj_fullM of the same
+    text with the <freejoint/> deleted by hand."""
+    text = ("<mujoco><worldbody><body name='base' pos='0.3 0 1' euler='0 20 0'>"
+            "<freejoint name='fly'/><geom type='box' size='.2 .1 .1'/>"
+            "<body name='arm' pos='0.2 0 0'><joint name='j' axis='0 1 0'/>"
+            "<geom type='capsule' fromto='0 0 0 0.4 0 0' size='0.05'/></body></body>"
+            "</worldbody></mujoco>")
+    (tmp_path / "free.xml").write_text(text)
+    as_is = load_robot(tmp_path / "free.xml")  # default: the file's free joint
+    assert as_is.model.nv == 7 and as_is.model.names[1] == "fly"
+    fixed = load_robot(tmp_path / "free.xml", floating_base=False)
+    assert list(fixed.model.names[1:]) == ["j"] and fixed.model.nv == 1
+    m = mujoco.MjModel.from_xml_string(text.replace("<freejoint name='fly'/>", ""))
+    d = mujoco.MjData(m)
+    for qj in (0.0, 0.7, -1.2):
+        d.qpos[:] = qj
+        mujoco.mj_forward(m, d)
+        M = pin.crba(fixed.model, fixed.model.createData(), np.array([qj]))
+        assert M[0, 0] == pytest.approx(_mj_M(m, d)[0, 0], rel=1e-12)
+    # the arm's world placement is the file's (base at (0.3, 0, 1) pitched 20 degrees)
+    data = fixed.model.createData()
+    pin.forwardKinematics(fixed.model, data, np.zeros(1))
+    np.testing.assert_allclose(data.oMi[1].translation, d.xpos[m.body("arm").id], atol=1e-12)
+
+
 def test_geoms_are_recorded_for_wheel_radii(files):
     mbm = load_robot(files / "rover.xml")
     tire = next(g for g in mbm.params["geoms"] if g["name"] == "front_tire")

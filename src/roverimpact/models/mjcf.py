@@ -558,7 +558,9 @@ def compile_mjcf(path: str | Path, *, floating_base: bool | None = None):
     """Compile an MJCF file with MuJoCo (``MjSpec.from_file(...).compile()``).
 
     ``floating_base=True`` adds a free joint ``"root_joint"`` to the single top-level body
-    when it has no joint (MuJoCo's way to make a body float).
+    when it has no joint (MuJoCo's way to make a body float); ``False`` removes the free
+    joints of the top-level bodies, which stay fixed where the file places them; ``None``
+    takes the file as it is.
 
     Raises
     ------
@@ -597,6 +599,10 @@ def _compile(mujoco, path: Path, floating_base):
             elif not any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in top.joints):
                 raise ModelError(f"{path}: floating_base: body {top.name!r} already has "
                                  "joints; MuJoCo allows a free joint only alone in its body")
+        elif floating_base is not None:  # False: weld the free bodies where the file puts them
+            for body in spec.worldbody.bodies:
+                for j in [j for j in body.joints if j.type == mujoco.mjtJoint.mjJNT_FREE]:
+                    spec.delete(j)
         return spec.compile()
     except ModelError:
         raise
@@ -615,8 +621,9 @@ def load_mjcf(path: str | Path, *, floating_base: bool | None = None):
     path : str or Path
         ``.xml`` / ``.mjcf`` file.
     floating_base : bool, optional
-        Add a free joint ``"root_joint"`` to the (single) top-level body if it has no
-        joint. Default: as in the file.
+        ``True``: add a free joint ``"root_joint"`` to the (single) top-level body if it
+        has no joint. ``False``: remove the free joints of the top-level bodies (fixed
+        where the file places them). Default: as in the file.
 
     Returns
     -------

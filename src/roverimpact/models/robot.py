@@ -405,8 +405,10 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         ``"erd:<name or path>"`` or ``"example-robot-data:<name or path>"`` (e.g.
         ``"erd:panda"``; see :mod:`roverimpact.models.robot_data`).
     floating_base : bool, optional
-        Add a free-flyer root (joint ``"root_joint"``). Default: as recorded by
-        :func:`export_urdf` in the file, else fixed base (MJCF: as in the file).
+        Add a free-flyer root (joint ``"root_joint"``); ``False`` for an MJCF file
+        removes the free joints of its top-level bodies (fixed where the file places
+        them). Default: as recorded by :func:`export_urdf` in the file, else fixed base
+        (MJCF: as in the file).
     mujoco_check : bool
         Run the comparison with MuJoCo (default ``True``).
 
@@ -443,7 +445,8 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         from .mjcf import load_mjcf
         from .mujoco_check import check_mass_matrix
 
-        mj, compiled = load_mjcf(path, floating_base=floating)
+        # None: the file's own free joints (False would remove them)
+        mj, compiled = load_mjcf(path, floating_base=True if floating else floating_base)
         if mujoco_check:
             check_mass_matrix(mj, compiled, source=str(path))
         model, extra = mj.model, dict(mj.params)
