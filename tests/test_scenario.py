@@ -523,3 +523,39 @@ def test_coupled_joints_given_values_that_disagree(tmp_path):
                                        "velocity": {"joints": {"ja": 1.0, "jb": -1.0}}})
     ia, ib = (ok.model.model.joints[ok.model.model.getJointId(n)].idx_q for n in ("ja", "jb"))
     assert ok.q[ia] == pytest.approx(0.3) and ok.q[ib] == pytest.approx(-0.1)
+
+
+def test_fixed_base_on_a_file_with_a_free_root(tmp_path):
+    """model.base.kind = "fixed" on an MJCF file whose root body has a free joint welds
+    it where the file places it, as model.floating_base = false does. Reference: the
+    effective mass 1 / (n^T J M^-1 J^T n) of the hit point, from Pinocchio on the same
+    text without the <freejoint/> (an arm on a pitched base, hit at its tip)."""
+    text = ("<mujoco><worldbody><body name='base' pos='0.3 0 1' euler='0 20 0'>"
+            "<freejoint name='fly'/><geom type='box' size='.2 .1 .1'/>"
+            "<body name='arm' pos='0.2 0 0'><joint name='j' axis='0 1 0'/>"
+            "<geom type='capsule' fromto='0 0 0 0.4 0 0' size='0.05'/></body></body>"
+            "</worldbody></mujoco>")
+    (tmp_path / "free.xml").write_text(text)
+    (tmp_path / "welded.xml").write_text(text.replace("<freejoint name='fly'/>", ""))
+    ref = ri.load_robot(tmp_path / "welded.xml").model
+    data = ref.createData()
+    q, v = np.array([0.4]), np.array([1.5])
+    pin.computeJointJacobians(ref, data, q)
+    pin.framesForwardKinematics(ref, data, q)
+    tip = pin.SE3(np.eye(3), np.array([0.4, 0.0, 0.0]))
+    J = np.reshape(pin.getFrameJacobian(ref, data, ref.getJointId("j"), tip,
+                                        pin.LOCAL_WORLD_ALIGNED), (6, -1))[:3]
+    n = np.array([0.0, 0.0, 1.0])  # the face's normal, out of the obstacle: v_n = -n J v
+    if n @ J @ v > 0:
+        n = -n
+    M = pin.crba(ref, data, q)
+    m_ref = 1.0 / float(n @ J @ np.linalg.solve(M, J.T) @ n)
+    f = str(tmp_path / "free.xml")
+    for model in ({"file": f, "base": {"kind": "fixed"}}, {"file": f, "floating_base": False}):
+        sc = {"model": model, "configuration": {"joints": {"j": 0.4}},
+              "velocity": {"joints": {"j": 1.5}},
+              "obstacle": {"frame": "arm", "point": [0.4, 0, 0], "normal": n.tolist()}}
+        e = energy_of(sc)
+        assert float(e.m_eff_free) == pytest.approx(m_ref, rel=1e-10)
+        assert float(e.T_c_minus) == pytest.approx(0.5 * m_ref * float(n @ J @ v) ** 2,
+                                                   rel=1e-10)

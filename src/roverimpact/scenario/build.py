@@ -375,10 +375,9 @@ def make_model(spec: ModelSpec, base_dir: str | Path | None = None, *,
         if not is_example_robot_name(f) and not Path(f).is_absolute():
             f = str(Path(base_dir if base_dir is not None else Path.cwd()) / f)
         floating = spec.floating_base
-        if spec.base is not None:
-            floating = spec.base.kind == "floating" and not f.lower().endswith((".xml",
-                                                                               ".mjcf"))
-            floating = floating or None
+        if spec.base is not None:  # fixed: no free-flyer added, an MJCF's free joints removed
+            mjcf = f.lower().endswith((".xml", ".mjcf"))
+            floating = {"floating": None if mjcf else True, "fixed": False}.get(spec.base.kind)
         mbm = load_robot(f, floating_base=floating)
         if spec.base is not None:
             declare_base(mbm, spec.base.kind, spec.base.joints)

@@ -128,7 +128,8 @@ class BaseKindSpec(StrictModel):
     ``kind``: ``"floating"`` (a free-flyer root is added to a URDF; an MJCF free joint is
     one already), ``"planar"`` (three joints move the base in the x-z plane: ``joints`` =
     [x slide, z slide, pitch hinge], default the file's first three joints), or
-    ``"fixed"``. Default: from the file (a free joint is floating; a root chain of an
+    ``"fixed"`` (the root stays where the file places it: an MJCF file's free joints are
+    removed, a URDF gets no free-flyer). Default: from the file (a free joint is floating; a root chain of an
     x slide, a z slide and a y hinge is planar; else fixed).
     """
 
