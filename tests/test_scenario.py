@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 import roverimpact as ri
-from roverimpact.exceptions import ConfigError, ModelError
+from roverimpact.exceptions import ConfigError, InputError, ModelError
 from roverimpact.models import export_urdf, rocker_bogie, rover2d
 from roverimpact.scenario import Scenario, energy_of, load_scenario, sweep_energy
 
@@ -132,6 +132,25 @@ def test_sweep_matches_individual_builds():
             e = energy_of(sc(base, obstacle={"beta_deg": b}))
             assert sw.T_c_minus[k] == pytest.approx(e.T_c_minus, rel=1e-9, abs=1e-12)
             assert sw.m_eff[k] == pytest.approx(e.m_eff, rel=1e-9)
+
+
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.HeldRowsWarning")
+def test_sweep_with_a_normal_along_the_wheel_axis_matches_individual_builds():
+    """A rover rolled onto its side: the wheel axis is vertical, parallel to the beta = 0
+    normal (a hit on the wheel's face). The sweep gave a NaN row there (166.8 kg where
+    one build gives inf); it now takes the row assembly's rule, and agrees at every beta."""
+    rolled = sc(RB, configuration={"base": {"roll_deg": 90.0}})
+    betas = np.array([0.0, 1e-7, 30.0, 90.0])
+    sw = sweep_energy(rolled, np.deg2rad(betas))
+    assert np.all(np.isfinite(sw.T_c_minus)) and not np.any(np.isnan(sw.m_eff))
+    for bad in ("abc", None, [[0.1], [0.2, 0.3]]):
+        with pytest.raises(InputError, match="1-D array of finite angles"):
+            sweep_energy(rolled, bad)
+    for k, b in enumerate(betas):
+        e = energy_of(sc(RB, configuration={"base": {"roll_deg": 90.0}},
+                         obstacle={"beta_deg": b}))
+        assert sw.T_c_minus[k] == pytest.approx(e.T_c_minus, rel=1e-9, abs=1e-12)
+        assert sw.m_eff[k] == pytest.approx(e.m_eff, rel=1e-9)
 
 
 @pytest.mark.parametrize("builder", ["rover2d", "rocker_bogie"])

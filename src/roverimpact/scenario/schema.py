@@ -129,8 +129,8 @@ class BaseKindSpec(StrictModel):
     one already), ``"planar"`` (three joints move the base in the x-z plane: ``joints`` =
     [x slide, z slide, pitch hinge], default the file's first three joints), or
     ``"fixed"`` (the root stays where the file places it: an MJCF file's free joints are
-    removed, a URDF gets no free-flyer). Default: from the file (a free joint is floating; a root chain of an
-    x slide, a z slide and a y hinge is planar; else fixed).
+    removed, a URDF gets no free-flyer). Default: from the file (a free joint is
+    floating; a root chain of an x slide, a z slide and a y hinge is planar; else fixed).
     """
 
     kind: Literal["floating", "planar", "fixed"]

@@ -72,7 +72,10 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
         Fields are (k,) arrays.
     """
     setup = scenario if isinstance(scenario, ImpactSetup) else ImpactSetup.from_scenario(scenario)
-    beta = np.atleast_1d(np.asarray(beta, dtype=float))
+    try:
+        beta = np.atleast_1d(np.asarray(beta, dtype=float))
+    except (TypeError, ValueError):  # a string, None, a ragged list
+        beta = np.array([[np.nan]])
     if beta.ndim != 1 or not np.all(np.isfinite(beta)):
         raise InputError("beta must be a 1-D array of finite angles [rad]")
     if np.any(beta < -1e-12) or np.any(beta > np.pi / 2 + 1e-12):
@@ -84,7 +87,9 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
     else:
         a = oMf.rotation @ np.asarray(wheel.axis, float)
         d = N - (N @ a)[:, None] * a
-        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        nd = np.linalg.norm(d, axis=1, keepdims=True)
+        # a normal along the wheel axis (a face hit): d = n, as the row assembly does
+        d = np.where(nd < 1e-9, N, d / np.maximum(nd, 1e-300))
         r = -wheel.radius * d
         rows = N @ J[:3] + np.cross(r, N) @ J[3:]
     # the active rows may depend on beta ("auto"): decided per beta among all candidates
