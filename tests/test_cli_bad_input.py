@@ -59,6 +59,7 @@ def _write_inputs(d: Path) -> None:
         "normal0.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='front'\n"
                         "normal=[0,0,0]\n",
         "wheel.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='nose'\nbeta_deg=10\n",
+        "beta_true.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='front'\nbeta_deg=true\n",
         "radius.toml": "[model]\nname='rover2d'\nparams={wheel_radius=-0.1}\n[obstacle]\n"
                        "wheel='front'\nbeta_deg=10\n",
         "model.toml": "[model]\nname='moonbuggy'\n[obstacle]\nwheel='front'\nbeta_deg=10\n",
@@ -253,6 +254,7 @@ CASES = [
     ("energy-beta", ["energy", "{d}/beta120.toml"], [], "beta_deg", None),
     ("energy-normal", ["energy", "{d}/normal0.toml"], [], "non-zero", None),
     ("energy-wheel", ["energy", "{d}/wheel.toml"], [], "unknown wheel", None),
+    ("energy-beta-bool", ["energy", "{d}/beta_true.toml"], [], "got true, a boolean", None),
     ("energy-radius", ["energy", "{d}/radius.toml"], [], "wheel_radius", None),
     ("energy-model", ["energy", "{d}/model.toml"], [], "model.name", None),
     ("energy-h-with-unit", ["energy", "{d}/h_unit.toml"], [], "0.35 m", None),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -17,11 +19,15 @@ RB = {"model": {"name": "rocker_bogie"}, "velocity": {"u": 0.2}, "constraints": 
       "obstacle": {"wheel": "left_front", "beta_deg": 30.0}}
 
 
-def sc(base, **upd):
+def raw(base, **upd):
     d = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
     for k, v in upd.items():
         d[k] = {**d.get(k, {}), **v} if isinstance(v, dict) else v
-    return Scenario.model_validate(d)
+    return d
+
+
+def sc(base, **upd):
+    return Scenario.model_validate(raw(base, **upd))
 
 
 @pytest.mark.filterwarnings("ignore::roverimpact.exceptions.HeldRowsWarning")  # "all" held
@@ -578,3 +584,24 @@ def test_fixed_base_on_a_file_with_a_free_root(tmp_path):
         assert float(e.m_eff_free) == pytest.approx(m_ref, rel=1e-10)
         assert float(e.T_c_minus) == pytest.approx(0.5 * m_ref * float(n @ J @ v) ** 2,
                                                    rel=1e-10)
+
+
+@pytest.mark.parametrize("upd, where", [
+    ({"obstacle": {"beta_deg": True}}, "obstacle.beta_deg"),
+    ({"velocity": {"u": False}}, "velocity.u"),
+    ({"configuration": {"base": {"roll_deg": True}}}, "configuration.base.roll_deg"),
+    ({"obstacle": {"beta_deg": None, "frame": "chassis", "wheel": None,
+                   "point": [0.0, True, 0.0], "normal": [1.0, 0.0, 0.0]}}, "obstacle.point.1"),
+    ({"contacts": {"mu": {"ground": True}}}, "contacts.mu"),
+])
+def test_a_boolean_is_not_a_number(upd, where):
+    """TOML's true where a number belongs: pydantic read beta_deg = true as 1 degree."""
+    with pytest.raises(ConfigError, match=rf"{re.escape(where)}.*got (true|false), a boolean"):
+        ri.energy_of(raw(ROVER2D, **upd))
+
+
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.HeldRowsWarning")  # "all" held
+def test_booleans_where_the_schema_takes_them():
+    """Boolean options, and builder parameters (which may be boolean), are untouched."""
+    e = ri.energy_of(sc(ROVER2D, model={"params": {"middle_wheel": True}}))
+    assert np.isfinite(float(e.T_c_minus))

@@ -9,10 +9,11 @@ naming the file and every offending key.
 from __future__ import annotations
 
 import re
+import typing
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
 
 from .exceptions import ConfigError
 
@@ -22,9 +23,78 @@ T = TypeVar("T", bound=BaseModel)
 
 
 class StrictModel(BaseModel):
-    """Base of the configuration schemas: unknown keys are errors, instances are frozen."""
+    """Base of the configuration schemas: unknown keys are errors, instances are frozen,
+    and a boolean is not a number (pydantic reads ``beta_deg = true`` as 1.0)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _booleans_are_not_numbers(cls, data):
+        if type(data) is dict:
+            plain = None
+            for key, value in data.items():
+                t = type(value)  # numbers and strings: nothing to look at
+                if t is bool or t is list or t is dict or t is tuple:
+                    if plain is None:
+                        plain = _PLAIN.get(cls) or _plain_fields(cls)
+                    if key in plain and _has_bool(value):
+                        data = {**data, key: _mark_bools(value)}
+        return data
+
+
+class _Boolean:
+    """A TOML/JSON boolean given where a number is expected: no number type accepts it,
+    and the error message shows it as the file wrote it."""
+
+    __slots__ = ("value",)
+
+    def __init__(self, value: bool):
+        self.value = value
+
+    def __repr__(self) -> str:
+        return "true" if self.value else "false"
+
+
+def _has_bool(value) -> bool:
+    if type(value) is bool:
+        return True
+    if type(value) in (list, tuple):
+        return any(_has_bool(v) for v in value)
+    if type(value) is dict:
+        return any(_has_bool(v) for v in value.values())
+    return False
+
+
+def _mark_bools(value):
+    if type(value) is bool:
+        return _Boolean(value)
+    if type(value) in (list, tuple):
+        return type(value)(_mark_bools(v) for v in value)
+    if type(value) is dict:
+        return {k: _mark_bools(v) for k, v in value.items()}
+    return value
+
+
+_PLAIN: dict[type, frozenset] = {}
+
+
+def _plain_fields(cls) -> frozenset:
+    """The fields of ``cls`` whose type admits no boolean and holds no schema (whose own
+    validator looks at its values): a boolean anywhere in their value is an error."""
+    plain = _PLAIN.get(cls)
+    if plain is None:
+        def admits(tp) -> bool:
+            if tp is bool or tp is typing.Any or (isinstance(tp, type)
+                                                   and issubclass(tp, BaseModel)):
+                return True
+            if typing.get_origin(tp) is typing.Literal:
+                return any(type(a) is bool for a in typing.get_args(tp))
+            return any(admits(a) for a in typing.get_args(tp))
+
+        plain = _PLAIN[cls] = frozenset(name for name, f in cls.model_fields.items()
+                                        if not admits(f.annotation))
+    return plain
 
 
 #: a number followed by a unit, e.g. "0.35 m", "45 deg"
@@ -92,7 +162,9 @@ def validation_message(exc: ValidationError, where: str, what: str = "") -> str:
         if err["type"] == "extra_forbidden":
             msg = "unknown key"
         val = err.get("input")
-        if isinstance(val, str) and UNIT_RE.match(val):
+        if isinstance(val, _Boolean):
+            msg += f" (got {val!r}, a boolean)"
+        elif isinstance(val, str) and UNIT_RE.match(val):
             msg += (f" (got {val!r}: write a plain number in the unit of the key: "
                     "*_deg in degrees, everything else SI)")
         text = f"{loc}: {msg}"
