@@ -279,6 +279,15 @@ def test_bad_files(tmp_path):
         ri.ImpactSetup.from_scenario(sc(RB, model={"params": {"front_x": "0.3"}}))
     with pytest.raises(ModelError, match="chassis_com_above_pivot must be a finite number"):
         rocker_bogie(chassis_com_above_pivot=None)
+    with pytest.raises(ModelError, match="expected the path of a URDF/MJCF file, got NoneType"):
+        ri.load_robot(None)
+    # exports into a folder that does not exist: one ConfigError, nothing created
+    from roverimpact.models.export_mjcf import export_mjcf
+
+    for export in (export_urdf, export_mjcf):
+        with pytest.raises(ConfigError, match="no such folder"):
+            export(rover2d(), tmp_path / "missing" / "r.xml")
+    assert not (tmp_path / "missing").exists()
 
 
 def test_held_rows_heavier_than_the_vehicle_warn():

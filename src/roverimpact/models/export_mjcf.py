@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from .._io import check_writable
 from ..exceptions import ModelError
 from ._build import LinearLoopClosure
 from .base import MultibodyModel
@@ -290,6 +291,8 @@ def export_mjcf(mbm: MultibodyModel, path: str | Path, *, springs: dict | None =
     ------
     ModelError
         See :func:`mjcf_element`.
+    ConfigError
+        If ``path`` cannot be written (a missing folder, a folder, no permission).
 
     Examples
     --------
@@ -301,9 +304,9 @@ def export_mjcf(mbm: MultibodyModel, path: str | Path, *, springs: dict | None =
     >>> m.nv, m.nbody   # world + chassis + 2 wheels: the base_x/base_z links are merged
     (5, 4)
     """
+    path = check_writable(path, folder=False, option=None)
     root, _ = mjcf_element(mbm, springs=springs)
     ET.indent(root)
-    path = Path(path)
     path.write_text(ET.tostring(root, encoding="unicode") + "\n")
     return path
 

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from .._io import check_writable
 from ..exceptions import ModelError
 from ._build import LinearLoopClosure
 from .base import MultibodyModel, Wheel
@@ -78,9 +79,11 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
     ModelError
         If the model has a joint other than PX/PY/PZ/RX/RY/RZ or a free-flyer root, or
         a loop closure that is not linear in the joint coordinates.
+    ConfigError
+        If ``path`` cannot be written (a missing folder, a folder, no permission).
     """
     model = mbm.model
-    path = Path(path)
+    path = check_writable(path, folder=False, option=None)
     robot = ET.Element("robot", name=mbm.name)
     floating = False
     parent_link = {0: "ground"}
@@ -427,6 +430,9 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         Missing, unreadable or malformed file, a file Pinocchio (URDF) or MuJoCo (MJCF)
         cannot build, or an ``M(q)`` that differs from MuJoCo's.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise ModelError(f"load_robot: expected the path of a URDF/MJCF file, got "
+                         f"{type(path).__name__}")
     if is_example_robot(str(path)):
         path = example_robot_file(str(path))
     path = Path(path)
