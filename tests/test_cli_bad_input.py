@@ -251,6 +251,7 @@ CASES = [
      None),
     # energy
     ("energy-missing", ["energy", "{d}/nope.toml"], [], "no such file", None),
+    ("energy-folder", ["energy", "{d}"], [], "a folder, not a file", None),
     ("energy-beta", ["energy", "{d}/beta120.toml"], [], "beta_deg", None),
     ("energy-normal", ["energy", "{d}/normal0.toml"], [], "non-zero", None),
     ("energy-wheel", ["energy", "{d}/wheel.toml"], [], "unknown wheel", None),

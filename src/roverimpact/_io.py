@@ -19,11 +19,16 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 
+def no_file(path: Path) -> str:
+    """What is wrong with a path that is not a file: "no such file", or a folder."""
+    return "a folder, not a file" if path.is_dir() else "no such file"
+
+
 def read_toml(path: str | Path) -> dict:
     """Read a TOML file, turning syntax errors into :class:`ConfigError`."""
     path = Path(path)
     if not path.is_file():
-        raise ConfigError(f"{path}: no such file")
+        raise ConfigError(f"{path}: {no_file(path)}")
     try:
         with path.open("rb") as fh:
             return tomllib.load(fh)
@@ -142,7 +147,7 @@ def load_system(path: str | Path) -> dict[str, np.ndarray]:
     suffix = path.suffix.lower()
     if suffix == ".npz":
         if not path.is_file():
-            raise ConfigError(f"{path}: no such file")
+            raise ConfigError(f"{path}: {no_file(path)}")
         try:
             with np.load(path, allow_pickle=False) as data:
                 raw = {k: data[k] for k in data.files}

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .._io import no_file
 from ..exceptions import InputError
 from .trials import SensorsConfig
 
@@ -58,7 +59,7 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
     """
     path = Path(path)
     if not path.is_file():
-        raise TrialDataError(f"{path.name}: no such file")
+        raise TrialDataError(f"{path.name}: {no_file(path)}")
     try:
         df = pd.read_csv(path, comment="#", skipinitialspace=True)
     except pd.errors.EmptyDataError:

@@ -437,6 +437,8 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         path = example_robot_file(str(path))
     path = Path(path)
     if not path.is_file():
+        if path.is_dir():
+            raise ModelError(f"{path}: a folder, not a URDF/MJCF file")
         raise ModelError(f"{path}: no such URDF/MJCF file (a robot of example-robot-data: "
                          "erd:<name>)")
     suffix = path.suffix.lower()

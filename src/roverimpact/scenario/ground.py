@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._io import no_file
 from ..exceptions import ConfigError, InputError
 from .schema import TerrainSpec
 
@@ -71,7 +72,7 @@ def _base_terrain(spec: TerrainSpec):
     if spec.file is not None:
         f = spec.file
         if not Path(f).is_file():
-            raise ConfigError(f"terrain.file: no such file {f!r}")
+            raise ConfigError(f"terrain.file {f!r}: {no_file(Path(f))}")
         suffix = Path(f).suffix.lower()
         kw = {} if spec.spacing is None else {"spacing": spec.spacing, "origin": spec.origin}
         if suffix == ".npy":

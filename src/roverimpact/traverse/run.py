@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .._io import no_file
 from ..exceptions import ConfigError, InputError, ModelError
 from ..studies.store import atomic_parquet, atomic_write_bytes, check_out_dir, versions
 from .compute import evaluate_stations
@@ -64,7 +65,7 @@ def _terrain(spec_json: str):
             raise ConfigError(f"terrain: {exc}") from None
     f = Path(spec.file)
     if not f.is_file():
-        raise ConfigError(f"terrain.file {f}: no such file")
+        raise ConfigError(f"terrain.file {f}: {no_file(f)}")
     suffix = f.suffix.lower()
     if suffix == ".npy":
         return HeightField.from_npy(f, spec.spacing, spec.origin)
