@@ -171,8 +171,13 @@ def _corrupt_set(tmp_path):
     d = df.copy()
     d.loc[2000, "ch2_V"] = np.nan  # a single missing sample is interpolated
     d.to_csv(tmp_path / "one_nan.csv", index=False)
+    # a binary file, and a header of 300 columns none of which is time_s
+    (tmp_path / "binary.csv").write_bytes(bytes(np.random.default_rng(1).integers(0, 256, 3000,
+                                                                           dtype=np.uint8)))
+    (tmp_path / "wide.csv").write_text(",".join(f"c{i}" for i in range(300)) + "\n"
+                                       + ",".join("0" * 300) + "\n")
     files = [*good, "missing_col.csv", "time_back.csv", "nan_run.csv", "units.csv",
-             "empty.csv", "absent.csv", "one_nan.csv"]
+             "empty.csv", "absent.csv", "one_nan.csv", "binary.csv", "wide.csv"]
     return _trials_toml(tmp_path / "trials.toml", files)
 
 
@@ -182,7 +187,10 @@ def test_corrupted_files_reported_per_file(tmp_path):
         ["trial_00_beta30_v0.3_r1.csv", "trial_05_beta80_v0.3_r1.csv", "one_nan.csv"])
     msgs = {f.file: f.message for f in res.failures}
     assert set(msgs) == {"missing_col.csv", "time_back.csv", "nan_run.csv", "units.csv",
-                         "empty.csv", "absent.csv"}
+                         "empty.csv", "absent.csv", "binary.csv", "wide.csv"}
+    assert msgs["binary.csv"] == "binary.csv: not a text CSV file (binary data)"
+    assert "no 'time_s' column" in msgs["wide.csv"] and "(300 columns)" in msgs["wide.csv"]
+    assert all(len(m) < 400 for m in msgs.values())  # the binary file's bytes were echoed
     assert "missing column 'ch2_V'" in msgs["missing_col.csv"]
     assert "not strictly increasing at row 101" in msgs["time_back.csv"]
     assert "run of 20 NaN" in msgs["nan_run.csv"] and "'ch1_V'" in msgs["nan_run.csv"]

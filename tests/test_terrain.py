@@ -240,9 +240,10 @@ def test_bad_npy(tmp_path):
         HeightField.from_npy(tmp_path / "obj.npy", 0.1)
     with pytest.raises(ConfigError, match="cannot read"):
         HeightField.from_npy(tmp_path / "missing.npy", 0.1)
-    (tmp_path / "junk.npy").write_bytes(b"not numpy")
-    with pytest.raises(ConfigError, match="cannot read"):
+    (tmp_path / "junk.npy").write_bytes(b"not numpy" * 300)
+    with pytest.raises(ConfigError, match=r"not a NumPy \.npy file") as info:
         HeightField.from_npy(tmp_path / "junk.npy", 0.1)
+    assert "pickle" not in str(info.value)  # numpy's hint to load it unsafely
     np.save(tmp_path / "z.npy", np.zeros((3, 3)))
     with pytest.raises(ConfigError, match="spacing"):
         HeightField.from_npy(tmp_path / "z.npy", 0.0)

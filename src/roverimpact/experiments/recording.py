@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,6 +38,16 @@ def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return [(sl.start, sl.stop - sl.start) for (sl,) in ndimage.find_objects(labels)]
 
 
+#: control characters other than tab, newline and carriage return
+_UNPRINTABLE = re.compile("[\x01-\x08\x0b\x0c\x0e-\x1f]")
+
+
+def _header(columns, limit: int = 200) -> str:
+    """A header as a list, shortened to about ``limit`` characters for a message."""
+    text = str(list(columns))
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(columns)} columns)"
+
+
 def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int = 3):
     """Read one CSV recording and check it.
 
@@ -60,6 +71,10 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
     path = Path(path)
     if not path.is_file():
         raise TrialDataError(f"{path.name}: {no_file(path)}")
+    with path.open("rb") as fh:
+        head = fh.read(4096)
+    if b"\x00" in head or _UNPRINTABLE.search(head.decode("utf-8", "replace")):
+        raise TrialDataError(f"{path.name}: not a text CSV file (binary data)")
     try:
         df = pd.read_csv(path, comment="#", skipinitialspace=True)
     except pd.errors.EmptyDataError:
@@ -69,7 +84,7 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
     df.columns = [str(c).strip() for c in df.columns]
     if "time_s" not in df.columns:
         raise TrialDataError(
-            f"{path.name}: no 'time_s' column (header is {list(df.columns)}); the first "
+            f"{path.name}: no 'time_s' column (header is {_header(df.columns)}); the first "
             "column must be the time in seconds"
         )
     cols = []
@@ -86,7 +101,7 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
             )
         raise TrialDataError(
             f"{path.name}: missing column {col!r} for channel {ch!r} (header is "
-            f"{list(df.columns)})"
+            f"{_header(df.columns)})"
         )
     if len(df) == 0:
         raise TrialDataError(f"{path.name}: header but no data rows")

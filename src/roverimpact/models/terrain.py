@@ -368,7 +368,14 @@ class HeightField(Terrain):
         """
         path = Path(path)
         try:
+            with path.open("rb") as fh:
+                magic = fh.read(6)
+            if magic != b"\x93NUMPY":  # np.load would take it for a pickle and say so
+                raise ConfigError(f"height field {path} is not a NumPy .npy file (one 2-D "
+                                  "array written by numpy.save)")
             z = np.load(path, allow_pickle=False)
+        except ConfigError:
+            raise
         except (OSError, ValueError, EOFError) as exc:
             raise ConfigError(f"cannot read height field {path}: {exc}") from None
         if not isinstance(z, np.ndarray) or z.dtype.kind not in "biuf":
