@@ -303,7 +303,7 @@ def test_cli_exit_codes(tmp_path, capsys):
     cfg = _corrupt_set(d)
     assert main(["experiment", str(cfg), "-o", str(tmp_path / "o2"), "--no-plot"]) == 0
     err = capsys.readouterr().err
-    assert "6 trial(s) failed" in err and "units.csv" in err
+    assert "8 trial(s) failed" in err and "units.csv" in err
 
     # nothing ran: exit 2
     bad = tmp_path / "bad"
