@@ -197,6 +197,29 @@ def test_export_springs_give_the_own_spring_torque():
     dof = m.jnt_dofadr[jid]
     assert d.qfrc_spring[dof] == pytest.approx(-50.0 * 0.07)
     assert d.qfrc_spring[dof] + d.qfrc_damper[dof] == pytest.approx(own[iq])
+    # the start configuration is not the rest value: a system built from q (as
+    # simulate_impact(q0=q) builds it) has the same springs (it rested at 0.07: no torque)
+    assert build_system(mbm, cfg, q_ref=q).spring_torque(q, v)[iq] == pytest.approx(own[iq])
+
+
+def test_settled_state_passed_back_runs_the_same_impact_in_both_engines():
+    """initial_state's (q0, v0) passed to simulate_impact (the documented "settle once")
+    is the run that settles by itself, and MuJoCo's run from it. The own engine took q0 as
+    the springs' rest values: with the rocker's COM 5 cm ahead, the settled rocker is off
+    its rest value, and F_max was 631 N for 749 N (MuJoCo: 750 N)."""
+    mbm = rover2d(suspension="rocker", com_x=0.05)
+    cfg = SimulationConfig(speed=0.3, beta_deg=60, springs={"rocker": {"k": 500.0, "c": 2.0}},
+                           distance=0.01)
+    q0, v0 = initial_state(mbm, cfg)
+    iq = mbm.model.joints[mbm.model.getJointId("rocker")].idx_q
+    assert abs(q0[iq] - mbm.params["q_nominal"][iq]) > 1e-3  # settled off the rest value
+    alone = simulate_impact(mbm, cfg)
+    again = simulate_impact(mbm, cfg, q0=q0, v0=v0)
+    mj = simulate_impact_mujoco(mbm, cfg, q0=q0, v0=v0)
+    assert again.F_max_total == pytest.approx(alone.F_max_total, rel=1e-4)
+    assert again.T_c_minus == pytest.approx(alone.T_c_minus, rel=1e-6)
+    assert mj.F_max_total == pytest.approx(again.F_max_total, rel=0.01)
+    assert mj.T_c_minus == pytest.approx(again.T_c_minus, rel=1e-3)
 
 
 # ------------------------------------------------------------------------- contact mapping

@@ -58,8 +58,9 @@ def build_system(mbm, cfg: SimulationConfig, *, law=None, ground_law=None,
 
     The obstacle plane is created far ahead (x = 1e9 m); :func:`simulate_impact` moves it
     in front of the rover after settling. ``q_ref`` (default: the model's reference
-    configuration) gives the rest value of springs without ``q0`` and the value at which
-    the joints of ``cfg.contacts.locked`` are held. ``terrain`` (a
+    configuration) gives the value at which the joints of ``cfg.contacts.locked`` are
+    held; a spring without ``q0`` rests at its joint's value in the model's reference
+    configuration, whatever the start (as ``springref`` in :func:`export_mjcf`). ``terrain`` (a
     :class:`~roverimpact.models.terrain.Terrain` or ``{wheel: Terrain}``): the ground of
     every wheel comes from it (:mod:`roverimpact.simulate.terrain`), else the plane z = 0.
     """
@@ -68,11 +69,12 @@ def build_system(mbm, cfg: SimulationConfig, *, law=None, ground_law=None,
     model = mbm.model
     if not mbm.wheels:
         raise ModelError(f"model {mbm.name!r} has no wheels: nothing can touch the obstacle")
-    q_ref = reference_configuration(mbm) if q_ref is None else np.asarray(q_ref, float)
+    q_nominal = reference_configuration(mbm)
+    q_ref = q_nominal if q_ref is None else np.asarray(q_ref, float)
     springs = []
     for name, sp in cfg.springs.items():
         iv = int(np.flatnonzero(lock_row(mbm, name, what="simulation.springs"))[0])
-        q0 = joint_value(mbm, q_ref, name) if sp.q0 is None else sp.q0
+        q0 = joint_value(mbm, q_nominal, name) if sp.q0 is None else sp.q0
         springs.append((iv, functools.partial(joint_value, mbm, name=name), sp.k, sp.c, q0))
     loop = _with_locks(mbm, mbm.loop_closure, cfg.contacts.locked, q_ref)
     planes = []
