@@ -490,3 +490,24 @@ def test_export_rejects_what_mujoco_cannot_take(tmp_path):
 def test_docstring_examples(module):
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_a_configured_suspension_settles_in_both_engines(tmp_path):
+    """[configuration.joints] rocker = 0.02 (mu = 0): the wheels are not level, so the
+    rover is posed on the ground before settling, in the own engine as in MuJoCo's. The
+    own engine skipped the pose and could not settle ("residual 0.5 of the weight")."""
+    from pathlib import Path
+
+    from roverimpact.scenario import load_scenario
+    from roverimpact.simulate.engines import simulate_scenario
+
+    text = (Path(__file__).parents[1] / "examples" / "simulate_rover2d.toml").read_text()
+    assert "mu = 0.3 " in text
+    f = tmp_path / "s.toml"
+    f.write_text(text.replace("mu = 0.3 ", "mu = 0.0 ")
+                 + "\n[configuration.joints]\nrocker = 0.02\n")
+    sc = load_scenario(f)
+    own = simulate_scenario(sc)
+    mj = simulate_scenario(sc, engine="mujoco")
+    assert mj.F_max_total == pytest.approx(own.F_max_total, rel=0.01)
+    assert mj.T_c_minus == pytest.approx(own.T_c_minus, rel=1e-3)

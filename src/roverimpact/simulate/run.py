@@ -387,9 +387,14 @@ def initial_state(mbm, config: SimulationConfig | dict | None = None, *, q0=None
     if terrain is not None:
         return _start_on_terrain(sys, mbm, config, q, terrain, pose, pose_wheels)
     if config.settle and config.ground:
-        q = _pose_on_ground(mbm, sys, q)
-        q = _settle(sys, q, config, float(sum(i.mass for i in sys.model.inertias)))
+        q = _settled_on_ground(sys, mbm, config, q)
     return q, _driving_velocity(sys, q, config.speed)
+
+
+def _settled_on_ground(sys: ContactSystem, mbm, config: SimulationConfig, q):
+    """``q`` posed with every wheel on the ground plane, then in static equilibrium."""
+    q = _pose_on_ground(mbm, sys, q)
+    return _settle(sys, q, config, float(sum(i.mass for i in sys.model.inertias)))
 
 
 def _pose_on_ground(mbm, sys: ContactSystem, q):
@@ -553,10 +558,9 @@ def _start_state(sys: ContactSystem, mbm, config: SimulationConfig, q0, v0, terr
         raise InputError(f"q0 must have shape ({sys.nq},), got {q.shape}")
     if v0 is None and terrain is not None:
         q, v = _start_on_terrain(sys, mbm, config, q, terrain, pose, pose_wheels)
-    elif v0 is None:
+    elif v0 is None:  # as initial_state
         if config.settle and config.ground:
-            mass = float(sum(i.mass for i in sys.model.inertias))
-            q = _settle(sys, q, config, mass)
+            q = _settled_on_ground(sys, mbm, config, q)
         v = _driving_velocity(sys, q, config.speed)
     else:
         v = np.asarray(v0, dtype=float).copy()
