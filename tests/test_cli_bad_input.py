@@ -99,6 +99,7 @@ def _write_inputs(d: Path) -> None:
         # studies (sweep, trust), optimisation (optimize)
         "study_param.toml": STUDY.replace('"model.params.com_height"', '"model.params.zzz"'),
         "study_empty.toml": STUDY.replace("num = 9", "num = 0"),
+        "study_num1.toml": STUDY.replace("num = 9", "num = 1"),
         "study_malformed.toml": "[grid\n",
         "study_uniform.toml": STUDY.split("[grid]")[0] + "[random]\nn = 4\nseed = 1\n"
                               '[random.params]\n"obstacle.beta_deg" = { low = 90, high = 10 }\n',
@@ -107,6 +108,7 @@ def _write_inputs(d: Path) -> None:
         "opt_no_scenario.toml": "[optimize]\nvariables = { h = [0.3, 0.45] }\n",
         "opt_bounds.toml": OPT.replace("h = [0.3, 0.45]", "h = [0.45, 0.3]"),
         "opt_malformed.toml": "[optimize\n",
+        "opt_nbeta1.toml": OPT.replace("n_beta = 4", "n_beta = 1"),
         # traverses (traverse, traverse-report)
         "trav_good.toml": TRAV,
         "trav_malformed.toml": "[terrain\n",
@@ -380,6 +382,8 @@ CASES = [
      "malformed TOML", None),
     ("sweep-parameter", ["sweep", "{d}/study_param.toml", "-o", "{o}/r"], ["{o}/r"], "zzz",
      None),
+    ("sweep-grid-num-1", ["sweep", "{d}/study_num1.toml", "-o", "{o}/r"], ["{o}/r"],
+     "num = 1 gives start", None),
     ("sweep-empty-grid", ["sweep", "{d}/study_empty.toml", "-o", "{o}/r"], ["{o}/r"], "num",
      None),
     ("sweep-uniform-order", ["sweep", "{d}/study_uniform.toml", "-o", "{o}/r"], ["{o}/r"],
@@ -425,6 +429,8 @@ CASES = [
     ("trust-unwritable", ["trust", "--quick", "-o", "{ro}"], ["{ro}"], "not writable", None),
     # optimize
     ("optimize-no-scenario", ["optimize", "{d}/opt_no_scenario.toml"], [], "scenario", None),
+    ("optimize-one-beta", ["optimize", "{d}/opt_nbeta1.toml", "--no-simulate"], [],
+     "n_beta = 1 evaluates beta = 30 deg only", None),
     ("optimize-bounds", ["optimize", "{d}/opt_bounds.toml", "--no-simulate"], [], "bounds",
      None),
     ("optimize-malformed", ["optimize", "{d}/opt_malformed.toml"], [], "malformed TOML",

@@ -55,6 +55,13 @@ class Linspace(StrictModel):
     stop: float
     num: int = Field(ge=1, le=10_000_000)
 
+    @model_validator(mode="after")
+    def _ends(self):
+        if self.num == 1 and self.start != self.stop:
+            raise ValueError(f"num = 1 gives start = {self.start:g} only, not both ends: give "
+                             "num >= 2, or start = stop for one value")
+        return self
+
     def values(self) -> list[float]:
         return [float(x) for x in np.linspace(self.start, self.stop, self.num)]
 

@@ -109,6 +109,15 @@ class OptimizeSpec(StrictModel):
                              f"{list(b)}")
         return b
 
+    @model_validator(mode="after")
+    def _one_beta(self):
+        lo, hi = self.beta_deg
+        if self.n_beta == 1 and lo < hi:
+            raise ValueError(f"n_beta = 1 evaluates beta = {lo:g} deg only, not the range "
+                             f"beta_deg = [{lo:g}, {hi:g}]: give n_beta >= 2, or beta_deg = "
+                             "[b, b] for one angle")
+        return self
+
 
 class OptimizeFile(StrictModel):
     scenario: dict[str, Any]
