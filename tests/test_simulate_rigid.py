@@ -113,10 +113,18 @@ def test_pendulum_hits_wall():
     {"beta_deg": 0.0},
     {"distance": -0.1},
     {"gravity": "jupiter"},
+    {"obstacle_x": float("nan")},
+    {"obstacle_x": float("inf")},
+    {"unknown_option": 1.0},
 ])
 def test_bad_config_is_one_config_error(bad):
     with pytest.raises(ConfigError, match="simulation config"):
         SimulationConfig.from_dict(bad)
+    # keyword construction, as the docs write it: the same ConfigError (was pydantic's
+    # ValidationError, which `except RoverImpactError` did not catch); obstacle_x = nan was
+    # explained as "the obstacle (height inf m) is lower than ... every wheel"
+    with pytest.raises(ConfigError, match="SimulationConfig: "):
+        SimulationConfig(**bad)
 
 
 def test_obstacle_behind_rover_is_input_error():

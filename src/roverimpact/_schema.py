@@ -22,7 +22,19 @@ __all__ = ["UNIT_RE", "StrictModel", "validate", "validation_message"]
 T = TypeVar("T", bound=BaseModel)
 
 
-class StrictModel(BaseModel):
+class _Constructed(type(BaseModel)):
+    """Keyword construction of a schema (``SimulationConfig(beta_deg=120)``): a bad value
+    is one :class:`ConfigError` naming the class and the keys, as from a file. (A metaclass,
+    not ``__init__``: pydantic calls a custom ``__init__`` for every nested model too.)"""
+
+    def __call__(cls, *args, **kwargs):
+        try:
+            return super().__call__(*args, **kwargs)
+        except ValidationError as exc:
+            raise ConfigError(validation_message(exc, cls.__name__)) from None
+
+
+class StrictModel(BaseModel, metaclass=_Constructed):
     """Base of the configuration schemas: unknown keys are errors, instances are frozen,
     and a boolean is not a number (pydantic reads ``beta_deg = true`` as 1.0)."""
 

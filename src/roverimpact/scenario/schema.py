@@ -429,7 +429,7 @@ class SimulationSpec(StrictModel):
 
     gravity: str | float = "earth"
     distance: float = Field(1e-3, allow_inf_nan=False)
-    obstacle_x: float | None = None
+    obstacle_x: float | None = Field(None, allow_inf_nan=False)
     obstacle_height: float = Field(math.inf, gt=0.0)
     ground: bool = True
     settle: bool = True
