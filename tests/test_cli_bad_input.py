@@ -109,6 +109,7 @@ def _write_inputs(d: Path) -> None:
         "opt_bounds.toml": OPT.replace("h = [0.3, 0.45]", "h = [0.45, 0.3]"),
         "opt_malformed.toml": "[optimize\n",
         "opt_nbeta1.toml": OPT.replace("n_beta = 4", "n_beta = 1"),
+        "opt_negative.toml": OPT.replace("h = [0.3, 0.45]", "wheelbase = [-0.45, 0.8]"),
         # traverses (traverse, traverse-report)
         "trav_good.toml": TRAV,
         "trav_malformed.toml": "[terrain\n",
@@ -429,6 +430,8 @@ CASES = [
     ("trust-unwritable", ["trust", "--quick", "-o", "{ro}"], ["{ro}"], "not writable", None),
     # optimize
     ("optimize-no-scenario", ["optimize", "{d}/opt_no_scenario.toml"], [], "scenario", None),
+    ("optimize-negative-bound", ["optimize", "{d}/opt_negative.toml", "--no-simulate"], [],
+     "does not build at the bounds {wheelbase = -0.45}", None),
     ("optimize-one-beta", ["optimize", "{d}/opt_nbeta1.toml", "--no-simulate"], [],
      "n_beta = 1 evaluates beta = 30 deg only", None),
     ("optimize-bounds", ["optimize", "{d}/opt_bounds.toml", "--no-simulate"], [], "bounds",

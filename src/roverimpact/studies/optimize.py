@@ -194,7 +194,32 @@ def load_optimization(source: str | Path | Mapping[str, Any]) -> OptimizeProblem
     if setup.scenario.obstacle.wheel is None:
         raise ConfigError(f"{where}: scenario.obstacle must name a wheel")
     nominal = {v: float(setup.model.params[v]) for v in f.optimize.variables}
-    return OptimizeProblem(scenario=scn, spec=f.optimize, nominal=nominal)
+    problem = OptimizeProblem(scenario=scn, spec=f.optimize, nominal=nominal)
+    _check_bounds(problem, where)
+    return problem
+
+
+def _check_bounds(problem: OptimizeProblem, where: str) -> None:
+    """Build the rover at the corners of the bounds (each bound alone, the others nominal,
+    beyond 6 variables), before any work: a bound the model refuses (a negative wheelbase)
+    is a ConfigError naming the variable, not a failure in the middle of the search."""
+    import itertools
+
+    from ..scenario import ImpactSetup, scenario_from_dict
+
+    bounds = problem.spec.variables
+    names = list(bounds)
+    if len(names) <= 6:
+        settings = [dict(zip(names, c, strict=True))
+                    for c in itertools.product(*(bounds[n] for n in names))]
+    else:
+        settings = [problem.nominal | {n: b} for n in names for b in bounds[n]]
+    for values in settings:
+        try:
+            ImpactSetup.from_scenario(scenario_from_dict(_scenario_with(problem, values)))
+        except (RoverImpactError, ValueError) as exc:
+            raise ConfigError(f"{where}: optimize.variables: the rover does not build at the "
+                              f"bounds {_setting_text(values)}: {exc}") from None
 
 
 # -------------------------------------------------------------------------------------
@@ -254,6 +279,10 @@ def _sim_config(problem: OptimizeProblem, beta_deg: float):
     return SimulationConfig.from_scenario(sc)
 
 
+def _setting_text(values: Mapping[str, float]) -> str:
+    return "{" + ", ".join(f"{k} = {float(v):.6g}" for k, v in values.items()) + "}"
+
+
 def evaluate_setting(problem: OptimizeProblem, values: Mapping[str, float],
                      law=None) -> SettingReport:
     """T_c^- over the beta range, objective, margin, clearance and F_pred of a setting."""
@@ -263,7 +292,7 @@ def evaluate_setting(problem: OptimizeProblem, values: Mapping[str, float],
     try:
         setup = ImpactSetup.from_scenario(scenario_from_dict(_scenario_with(problem, values)))
     except (RoverImpactError, ValueError) as exc:
-        raise ConfigError(f"setting {dict(values)} does not build: {exc}") from None
+        raise ConfigError(f"setting {_setting_text(values)} does not build: {exc}") from None
     betas = problem.betas_deg
     en = sweep_energy(setup, np.deg2rad(betas))
     T = np.asarray(en.T_c_minus, float)
