@@ -100,6 +100,11 @@ def _write_inputs(d: Path) -> None:
         "study_param.toml": STUDY.replace('"model.params.com_height"', '"model.params.zzz"'),
         "study_empty.toml": STUDY.replace("num = 9", "num = 0"),
         "study_num1.toml": STUDY.replace("num = 9", "num = 1"),
+        # a builder parameter the base does not set, misspelt: the hint names it
+        "study_hh.toml": 'name = "t"\n[base]\nmodel = { name = "rover2d" }\n'
+                         'velocity = { u = 0.5 }\nobstacle = { wheel = "front", beta_deg = 60 }'
+                         '\n[grid]\n"model.params.hh" = [0.3]\n',
+        "study_deg.toml": STUDY.replace("[0.2, 0.4]", '["0.2 m", 0.4]'),
         "study_malformed.toml": "[grid\n",
         "study_uniform.toml": STUDY.split("[grid]")[0] + "[random]\nn = 4\nseed = 1\n"
                               '[random.params]\n"obstacle.beta_deg" = { low = 90, high = 10 }\n',
@@ -383,6 +388,10 @@ CASES = [
      "malformed TOML", None),
     ("sweep-parameter", ["sweep", "{d}/study_param.toml", "-o", "{o}/r"], ["{o}/r"], "zzz",
      None),
+    ("sweep-builder-parameter", ["sweep", "{d}/study_hh.toml", "-o", "{o}/r"], ["{o}/r"],
+     "did you mean 'model.params.h'", None),
+    ("sweep-unit", ["sweep", "{d}/study_deg.toml", "-o", "{o}/r"], ["{o}/r"],
+     "write a plain number", None),
     ("sweep-grid-num-1", ["sweep", "{d}/study_num1.toml", "-o", "{o}/r"], ["{o}/r"],
      "num = 1 gives start", None),
     ("sweep-empty-grid", ["sweep", "{d}/study_empty.toml", "-o", "{o}/r"], ["{o}/r"], "num",

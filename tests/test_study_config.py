@@ -201,3 +201,14 @@ def test_sweep_compile_plan(tmp_path, monkeypatch, compile_plan, simulate, worke
     with pytest.raises(ConfigError):
         _study._compile_plan(bad, None, None)
     assert sent == []
+
+
+def test_a_unit_in_a_swept_value_is_explained_once(tmp_path, capsys):
+    """'0.2 m' in a grid: the message says once to write a plain number (it said it twice,
+    once from the scenario's schema and once from the study's check)."""
+    text = (Path(__file__).parents[1] / "examples" / "study_rigid_body.toml").read_text()
+    f = tmp_path / "s.toml"
+    f.write_text(text.replace("[0.2, 0.4]", '["0.2 m", 0.4]'))
+    assert main(["sweep", str(f), "-o", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("write a plain number") == 1 and "'0.2 m'" in err

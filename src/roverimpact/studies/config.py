@@ -525,9 +525,24 @@ def _hashable(v):
     return tuple(v) if isinstance(v, list) else v
 
 
+def _builder_parameters(base: Mapping[str, Any]) -> list[str]:
+    """``model.params.<name>`` of every parameter of the base's built-in model (the
+    params table holds only those the base sets)."""
+    from dataclasses import fields
+
+    from ..models import RigidBodyParams, RockerBogieParams, Rover2DParams
+
+    model = base.get("model") if isinstance(base, Mapping) else None
+    cls = {"rover2d": Rover2DParams, "rocker_bogie": RockerBogieParams,
+           "rigid_body": RigidBodyParams}.get(model.get("name") if isinstance(model, Mapping)
+                                              else None)
+    return [] if cls is None else [f"model.params.{f.name}" for f in fields(cls)]
+
+
 def _unknown_parameter(study: Study, name: str, leaves: Mapping[str, Any]) -> ConfigError:
     import difflib
 
+    leaves = dict.fromkeys([*leaves, *_builder_parameters(study.base)])
     close = difflib.get_close_matches(name, list(leaves), n=3, cutoff=0.5)
     hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
     return ConfigError(
@@ -560,7 +575,7 @@ def validate_scenarios(study: Study, validate, check=None) -> dict:
             raise ConfigError(validation_message(exc, where)) from None
         except InputError as exc:  # ConfigError, or ModelError from building the model
             hint = ""
-            if isinstance(value, str) and UNIT_RE.match(value):
+            if isinstance(value, str) and UNIT_RE.match(value) and "plain number" not in str(exc):
                 hint = (" (write a plain number in the unit of the parameter name: *_deg in "
                         "degrees, everything else SI)")
             raise ConfigError(f"{where}: {exc}{hint}") from None
