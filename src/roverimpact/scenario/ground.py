@@ -89,8 +89,8 @@ def _base_terrain(spec: TerrainSpec):
 
 def make_terrain(spec: TerrainSpec, mbm, q):
     """The terrain of ``[terrain]``; with ``wheels``, ``{wheel name: terrain}`` for every
-    wheel, a wheel's own plane passing through ``height`` straight below its centre at
-    ``q``."""
+    wheel, a wheel's own plane passing through the point at world height ``z = height``
+    straight below its centre at ``q``."""
     import pinocchio as pin
 
     from ..models.terrain import PlaneTerrain

@@ -477,9 +477,10 @@ class PlaneSpec(StrictModel):
 
 
 class WheelGroundSpec(StrictModel):
-    """The ground under one wheel, ``[terrain.wheels.NAME]``: a plane at ``height`` [m]
-    below the wheel (through the point of the terrain straight below the wheel centre)
-    with outward ``normal`` (world, default up)."""
+    """The ground under one wheel, ``[terrain.wheels.NAME]``: a plane through the point
+    at world height ``z = height`` [m] straight below the wheel centre (an absolute
+    height, like the terrain's own: not relative to the terrain under the wheel), with
+    outward ``normal`` (world, default up)."""
 
     height: float = Field(0.0, allow_inf_nan=False)
     normal: Vec3 = (0.0, 0.0, 1.0)
