@@ -262,3 +262,27 @@ def test_file_model_step_equals_scenario():
                                                   "beta_deg": float(np.degrees(beta))}})
     en = ri.ImpactSetup.from_scenario(sc).partition()
     assert res.impact.T_c_minus[0, front] == pytest.approx(float(en.T_c_minus), rel=1e-9)
+
+
+def test_reference_speed_is_a_map_speed_on_a_slope():
+    """On a 10 deg slope the traverse drives the base at u horizontally (a map speed:
+    u / cos 10 deg along the ground), a scenario's [velocity] u on the same [terrain] at u
+    along the ground, so T_c^- differs by 1 / cos^2 10 deg (docs/traverse.md)."""
+    alpha = np.radians(10.0)
+    rb = rocker_bogie()
+    T = FunctionTerrain(lambda x, y: np.tan(alpha) * x + 0.0 * y)
+    r = evaluate_stations(rb, T, np.array([1.0]), np.array([0.0]), np.array([0.0]), u=0.2,
+                          max_travel=0.05)
+    q, v = r.pose.q[0], r.v[0]
+    lin = pin.Quaternion(q[3:7]).toRotationMatrix() @ v[:3]
+    assert lin[0] == pytest.approx(0.2, rel=1e-9)
+    assert np.linalg.norm(lin) == pytest.approx(0.2 / np.cos(alpha), rel=1e-6)
+    n = [-np.sin(alpha), 0.0, np.cos(alpha)]
+    sc = ri.Scenario.model_validate({
+        "model": {"name": "rocker_bogie"}, "velocity": {"u": 0.2},
+        "configuration": {"base": {"x": 1.0, "y": 0.0}},
+        "obstacle": {"wheel": "left_front", "beta_deg": 45.0},
+        "terrain": {"plane": {"point": [0.0, 0.0, 0.0], "normal": n}}})
+    s = ri.ImpactSetup.from_scenario(sc)
+    lin_sc = pin.Quaternion(s.q[3:7]).toRotationMatrix() @ s.v[:3]
+    assert np.linalg.norm(lin_sc) == pytest.approx(0.2, rel=1e-6)

@@ -222,7 +222,9 @@ class TraverseContactsSpec(StrictModel):
 
 
 class DriveSpec(StrictModel):
-    """``[drive]``: reference speed ``speed`` [m/s] (T_c^- is computed at it), the
+    """``[drive]``: reference speed ``speed`` [m/s] (T_c^- is computed at it; a horizontal
+    speed along the path, as are the limits: on a slope the base moves faster along the
+    ground than a scenario's ``[velocity] u``, by 1 / cos(slope)), the
     look-ahead of every wheel [m] (default twice the path spacing), an optional top speed
     ``v_max`` [m/s] capping the limit, and the ``segment`` length [m] of the speed profile."""
 
