@@ -112,3 +112,36 @@ def test_simulate_sends_lemke_to_the_background_and_compiles_the_partition_here(
     assert main(["simulate", str(example), "-o", str(tmp_path / "o"), "--no-plot"]) == 0
     assert compile_plan.sent == ["impact_kernel"]
     assert compile_plan.got[0] == "partition_kernel" and "impact_kernel" in compile_plan.got
+
+
+def test_ctrl_c_swallowed_by_the_compiler_is_an_interruption(monkeypatch, capsys):
+    """A Ctrl-C while numba's compiler is in a C callback: Python reports that
+    KeyboardInterrupt as an unraisable exception and numba then fails with a RuntimeError
+    ("no compiled object yet", a traceback at 10-16 s of a first `roverimpact energy`).
+    The command ends as interrupted, exit 130, without a traceback; a RuntimeError with
+    no Ctrl-C before it still propagates."""
+    import types
+
+    import pytest
+
+    import roverimpact.cli as cli
+
+    def compile_interrupted(argv):
+        sys.unraisablehook(types.SimpleNamespace(
+            exc_type=KeyboardInterrupt, exc_value=KeyboardInterrupt(), exc_traceback=None,
+            err_msg="Exception ignored on calling ctypes callback function", object=None))
+        raise RuntimeError("no compiled object yet for <Library 'partition_kernel'>")
+
+    monkeypatch.setattr(cli, "_main", compile_interrupted)
+    hook = sys.unraisablehook
+    assert cli.main(["energy", "x.toml"]) == 130
+    err = capsys.readouterr().err
+    assert "interrupted" in err and "Exception ignored" not in err
+    assert sys.unraisablehook is hook  # restored
+
+    def plain_failure(argv):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(cli, "_main", plain_failure)
+    with pytest.raises(RuntimeError, match="a bug"):
+        cli.main(["energy", "x.toml"])

@@ -8,8 +8,10 @@ becomes one line on stderr and exit code 2, never a traceback.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import functools
 import os
+import signal
 import sys
 import threading
 
@@ -60,8 +62,53 @@ def _print_interrupted(word: str, exc: BaseException | None) -> None:
                       highlight=False)
 
 
+@contextlib.contextmanager
+def _ctrl_c_noted(seen: list):
+    """Note every Ctrl-C in ``seen``, including one that arrives while numba's compiler is
+    in a C callback: Python reports that KeyboardInterrupt as "Exception ignored" and
+    numba then fails with "no compiled object yet" (a RuntimeError traceback at 10-16 s of
+    a first run). Such a failure after a Ctrl-C is the interruption (exit 130)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous, hook = signal.getsignal(signal.SIGINT), sys.unraisablehook
+    if previous is not signal.default_int_handler:  # ignored, or someone else's handler
+        yield
+        return
+
+    def on_sigint(signum, frame):
+        seen.append(True)
+        raise KeyboardInterrupt
+
+    def unraisable(u):
+        if isinstance(u.exc_value, KeyboardInterrupt):
+            seen.append(True)  # reported as the command's interruption below
+        else:
+            hook(u)
+
+    signal.signal(signal.SIGINT, on_sigint)
+    sys.unraisablehook = unraisable
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        sys.unraisablehook = hook
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``roverimpact`` console script; returns the exit code."""
+    seen: list = []
+    with _ctrl_c_noted(seen):
+        try:
+            return _main(argv)
+        except Exception:
+            if seen:  # numba's compiler failing after a Ctrl-C it did not pass on
+                _print_interrupted("interrupted", None)
+                return 130
+            raise
+
+
+def _main(argv: list[str] | None) -> int:
     from .. import _kernels
     from ..exceptions import RoverImpactError
     from ._app import compile_notice
