@@ -637,6 +637,29 @@ def test_local_cluster_start_method_and_one_blas_thread(monkeypatch, method):
     assert [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"] == before
 
 
+def test_forked_workers_outlive_a_ctrl_c(monkeypatch):
+    """Ctrl-C reaches every process of the terminal's group: a forked worker only notes it
+    (the command cancels the work and closes the cluster), so it neither dies mid-task nor
+    fills the terminal with Dask's warnings; the command's own handler is kept."""
+    pytest.importorskip("dask.distributed")
+    if not sys.platform.startswith("linux"):
+        pytest.skip("fork: Linux only")
+    from dask.distributed import Client
+
+    from roverimpact.studies.executors import local_cluster
+
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", "fork")
+    before = signal.getsignal(signal.SIGINT)
+    with local_cluster(1) as address, Client(address) as client:
+        pids = client.run(os.getpid)
+        os.kill(next(iter(pids.values())), signal.SIGINT)
+        time.sleep(0.5)
+        assert client.submit(sum, [1, 2]).result(timeout=30) == 3
+        # the same worker: not killed and restarted
+        assert client.run(os.getpid, wait=True, on_error="return") == pids
+    assert signal.getsignal(signal.SIGINT) is before
+
+
 def test_worker_start_method_default_and_bad_value(monkeypatch):
     from roverimpact.studies.executors import worker_start_method
 

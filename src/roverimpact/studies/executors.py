@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import io
 import json
+import logging
 import os
+import signal
 import socket
 import sys
+import threading
 import time
 from collections.abc import Mapping, Sequence
 from contextlib import contextmanager, nullcontext
@@ -212,13 +215,51 @@ def local_cluster(workers: int):
     method = worker_start_method()
     with dask.config.set({**WORKER_ENVIRON, **CLUSTER_CONFIG,
                           "distributed.worker.multiprocessing-method": method}), \
-            _one_blas_thread(method):
+            _one_blas_thread(method), _workers_ignore_ctrl_c(method) as ctrl_c:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                dashboard_address=None)
+    if ctrl_c:  # while the workers started: the command's, now
+        _close(cluster, quiet=True)
+        raise KeyboardInterrupt
+    interrupted = False
     try:
         yield cluster.scheduler_address
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
     finally:
+        _close(cluster, quiet=interrupted)
+
+
+def _close(cluster, *, quiet: bool) -> None:
+    """Close a local cluster; ``quiet`` (after a Ctrl-C, which the command reports): without
+    Dask's shutdown warnings (cancelled tasks, workers killed)."""
+    log = logging.getLogger("distributed")
+    level = log.level
+    if quiet:
+        log.setLevel(logging.CRITICAL)
+    try:
         cluster.close()
+    finally:
+        log.setLevel(level)
+
+
+@contextmanager
+def _workers_ignore_ctrl_c(method: str):
+    """Forked workers inherit a SIGINT handler that only notes the signal (in the list
+    this yields: a Ctrl-C while they start is the caller's to raise). A Ctrl-C then stops
+    the command, which cancels the work and closes the cluster, instead of killing every
+    worker mid-task (Dask's "CancelledError" and "still alive after 4 s, killing" lines).
+    Spawned workers start Python afresh and are left as they are."""
+    seen: list = []
+    if method != "fork" or threading.current_thread() is not threading.main_thread():
+        yield seen
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    try:
+        yield seen
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _one_blas_thread(method: str):
