@@ -56,3 +56,13 @@ def test_peak_force_plot(tmp_path):
     fig = plot_peak_force_vs_T(default_laws(1e6, 0.7, m_eff=10.0), 0.5,
                                path=tmp_path / "pf.png")
     assert isinstance(fig, matplotlib.figure.Figure) and (tmp_path / "pf.png").exists()
+
+
+@pytest.mark.parametrize("law", ["gonthier", "flores"])
+def test_contact_small_restitution(law, capsys):
+    """e = 0.001 (z ~ 1000): the closed forms crashed with a ZeroDivisionError traceback."""
+    assert main(["contact", "--law", law, "--k", "1e6", "--e", "0.001", "--mass", "12",
+                 "--speed", "0.5", "--check"]) == 0
+    out = capsys.readouterr().out
+    p = predict(get_law(law, k=1e6, e=0.001), 12.0, 0.5)
+    assert f"{p.peak_force:.6g}" in out and f"{1e3 * p.duration:.6g}" in out

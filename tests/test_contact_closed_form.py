@@ -9,6 +9,7 @@ References used here (none is the code under test):
   evaluated directly with numpy.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -299,3 +300,95 @@ def test_peak_force_does_not_import_scipy_optimize():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "False"]
+
+
+# --- strong damping (e -> 0) against an integration written out here -----------------------
+
+# chi v_i = z(e) of the laws that reach any z, from their papers (not from the code)
+_Z_OF_E = {"gonthier": lambda e: (1.0 - e * e) / e, "flores": lambda e: 8.0 * (1.0 - e) / (5.0 * e)}
+
+
+@functools.lru_cache(maxsize=32)
+def _hunt_crossley_ode(z, n, k, m, v, rtol=1e-11):
+    """m x'' = -max(k x^n (1 + z x'/v), 0), x(0) = 0, x'(0) = v, to separation x = 0.
+
+    Radau (implicit: for large z the slow exit at x' ~ -v/z is stiff) with events written
+    out: the peak force where dF/dt = k x^(n-1) [n x' (1 + z x'/v) + x (z/v) x''] changes
+    sign, the maximum indentation x' = 0 and the separation. Returns
+    (peak force [N], max indentation [m], duration [s], e* = -x'(t_c)/v)."""
+    from scipy.integrate import solve_ivp
+
+    d = (m * v * v / k) ** (1.0 / (n + 1.0))  # a length, for the absolute tolerance only
+
+    def force(x, xd):
+        return max(k * max(x, 0.0) ** n * (1.0 + z * xd / v), 0.0)
+
+    def rhs(_t, s):
+        return [s[1], -force(s[0], s[1]) / m]
+
+    def separation(_t, s):
+        return s[0]
+
+    def top(_t, s):
+        return s[1]
+
+    def dfdt(_t, s):  # dF/dt / (k x^(n-1))
+        x, xd = s
+        return n * xd * (1.0 + z * xd / v) - x * (z / v) * force(x, xd) / m
+
+    separation.terminal, separation.direction = True, -1
+    top.direction = dfdt.direction = -1
+    sol = solve_ivp(rhs, (0.0, 1e9 * d / v), [0.0, v], method="Radau", rtol=rtol,
+                    atol=[rtol * 1e-3 * d, rtol * 1e-3 * v], events=[separation, top, dfdt])
+    assert sol.status == 1, sol.message
+    return (force(*sol.y_events[2][0]), sol.y_events[1][0][0], sol.t_events[0][0],
+            -sol.y_events[0][0][1] / v)
+
+
+@pytest.mark.parametrize(("name", "e"), [
+    ("gonthier", 1.0), ("gonthier", 0.3), ("gonthier", 1e-2), ("gonthier", 1e-3),
+    ("gonthier", 1e-5), ("gonthier", 1e-8), ("flores", 1e-3), ("flores", 1e-6),
+    ("flores", 1e-8),
+])
+def test_small_restitution_matches_written_out_integration(name, e):
+    """e -> 0 (z up to 1.6e8): the closed forms against the integration above (for
+    z > ~745, e < ~1e-3, the restitution root y underflowed: ZeroDivisionError in the
+    duration, so predict() and `roverimpact contact` crashed)."""
+    m, v, k, n = 12.0, 0.5, 1e6, 1.5
+    law = get_law(name, k=k, e=e)
+    assert law.z == pytest.approx(_Z_OF_E[name](e), rel=1e-15)
+    F, dmax, tc, es = _hunt_crossley_ode(_Z_OF_E[name](e), n, k, m, v)
+    p = predict(law, m, v)
+    assert p.peak_force == pytest.approx(F, rel=1e-9)
+    assert p.max_indentation == pytest.approx(dmax, rel=1e-9)
+    assert p.duration == pytest.approx(tc, rel=1e-8)
+    assert p.restitution_achieved == pytest.approx(es, rel=1e-8)
+    assert peak_force(0.5 * m * v * v, v, law) == pytest.approx(F, rel=1e-9)
+
+
+@pytest.mark.parametrize("e", [1e-100, 1e-300])
+@pytest.mark.parametrize("n", [1.0, 1.5, 3.0])
+def test_vanishing_restitution_asymptotics(e, n):
+    """z = (1-e^2)/e -> inf (gonthier), beyond any integration. From the energy integral
+    (docs/contact.md), to relative O(ln z / z): e* = 1/z; xi_max^(n+1) = 2/z; the peak at
+    u = 1/(1+a), a = n/(n+1), where F/F_H = 2^a (1-u)^a u z^(1-a); and, the exit at
+    x' ~ -v/z dominating, t_c/t_H = 2/(n+1) 2^-a z^a / (1-a)."""
+    m, v, k = 12.0, 0.5, 1e6
+    z, a = 1.0 / e, n / (n + 1.0)
+    d_H = ((n + 1.0) * m * v * v / (2.0 * k)) ** (1.0 / (n + 1.0))
+    F_H, t_H = k * d_H**n, d_H / v
+    u = 1.0 / (1.0 + a)
+    p = predict(get_law("gonthier", k=k, e=e, n=n), m, v)
+    assert p.restitution_achieved == pytest.approx(1.0 / z, rel=1e-12)
+    assert p.max_indentation == pytest.approx(d_H * (2.0 / z) ** (1.0 / (n + 1.0)), rel=1e-12)
+    peak = F_H * 2.0**a * (1.0 - u) ** a * u * math.exp((1.0 - a) * math.log(z))
+    assert p.peak_force == pytest.approx(peak, rel=1e-12)
+    tc = t_H * 2.0 / (n + 1.0) * 2.0 ** (-a) * math.exp(a * math.log(z)) / (1.0 - a)
+    assert p.duration == pytest.approx(tc, rel=1e-12)
+
+
+def test_restitution_below_floating_point_range_is_refused():
+    """e = 1e-320: (1-e^2)/e overflows to inf; one InputError, not inf/NaN predictions."""
+    for name in ("gonthier", "flores"):
+        with pytest.raises(InputError, match="too small"):
+            get_law(name, k=1e6, e=1e-320)

@@ -38,6 +38,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..exceptions import InputError
 from .base import ContactLaw, Parameter, check_positive, check_restitution
 from .hertz import hertz_duration_factor, hertz_scales
 
@@ -88,6 +89,9 @@ class HuntCrossleyFamily(ContactLaw):
         object.__setattr__(
             self, "e", check_restitution(self.e, self.name, allow_zero=self.allow_e_zero)
         )
+        if not math.isfinite(self.z):  # e.g. gonthier's (1-e^2)/e for e < 5.6e-309
+            raise InputError(f"{self.name}: e = {self.e!r} is too small: the damping number "
+                             f"{self.equation} overflows; use e >= 1e-300")
 
     @staticmethod
     @abstractmethod
@@ -265,6 +269,8 @@ def _psi(x: float) -> float:
         return math.inf
     if abs(x) < 1e-3:
         return 0.5 - x / 3 + x * x / 4 - x**3 / 5 + x**4 / 6
+    if x > 1e150:  # x * x overflows
+        return (1.0 - math.log1p(x) / x) / x
     return (x - math.log1p(x)) / (x * x)
 
 
@@ -371,6 +377,14 @@ def _peak_factor(z: float, n: float) -> tuple[float, float]:
     if z == 0.0:
         return 1.0, 0.0
     a = n / (n + 1.0)
+    if z > 1e300:
+        # q = (1-u)/(1+zu) ~ 1/z would be subnormal (e < ~1e-300): z P from Q = z q
+        def zP(u):
+            Q = z * (1.0 - u) / (1.0 + z * u)
+            return Q * u + Q * (Q / z) * _psi(Q)
+
+        u = brentq(lambda u: zP(u) - a * u, 0.0, 1.0, xtol=1e-16, rtol=1e-15, maxiter=200)
+        return (2.0 * zP(u)) ** a * z ** (-a) * (1.0 + z * u), u
     u = brentq(lambda u: z * _P(u, z, 0.0) - a * u, 0.0, 1.0,
                xtol=1e-16, rtol=1e-15, maxiter=200)
     return (2.0 * _P(u, z, 0.0)) ** a * (1.0 + z * u), u
@@ -401,29 +415,70 @@ def _duration_factor(z: float, n: float) -> float:
         return (2.0 * ratio) ** (-a) / w
 
     opts = {"epsabs": 0.0, "epsrel": 1e-13, "limit": 500}
-    hi = integrate.quad(g, 0.0, 1.0, weight="alg", wvar=(0.0, -a), **opts)[0]
+    if z <= 1e6:
+        hi = integrate.quad(g, 0.0, 1.0, weight="alg", wvar=(0.0, -a), **opts)[0]
+    else:
+        # Strong damping (e < ~1e-6 for gonthier): 1 + z u leaves 1 in a layer u ~ 1/z and
+        # the integrand is ~1/u above it, too thin a layer for one adaptive quadrature from
+        # u = 0 (z > ~1e80). Pieces: u = r/z, r in [0, 1]; ln u in [-ln z, ln 1/2];
+        # [1/2, 1] with the weight. The ratio is scaled by z (it would be subnormal for
+        # z ~ 1e308): z ratio = (z u + Q psi(Q))/w with Q = z q.
+        za = z**a
+
+        def gz(u):
+            w = 1.0 + z * u
+            Q = z * (1.0 - u) / w
+            return (2.0 * ((z * u + Q * _psi(Q)) / w)) ** (-a) * za / w
+
+        def g_log(t):
+            u = math.exp(t)
+            return gz(u) * u * (1.0 - u) ** (-a)
+
+        hi = (integrate.quad(lambda r: gz(r / z) * (1.0 - r / z) ** (-a), 0.0, 1.0,
+                             **opts)[0] / z
+              + integrate.quad(g_log, -math.log(z), math.log(0.5), **opts)[0]
+              + integrate.quad(gz, 0.5, 1.0, weight="alg", wvar=(0.0, -a), **opts)[0])
     if z < 0.05:
         lo = integrate.quad(g, s, 0.0, weight="alg", wvar=(-a, 0.0), **opts)[0]
         return 2.0 / (n + 1.0) * (lo + hi)
     # Restitution branch in x = z (u - s) / y in [0, X], X = z e*/y: with 1 + z u = y (1 + x)
     # and P = (u - s) R / z, R = ln(1+x)/x - y, the integrand becomes
     # (2 R x / z^2)^(-a) / (z (1 + x)) dx, free of the 1/(1 + z u) near-singularity that
-    # makes the exit slow for strong damping (y ~ 1e-42 for z = 100).
-    X = (1.0 - y) / y
+    # makes the exit slow for strong damping (y ~ 1e-42 for z = 100). y underflows to 0
+    # for z > ~745 (e < ~1e-3 for gonthier): beyond x = 1 the integral is taken in
+    # t = ln x up to L = ln X = ln(1 - y) - ln y, with ln y exact from y e^-y = (1+z) e^-(1+z),
+    # and z^2 is kept out of the powers (it overflows for z > 1e154).
+    c = z ** (2.0 * a - 1.0)  # (z^2)^a / z
+    ly = math.log(y) if y > 1e-200 else math.log1p(z) - (1.0 + z) + y
+    L = math.log1p(-y) - ly  # ln X
 
     def R(x):
         l1 = 1.0 - x / 2 + x * x / 3 - x**3 / 4 if x < 1e-4 else math.log1p(x) / x
         return l1 - y
 
     def f_lin(x):  # times the weight x^(-a)
-        return (2.0 * R(x) / (z * z)) ** (-a) / (z * (1.0 + x))
+        return c * (2.0 * R(x)) ** (-a) / (1.0 + x)
+
+    def Rx(t):  # R x at x = e^t >= 1: ln(1 + x) - y x, without forming x
+        return t + math.log1p(math.exp(-t)) - math.exp(ly + t)
 
     def f_log(t):  # x = exp(t), dx = x dt
-        x = math.exp(t)
-        return (2.0 * R(x) * x / (z * z)) ** (-a) * x / (z * (1.0 + x))
+        return c * (2.0 * Rx(t)) ** (-a) / (1.0 + math.exp(-t))
 
-    x1 = min(1.0, X)
-    lo = integrate.quad(f_lin, 0.0, x1, weight="alg", wvar=(-a, 0.0), **opts)[0]
-    if X > 1.0:
-        lo += integrate.quad(f_log, 0.0, math.log(X), **opts)[0]
+    lo = integrate.quad(f_lin, 0.0, 1.0 if L > 0.0 else math.exp(L), weight="alg",
+                        wvar=(-a, 0.0), **opts)[0]
+    if 0.0 < L <= 200.0:
+        lo += integrate.quad(f_log, 0.0, L, **opts)[0]
+    elif L > 200.0:
+        # t in [0, 64]: the approach to ~t^-a; t in [64, L - 40]: R x = t to 1e-19
+        # (ln(1 + 1/x) < e^-64, y x < e^-40), so the integral of c (2t)^-a is exact; t in
+        # [L - 40, L]: the exit, where y x -> 1 - y, in r = L - t (y x = (1 - y) e^-r)
+        def f_exit(r):
+            t = L - r
+            rx = t + math.log1p(math.exp(-t)) - (1.0 - y) * math.exp(-r)
+            return c * (2.0 * rx) ** (-a) / (1.0 + math.exp(-t))
+
+        lo += integrate.quad(f_log, 0.0, 64.0, points=[1.0], **opts)[0]
+        lo += c * 2.0 ** (-a) * ((L - 40.0) ** (1.0 - a) - 64.0 ** (1.0 - a)) / (1.0 - a)
+        lo += integrate.quad(f_exit, 0.0, 40.0, **opts)[0]
     return 2.0 / (n + 1.0) * (lo + hi)
