@@ -392,3 +392,24 @@ def test_restitution_below_floating_point_range_is_refused():
     for name in ("gonthier", "flores"):
         with pytest.raises(InputError, match="too small"):
             get_law(name, k=1e6, e=1e-320)
+
+
+@pytest.mark.parametrize(("name", "e"), [
+    ("gonthier", 1.0), ("gonthier", 1e-3), ("gonthier", 1e-5), ("gonthier", 1e-8),
+    ("flores", 1e-6), ("flores", 1e-8),
+])
+def test_impact_1dof_finds_an_early_peak(name, e):
+    """For e <= 1e-5 the peak force comes before impact_1dof's first evenly spaced sample
+    (the exit lasts 1e3-1e5 Hertz times): it returned 0 N with 9e-5 m of indentation. Against
+    the integration written out above and the closed form."""
+    m, v, k, n = 12.0, 0.5, 1e6, 1.5
+    law = get_law(name, k=k, e=e)
+    F, dmax, tc, es = _hunt_crossley_ode(_Z_OF_E[name](e), n, k, m, v)
+    r = impact_1dof(law, m, v, max_duration=1e6)
+    assert r.peak_force == pytest.approx(F, rel=1e-9)
+    assert r.peak_force == pytest.approx(predict(law, m, v).peak_force, rel=1e-9)
+    assert r.max_indentation == pytest.approx(dmax, rel=1e-9)
+    assert r.duration == pytest.approx(tc, rel=1e-8)
+    assert r.restitution_achieved == pytest.approx(es, rel=1e-8)
+    assert 0.0 < r.time_of_peak <= r.time_of_max_indentation * (1.0 + 1e-9)
+    assert r.peak_force >= r.force.max()
