@@ -210,6 +210,14 @@ def test_restitution_table_shape_and_honouring_laws():
         (lambda law: peak_force([1.0, -1.0], 1.0, law), r"T_c_minus \[J\]"),
         (lambda law: peak_force(1.0, np.nan, law), r"v_n"),
         (lambda law: predict("hertz", 1.0, 1.0), "ContactLaw"),
+        # finite inputs whose kinetic energy or force overflows (was inf/NaN or, from the
+        # CLI, an OverflowError traceback)
+        (lambda law: predict(law, 1e300, 1e300), r"1/2 m_eff v_n\^2 .* overflows floating"),
+        (lambda law: predict(law, [1.0, 1e300], 1e10), r"m_eff = 1e\+300 kg, v_n = 1e\+10"),
+        (lambda law: predict(get_law("hertz", k=1e-300), 1e300, 1e3), "peak force .* overflows"),
+        (lambda law: peak_force(1e300, 1e-300, get_law("kelvin-voigt", k=1e6, c=10.0)),
+         "peak force .* overflows"),
+        (lambda law: impact_1dof(law, 1e300, 1e300), "out of floating-point range"),
     ],
 )
 def test_bad_inputs(call, match):

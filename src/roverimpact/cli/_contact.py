@@ -19,6 +19,14 @@ def _positive(value: float | None, option: str, what: str, unit: str) -> None:
         raise InputError(f"{option} ({what}) must be a finite number > 0 {unit}, got {value:g}")
 
 
+def _in_range(value: float, what: str, unit: str) -> None:
+    """A quantity computed from finite options overflowed (inf) or underflowed (0)."""
+    from ..exceptions import InputError
+
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"{what} = {value:g} {unit}: out of floating-point range")
+
+
 @app.command("contact")
 def contact_cmd(
     law: str = typer.Option("hunt-crossley", "--law", help="Contact law (see --list)."),
@@ -62,7 +70,11 @@ def contact_cmd(
     if plot is not None:
         check_output(plot, folder=False, option="--plot", suffixes=IMAGE_TYPES)
     if T_c is not None:
-        mass = 2.0 * T_c / speed**2
+        mass = 2.0 * T_c / speed / speed
+        _in_range(mass, f"--tc {T_c:g} J at --speed {speed:g} m/s gives the effective mass "
+                  "m_eff = 2 T_c^-/v_n^2", "kg")
+    _in_range(0.5 * mass * speed * speed, f"--mass {mass:g} kg at --speed {speed:g} m/s "
+              "gives the kinetic energy T_c^- = 1/2 m_eff v_n^2", "J")
     the_law = get_law(law, k=k, e=e, n=n, c=c, m_eff=mass)  # m_eff: used if the law needs it
     p = predict(the_law, mass, speed)
     r = impact_1dof(the_law, mass, speed) if (check or plot) else None
@@ -73,13 +85,13 @@ def contact_cmd(
     if as_json:
         fields = [f for _, f, _ in rows]
         out = {"law": the_law.name, "m_eff": mass, "v_n": speed,
-               "T_c_minus": 0.5 * mass * speed**2,
+               "T_c_minus": 0.5 * mass * speed * speed,
                "closed_form": {f: getattr(p, f) for f in fields}}
         if check:
             out["integrated"] = {f: getattr(r, f) for f in fields}
     else:
         t = new_table(f"{the_law.name}: m_eff = {mass:.6g} kg, v_n = {speed:.6g} m/s, "
-                      f"T_c^- = {0.5 * mass * speed**2:.6g} J", "quantity", "closed form",
+                      f"T_c^- = {0.5 * mass * speed * speed:.6g} J", "quantity", "closed form",
                       *(["integrated", "rel. diff"] if check else []))
         for label, field, scale in rows:
             a = getattr(p, field)

@@ -290,13 +290,18 @@ class ContactLaw(ABC):
         """
         m, v = _broadcast(positive_array(m_eff, "m_eff [kg]"),
                           positive_array(v_n, "v_n [m/s]"), "m_eff", "v_n")
-        peak, dmax, dur, e_star = self._closed_form(m, v)
+        with np.errstate(all="ignore"):
+            T = 0.5 * m * v * v
+            _in_range(T, m, v, "the kinetic energy 1/2 m_eff v_n^2", "J")
+            peak, dmax, dur, e_star = self._closed_form(m, v)
+            _in_range(peak, m, v, f"{self.name}: the peak force", "N")
+            _in_range(dmax, m, v, f"{self.name}: the maximum indentation", "m")
         return Prediction(
             peak_force=as_output(peak),
             max_indentation=as_output(dmax),
             duration=as_output(dur),
             restitution_achieved=as_output(e_star),
-            energy_dissipated=as_output(0.5 * m * v * v * (1.0 - e_star**2)),
+            energy_dissipated=as_output(T * (1.0 - e_star**2)),
             law=self.name,
         )
 
@@ -308,7 +313,12 @@ class ContactLaw(ABC):
         v = positive_array(v_n, "v_n [m/s]")
         if T.shape != v.shape:
             _broadcast(T, v, "T_c_minus", "v_n")  # one clear error if they do not
-        return as_output(self._peak_force(T, v))
+        with np.errstate(all="ignore"):
+            peak = self._peak_force(T, v)
+            m = 2.0 * T / (v * v)  # for the message
+            _in_range(peak, m, np.broadcast_to(v, m.shape), f"{self.name}: the peak force",
+                      "N")
+        return as_output(peak)
 
 
 def positive_array(x, name: str) -> np.ndarray:
@@ -320,6 +330,17 @@ def positive_array(x, name: str) -> np.ndarray:
         bad = a[~(np.isfinite(a) & (a > 0))].ravel()[0]
         raise InputError(f"{name} must be finite and > 0 (got {bad!r})")
     return a
+
+
+def _in_range(x: np.ndarray, m: np.ndarray, v: np.ndarray, what: str, unit: str) -> None:
+    """InputError naming the first (m_eff, v_n) for which ``x`` is not finite: the inputs
+    are finite, but ``x`` (or a value on the way to it) overflows floating point."""
+    bad = ~np.isfinite(np.asarray(x, dtype=float))
+    if np.any(bad):
+        i = np.flatnonzero(bad.ravel())[0]
+        xb, mb, vb = (np.broadcast_to(a, bad.shape).ravel()[i] for a in (x, m, v))
+        raise InputError(f"{what} for m_eff = {mb:g} kg, v_n = {vb:g} m/s overflows floating "
+                         f"point ({xb:g} {unit}): inputs out of range")
 
 
 def _broadcast(a: np.ndarray, b: np.ndarray, name_a: str, name_b: str):

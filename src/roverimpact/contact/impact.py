@@ -110,9 +110,14 @@ def impact_1dof(
                          f"{max_duration!r}")
     max_duration = float(max_duration)
     n, k = law.n, law.k
-    d_H = ((n + 1.0) * m * v * v / (2.0 * k)) ** (1.0 / (n + 1.0))
-    F_H = k * d_H**n
-    t_H = d_H / v
+    with np.errstate(all="ignore"):
+        d_H = ((n + 1.0) * m * v * v / (2.0 * k)) ** (1.0 / (n + 1.0))
+        F_H = k * d_H**n
+        t_H = d_H / v
+    if not all(math.isfinite(x) and x > 0 for x in (d_H, F_H, t_H)):
+        raise InputError(f"m_eff = {m:g} kg, v_n = {v:g} m/s on {law.name} (k = {k:g}): the "
+                         f"impact's scales are out of floating-point range (indentation "
+                         f"{d_H:g} m, force {F_H:g} N, time {t_H:g} s)")
     gain = (n + 1.0) / 2.0
 
     def raw(y):
