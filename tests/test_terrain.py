@@ -220,15 +220,36 @@ def test_npy_and_csv_round_trip(tmp_path):
 @pytest.mark.parametrize("text, match", [
     ("1,2,3\n4,5\n", r"ragged: line 2 has 2 values, line 1 has 3"),
     ("1,2,3\n4,abc,6\n", r"line 2, column 2: 'abc' is not a number"),
-    ("1,2,3\n4,nan,6\n", r"1 NaN/inf value\(s\), the first at row 1, column 1"),
+    ("1,2,3\n4,nan,6\n", r"1 NaN/inf value\(s\), the first at line 2, column 2"),
+    # the file's line, counting comment lines, from 1 as the other messages
+    ("# z [m]\n1,2,3\n4,5,inf\n", r"the first at line 3, column 3"),
+    # a blank line inside the grid was dropped: the rows after it moved down in y
+    ("1,2,3\n\n4,5,6\n7,8,9\n", r"line 2 is blank inside the grid \(between the rows on "
+                                 r"lines 1 and 3\)"),
+    ("1,2,3\n# c\n4,5,6\n \t\n7,8,9\n", r"line 4 is blank inside the grid"),
+    (b"\x89PNG\r\n\x1a\n\x00\xff", r"not a text CSV file"),
     ("1,2,3\n", r"at least 2 x 2"),
     ("", r"empty"),
 ])
 def test_bad_csv(tmp_path, text, match):
     p = tmp_path / "bad.csv"
-    p.write_text(text)
+    if isinstance(text, bytes):
+        p.write_bytes(text)
+    else:
+        p.write_text(text)
     with pytest.raises(ConfigError, match=match):
         HeightField.from_csv(p, 0.1)
+
+
+@pytest.mark.parametrize(("data", "what"), [
+    (b"\xef\xbb\xbf1,2,3\r\n4,5,6\r\n", "byte-order mark (Excel's CSV UTF-8), CRLF"),
+    (b"\n\n1,2,3\n4,5,6\n\n\n", "blank lines before and after the grid"),
+    (b"# heights [m]\n1,2,3\n# row 1 next\n4,5,6\n", "comment lines, inside too"),
+])
+def test_csv_accepted(tmp_path, data, what):
+    p = tmp_path / "z.csv"
+    p.write_bytes(data)
+    np.testing.assert_array_equal(HeightField.from_csv(p, 0.1).z, [[1, 2, 3], [4, 5, 6]])
 
 
 def test_bad_npy(tmp_path):
@@ -272,6 +293,19 @@ def test_geotiff(tmp_path):
     nod = [*tags, (42113, "s", 0, "11", False)]
     tifffile.imwrite(tmp_path / "hole.tif", z, extratags=nod)
     with pytest.raises(ConfigError, match="1 no-data cell"):
+        HeightField.from_geotiff(tmp_path / "hole.tif")
+    # holes named by the file's own row (0 at the top), not by the flipped grid's
+    zn = z.copy()
+    zn[0, 2] = np.nan
+    tifffile.imwrite(tmp_path / "nan.tif", zn, extratags=tags)
+    with pytest.raises(ConfigError, match=r"1 NaN/inf value\(s\), the first at row 0, "
+                                          r"column 2 \(from 0, row 0 at the top"):
+        HeightField.from_geotiff(tmp_path / "nan.tif")
+    zn[2, 1] = np.inf  # first in the file: still row 0
+    tifffile.imwrite(tmp_path / "nan2.tif", zn, extratags=tags)
+    with pytest.raises(ConfigError, match=r"2 NaN/inf value\(s\), the first at row 0, "):
+        HeightField.from_geotiff(tmp_path / "nan2.tif")
+    with pytest.raises(ConfigError, match=r"no-data cell\(s\), the first at row 2, column 3"):
         HeightField.from_geotiff(tmp_path / "hole.tif")
     tifffile.imwrite(tmp_path / "plain.tif", z)
     with pytest.raises(ConfigError, match="no georeferencing"):

@@ -388,55 +388,85 @@ class HeightField(Terrain):
                  **kw) -> HeightField:
         """Load a CSV grid: one line per row ``i`` (y), one value per column ``j`` (x).
 
-        The first line is the row at ``y0`` (the smallest y). Lines starting with ``#``
-        and blank lines are skipped. Raises :class:`~roverimpact.exceptions.ConfigError`
-        naming the line on ragged rows, non-numeric cells or NaN/inf.
+        The first line is the row at ``y0`` (the smallest y). The file is read as UTF-8,
+        with or without a byte-order mark (Excel's "CSV UTF-8"). Lines starting with ``#``
+        are skipped, and so are blank lines before and after the grid; a blank line inside
+        it is refused (a missing row would shift the following rows in y). Raises
+        :class:`~roverimpact.exceptions.ConfigError` naming the file's line (and column,
+        from 1) on blank lines inside the grid, ragged rows, non-numeric cells or NaN/inf.
         """
         path = Path(path)
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", UserWarning)  # empty file: reported below
-                z = np.loadtxt(path, delimiter=delimiter, ndmin=2, comments="#")
+            text = path.read_text(encoding="utf-8-sig")
         except OSError as exc:
             raise ConfigError(f"cannot read height field {path}: {exc}") from None
+        except UnicodeDecodeError as exc:
+            raise ConfigError(f"height field {path} is not a text CSV file (byte "
+                              f"{exc.start} is not UTF-8)") from None
+        lines = text.splitlines()
+        rows = [k for k, line in enumerate(lines, start=1)
+                if line.strip() and not line.lstrip().startswith("#")]  # file line of row i
+        inside = [k for k, line in enumerate(lines, start=1)
+                  if not line.strip() and rows and rows[0] < k < rows[-1]]
+        if inside:
+            b = inside[0]
+            before = max(k for k in rows if k < b)
+            after = min(k for k in rows if k > b)
+            raise ConfigError(f"height field {path}, line {b} is blank inside the grid "
+                              f"(between the rows on lines {before} and {after}): every "
+                              "line is a row in y, so a missing row would shift the ones "
+                              "after it; remove the blank line (or mark it '#')")
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # empty file: reported below
+                z = np.loadtxt(lines, delimiter=delimiter, ndmin=2, comments="#")
         except ValueError:
-            cls._csv_diagnose(path, delimiter)  # raises with the line and column
+            cls._csv_diagnose(path, lines, delimiter)  # raises with the line and column
             raise  # pragma: no cover - _csv_diagnose always raises on what loadtxt rejects
-        return cls._from_loaded(z, path, spacing, origin, **kw)
+        return cls._from_loaded(z, path, spacing, origin,
+                                where=lambda i, j: f"line {rows[i]}, column {j + 1}", **kw)
 
     @staticmethod
-    def _csv_diagnose(path: Path, delimiter: str):
+    def _csv_diagnose(path: Path, lines: list[str], delimiter: str):
         width = None
-        with path.open(newline="") as fh:
-            for lineno, row in enumerate(csv.reader(fh, delimiter=delimiter), start=1):
-                if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
-                    continue
-                for col, cell in enumerate(row, start=1):
-                    try:
-                        float(cell)
-                    except ValueError:
-                        raise ConfigError(f"height field {path}, line {lineno}, column {col}: "
-                                          f"{cell.strip()!r} is not a number") from None
-                if width is None:
-                    width, first = len(row), lineno
-                elif len(row) != width:
-                    raise ConfigError(f"height field {path} is ragged: line {lineno} has "
-                                      f"{len(row)} values, line {first} has {width}")
+        for lineno, row in enumerate(csv.reader(lines, delimiter=delimiter), start=1):
+            if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
+                continue
+            for col, cell in enumerate(row, start=1):
+                try:
+                    float(cell)
+                except ValueError:
+                    raise ConfigError(f"height field {path}, line {lineno}, column {col}: "
+                                      f"{cell.strip()!r} is not a number") from None
+            if width is None:
+                width, first = len(row), lineno
+            elif len(row) != width:
+                raise ConfigError(f"height field {path} is ragged: line {lineno} has "
+                                  f"{len(row)} values, line {first} has {width}")
         raise ConfigError(f"height field {path} is not a readable CSV grid")
 
+    @staticmethod
+    def _check_finite(z: np.ndarray, path, where=None) -> None:
+        """ConfigError on NaN/inf, naming the first in the order of ``z`` as
+        ``where(i, j)`` (the file's own numbering; default ``row i, column j``)."""
+        bad = ~np.isfinite(z)
+        if bad.any():
+            i, j = (int(k) for k in np.argwhere(bad)[0])
+            at = where(i, j) if where is not None else f"row {i}, column {j}"
+            raise ConfigError(f"height field {path} has {int(bad.sum())} NaN/inf value(s), "
+                              f"the first at {at}: fill the holes before use")
+
     @classmethod
-    def _from_loaded(cls, z, path, spacing, origin, **kw) -> HeightField:
+    def _from_loaded(cls, z, path, spacing, origin, *, where=None, **kw) -> HeightField:
+        """``where(i, j)``: the place of grid node (i, j) in the file's own numbering, for
+        the messages (default: ``row i, column j``, the array's)."""
         z = np.asarray(z, dtype=float)
         if z.size == 0:
             raise ConfigError(f"height field {path} is empty")
         if z.ndim != 2 or min(z.shape) < 2:
             raise ConfigError(f"height field {path} must be a 2-D grid of at least 2 x 2 "
                               f"nodes, got shape {z.shape}")
-        bad = ~np.isfinite(z)
-        if bad.any():
-            i, j = (int(k) for k in np.argwhere(bad)[0])
-            raise ConfigError(f"height field {path} has {int(bad.sum())} NaN/inf value(s), "
-                              f"the first at row {i}, column {j}: fill the holes before use")
+        cls._check_finite(z, path, where)
         try:
             return cls(z, spacing, origin, **kw)
         except InputError as exc:
@@ -517,11 +547,15 @@ class HeightField(Terrain):
                 if hole.any():
                     r, c = (int(k) for k in np.argwhere(hole)[0])
                     raise ConfigError(f"GeoTIFF {path} has {int(hole.sum())} no-data cell(s), "
-                                      f"the first at row {r}, column {c}: fill the holes first")
+                                      f"the first at row {r}, column {c} (from 0, row 0 at "
+                                      "the top of the file): fill the holes first")
         nrow = z.shape[0]
         # pixel (col c, row r) centre: X = X0 + (c + half - I0) sx, Y = Y0 - (r + half - J0) sy
         x0 = X0 + (half - I0) * sx
         y_last = Y0 - (nrow - 1 + half - J0) * sy
+        # holes named as in the file (before the flip that puts row 0 south)
+        cls._check_finite(z, path, lambda r, c: f"row {r}, column {c} (from 0, row 0 at the "
+                          "top of the file)")
         return cls._from_loaded(z[::-1], path, (sx, sy), (x0, y_last), **kw)
 
 
