@@ -155,7 +155,8 @@ def impact_1dof(
         raise SolverError(
             f"{law.name}: no separation within {max_duration:g} Hertz times "
             f"({max_duration * t_H:.3g} s): the contact is too damped to end, or ends "
-            "later (gonthier e = 1e-8: 8e4 Hertz times); pass a larger max_duration"
+            "later (a strongly damped exit creeps: gonthier at e = 1e-8 lasts 8e4 Hertz "
+            "times); pass a larger max_duration"
         )
     tau_end = float(min(te[0] for te in ends))
     y_end = sol.sol(tau_end)
