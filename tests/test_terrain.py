@@ -719,9 +719,27 @@ def test_seeds_and_independent_streams():
     np.testing.assert_array_equal(a.rocks.diameter, d.rocks.diameter)  # same rocks
     assert isinstance(a, HeightField) and a.params["seed"] == 1
     with pytest.raises(InputError, match="rock abundance"):
-        synthetic_mars((5.0, 3.0), 0.05, seed=1, rock_abundance=0.0)
+        synthetic_mars((5.0, 3.0), 0.05, seed=1, rock_abundance=-0.1)
+    with pytest.raises(InputError, match="rock abundance"):
+        synthetic_mars((5.0, 3.0), 0.05, seed=1, rock_abundance=1.0)
     with pytest.raises(InputError, match="hurst"):
         synthetic_mars((5.0, 3.0), 0.05, seed=1, hurst=1.5)
+
+
+def test_no_rocks_is_the_surface_alone():
+    """rock_abundance = 0: no rocks, and the surface of the same seed with rocks (which
+    only raise it, by max()) unchanged where they are not; hurst = 1 is accepted."""
+    bare = synthetic_mars((6.0, 4.0), 0.05, seed=3, rock_abundance=0.0)
+    rocky = synthetic_mars((6.0, 4.0), 0.05, seed=3, rock_abundance=0.2)
+    assert len(bare.rocks) == 0 and len(rocky.rocks) > 5
+    assert bare.params["rock_abundance"] == 0.0
+    assert (rocky.z >= bare.z).all()
+    same = rocky.z == bare.z
+    assert 0.5 < same.mean() < 1.0          # raised under the rocks only
+    np.testing.assert_array_equal(bare.z, synthetic_mars((6.0, 4.0), 0.05, seed=3,
+                                                         rock_abundance=0.0).z)
+    assert synthetic_mars((6.0, 4.0), 0.05, seed=3, hurst=1.0,
+                          rock_abundance=0.0).z.std() == pytest.approx(0.1)
 
 
 @pytest.mark.parametrize("H, sd", [(0.3, 0.007), (0.8, 0.014)])

@@ -83,10 +83,11 @@ def golombek_rapp_area(D, k):
     return np.asarray(k, dtype=float) * np.exp(-golombek_rapp_q(k) * np.asarray(D, dtype=float))
 
 
-def _check_k(k, d_min, d_max):
+def _check_k(k, d_min, d_max, *, zero: bool = False):
     k = float(k)
-    if not (0 < k < 1):
-        raise InputError(f"rock abundance k must be in (0, 1), got {k}")
+    if not ((0 <= k < 1) if zero else (0 < k < 1)):
+        raise InputError(f"rock abundance k must be in [0, 1) (0: no rocks), got {k}" if zero
+                         else f"rock abundance k must be in (0, 1), got {k}")
     if not (np.isfinite(d_min) and np.isfinite(d_max) and 0 < d_min < d_max):
         raise InputError(f"rock diameters need 0 < d_min < d_max, got d_min={d_min}, "
                          f"d_max={d_max}")
@@ -141,7 +142,7 @@ def sample_rocks(k: float, extent, rng, *, d_min: float = 0.1, d_max: float = 2.
     Parameters
     ----------
     k : float
-        Total rock abundance (0 < k < 1), e.g. 0.05 to 0.2.
+        Total rock abundance (0 <= k < 1), e.g. 0.05 to 0.2; 0: no rocks.
     extent : ((x_min, x_max), (y_min, y_max))
         Domain of the rock centres [m].
     rng : numpy.random.Generator
@@ -150,13 +151,13 @@ def sample_rocks(k: float, extent, rng, *, d_min: float = 0.1, d_max: float = 2.
     height_ratio : float or (lo, hi)
         Rock height / diameter, fixed or uniform in [lo, hi] per rock.
     """
-    k = _check_k(k, d_min, d_max)
+    k = _check_k(k, d_min, d_max, zero=True)
     (xa, xb), (ya, yb) = extent
     area = (xb - xa) * (yb - ya)
     if not area > 0:
         raise InputError(f"rock domain has no area: {extent}")
-    q = float(golombek_rapp_q(k))
-    n = int(rng.poisson(rock_density(k, d_min, d_max) * area))
+    q = float(golombek_rapp_q(k)) if k > 0 else np.inf
+    n = int(rng.poisson(rock_density(k, d_min, d_max) * area)) if k > 0 else 0
     D = np.empty(0)
     a, b = 1.0 / d_min, 1.0 / d_max
     while D.size < n:
@@ -172,7 +173,7 @@ def sample_rocks(k: float, extent, rng, *, d_min: float = 0.1, d_max: float = 2.
         eta = rng.uniform(hr[0], hr[1], n)
     else:
         raise InputError(f"height_ratio must be a number or (lo, hi), got {hr.tolist()}")
-    if not (np.isfinite(eta).all() and (eta > 0).all()):
+    if not (np.isfinite(hr).all() and (hr > 0).all()):
         raise InputError(f"height_ratio must be positive, got {hr.tolist()}")
     return Rocks(x=rng.uniform(xa, xb, n), y=rng.uniform(ya, yb, n), diameter=D,
                  height=eta * D)
@@ -264,7 +265,7 @@ def synthetic_mars(size, spacing: float, *, seed: int, hurst: float = 0.8, rms: 
         Surface spectrum (see :func:`fractal_surface`); ``rms = 0`` gives flat ground.
         The defaults (0.8, 0.1 m, 10 m) are illustrative, not fitted to a site.
     rock_abundance : float
-        Golombek–Rapp k (0 < k < 1).
+        Golombek–Rapp k (0 <= k < 1; 0: the fractal surface without rocks).
     d_min, d_max : float
         Diameter range of the sampled rocks [m].
     height_ratio : float or (lo, hi)
