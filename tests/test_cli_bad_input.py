@@ -123,7 +123,9 @@ def _write_inputs(d: Path) -> None:
         "trav_off.toml": TRAV.replace("[40.0, 0.0]]", "[41.5, 0.0]]"),
         "trav_dem.toml": TRAV.replace('kind = "synthetic"', 'kind = "file"\nfile = "nope.npy"')
                              .replace("size = [44.0, 12.0]          # m\n", "")
-                             .replace("seed = 7\n", ""),
+                             .replace("seed = 7\n", "")
+                             .replace("rock_abundance = 0.2", "# rock_abundance")
+                             .replace("d_max = 1.0", "# d_max"),
         "trav_wheel.toml": TRAV.replace("[drive]", "[contacts]\nwheels = ['nose']\n[drive]"),
         "trav_unit.toml": TRAV.replace("speed = 0.1 ", 'speed = "0.1 m/s" '),
         "trav_gravity.toml": TRAV.replace("[limits]\n", '[limits]\ngravity = "venus"\n'),
@@ -132,6 +134,29 @@ def _write_inputs(d: Path) -> None:
                         "[velocity]\nu=0.5\n[obstacle]\nframe='contact'\nbeta_deg=45\n",
         "trav_ground.toml": TRAV.replace("[limits]\n",
                                          "[limits]\nground_law = { name = 'hertz', k = -1 }\n"),
+        "trav_susp_name.toml": TRAV + "[suspension]\n"
+                               "variables = { chasis_com_above_pivot = [0.0, 0.2] }\n",
+        "trav_susp_bounds.toml": TRAV + "[suspension]\n"
+                                 "variables = { chassis_com_above_pivot = [0.2, 0.0] }\n",
+        "trav_coulomb_nomu.toml": TRAV.replace("[drive]", "[contacts]\nground = 'coulomb'\n"
+                                               "[drive]"),
+        "trav_coulomb_neg.toml": TRAV.replace("[drive]", "[contacts]\nground = 'coulomb'\n"
+                                              "mu = -0.5\n[drive]"),
+        "trav_normal_mu.toml": TRAV.replace("[drive]", "[contacts]\nmu = 0.5\n[drive]"),
+        "trav_seed.toml": TRAV.replace("seed = 7", "seed = -1"),
+        "trav_lookahead.toml": TRAV.replace("[drive]\n", "[drive]\nlook_ahead = 0.02\n"),
+        "trav_file_synth_keys.toml": TRAV.replace('kind = "synthetic"',
+                                                  'kind = "file"\nfile = "dem.npy"\n'
+                                                  "hurst = 0.5")
+                                         .replace("size = [44.0, 12.0]          # m\n", "")
+                                         .replace("seed = 7\n", ""),
+        "trav_tif_spacing.toml": TRAV.split("[terrain]")[0] + '[terrain]\nkind = "file"\n'
+                                 'file = "dem.tif"\nspacing = 0.05\n[path]'
+                                 + TRAV.split("[path]")[1],
+        "trav_path_names.toml": TRAV.replace("[path]\nname = \"rocky\"",
+                                             "[[paths]]\nname = \"a/b\"")
+                                    .replace("[model]", "[[paths]]\nname = \"a b\"\n"
+                                             "waypoints = [[0.0, 0.0], [5.0, 0.0]]\n[model]"),
     }
     for name, text in t.items():
         (d / name).write_text(text)
@@ -490,6 +515,28 @@ CASES = [
                        "--scheduler", "tcp://127.0.0.1:9"], ["{o}/t"], "not both", None),
     ("traverse-report-not-folder", ["traverse-report", "{d}"], [],
      "not a traverse output folder", None),
+    # traverse: every key checked before any work, none silently ignored
+    ("traverse-suspension-variable", ["traverse", "{d}/trav_susp_name.toml", "-o", "{o}/t"],
+     ["{o}/t"], "'chasis_com_above_pivot': not a numeric parameter of rocker_bogie", None),
+    ("traverse-suspension-bounds", ["traverse", "{d}/trav_susp_bounds.toml", "-o", "{o}/t"],
+     ["{o}/t"], "lo < hi", None),
+    ("traverse-coulomb-no-mu", ["traverse", "{d}/trav_coulomb_nomu.toml", "-o", "{o}/t"],
+     ["{o}/t"], "needs contacts.mu", None),
+    ("traverse-coulomb-negative-mu", ["traverse", "{d}/trav_coulomb_neg.toml", "-o",
+                                      "{o}/t"], ["{o}/t"], "mu must be >= 0", None),
+    ("traverse-mu-without-coulomb", ["traverse", "{d}/trav_normal_mu.toml", "-o", "{o}/t"],
+     ["{o}/t"], "contacts.mu is for ground = \"coulomb\" only", None),
+    ("traverse-negative-seed", ["traverse", "{d}/trav_seed.toml", "-o", "{o}/t"], ["{o}/t"],
+     "terrain.seed", None),
+    ("traverse-look-ahead-short", ["traverse", "{d}/trav_lookahead.toml", "-o", "{o}/t"],
+     ["{o}/t"], "shorter than path 'rocky''s spacing", None),
+    ("traverse-file-synthetic-keys", ["traverse", "{d}/trav_file_synth_keys.toml", "-o",
+                                      "{o}/t"], ["{o}/t"],
+     "terrain.rock_abundance, terrain.hurst, terrain.d_max: for a synthetic terrain only", None),
+    ("traverse-geotiff-spacing", ["traverse", "{d}/trav_tif_spacing.toml", "-o", "{o}/t"],
+     ["{o}/t"], "GeoTIFF", None),
+    ("traverse-path-file-names", ["traverse", "{d}/trav_path_names.toml", "-o", "{o}/t"],
+     ["{o}/t"], "share the figure files map-a_b.png", None),
     # the program
     ("unknown-command", ["bogus"], [], "bogus", None),
 ]

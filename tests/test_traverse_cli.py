@@ -196,6 +196,36 @@ def test_schema_refusals():
     bad({"limits.gravity": "venus"}, "gravity preset")
     bad({"limits.model": "exact"}, "weight")
     bad({"limits.window": 0.0}, "window")
+    bad({"terrain.seed": -1}, "terrain.seed")
+    bad({"terrain.rock_abundance": 1.0}, "rock_abundance")
+    bad({"terrain.hurst": 1.2}, "hurst")
+    bad({"drive.look_ahead": 0.04}, "look_ahead = 0.04 m is shorter than path 'a''s spacing")
+    bad({"contacts": {"ground": "coulomb"}}, "needs contacts.mu")
+    bad({"contacts": {"ground": "coulomb", "mu": -0.5}}, "mu must be >= 0")
+    bad({"contacts": {"mu": 0.5}}, "mu is for ground")
+    bad({"contacts": {"ground": "noslip", "mu": 0.5}}, "held")
+    bad({"suspension": {"variables": {"chasis_com_above_pivot": [0.0, 0.2]}}},
+        "'chasis_com_above_pivot': not a numeric parameter of rocker_bogie; choose from")
+    bad({"suspension": {"variables": {"chassis_com_above_pivot": [0.2, 0.0]}}}, "lo < hi")
+    for key, value in (("hurst", 0.5), ("rock_abundance", 0.3), ("seed", 1)):
+        raw = json.loads(json.dumps(base))
+        raw["terrain"] = {"kind": "file", "file": "dem.npy", "spacing": 0.05, key: value}
+        with pytest.raises(ConfigError, match=f"terrain.{key}: for a synthetic terrain only"):
+            traverse_from_dict(raw)
+    for key, value in (("spacing", 0.05), ("origin", [0.0, 0.0])):
+        raw = json.loads(json.dumps(base))
+        raw["terrain"] = {"kind": "file", "file": "dem.tif", key: value}
+        with pytest.raises(ConfigError, match=f"terrain.{key}: a GeoTIFF"):
+            traverse_from_dict(raw)
+    # accepted: what synthetic_mars accepts (hurst up to 1, no rocks), a look-ahead of one
+    # spacing, mu with Coulomb friction
+    raw = json.loads(json.dumps(base))
+    raw["terrain"].update(hurst=1.0, rock_abundance=0.0)
+    raw["drive"]["look_ahead"] = 0.05
+    raw["contacts"] = {"ground": "coulomb", "mu": 0.5}
+    cfg = traverse_from_dict(raw)
+    assert cfg.terrain.synthetic_params()["rock_abundance"] == 0.0
+    assert traverse_from_dict(base).terrain.synthetic_params()["hurst"] == 0.8
     raw = json.loads(json.dumps(base))
     del raw["contact_law"]
     del raw["band"]
@@ -206,6 +236,38 @@ def test_schema_refusals():
     raw["limits"] = {"T_allow": 0.01}
     with pytest.raises(ConfigError, match="names must differ"):
         traverse_from_dict(raw)
+    # names that are different but give the same file names (map-<name>.png)
+    raw["paths"] = [{**raw["paths"][0], "name": n} for n in ("route 1/a", "Route_1_A")]
+    with pytest.raises(ConfigError, match=r"share the figure files map-route_1_a\.png"):
+        traverse_from_dict(raw)
+
+
+def test_path_names_with_a_slash(tmp_path, capfd):
+    """Two [[paths]] named "route 1/a" and "route 1/b": the figures are map-route_1_a.png
+    ..., the tables keep the names, and traverse-report redraws them (the traverse failed
+    writing "map-route 1/a.png" after all its work, keeping nothing)."""
+    import tomllib
+
+    raw = tomllib.loads(SHORT)
+    del raw["path"], raw["band"], raw["contact_law"]
+    raw["limits"] = {"T_allow": 0.01}
+    raw["paths"] = [{"name": "route 1/a", "start": [0.5, 0.0], "end": [1.0, 0.0],
+                     "spacing": 0.1},
+                    {"name": "route 1/b", "start": [0.5, 0.5], "end": [1.0, 0.5],
+                     "spacing": 0.1}]
+    f = tmp_path / "t.toml"
+    from roverimpact.traverse.run import _toml
+
+    f.write_text(_toml(raw))
+    out = tmp_path / "out"
+    assert main(["traverse", str(f), "-o", str(out)]) == 0
+    for stem in ("map-route_1_a", "map-route_1_b", "speed-route_1_a", "speed-route_1_b"):
+        assert (out / f"{stem}.png").is_file() and (out / f"{stem}.svg").is_file(), stem
+    assert set(pd.read_parquet(out / "poses.parquet")["path"]) == {"route 1/a", "route 1/b"}
+    assert "route 1/a" in (out / "report.html").read_text()
+    assert main(["traverse", str(f), "-o", str(tmp_path / "n"), "--no-report"]) == 0
+    assert main(["traverse-report", str(tmp_path / "n")]) == 0
+    assert (tmp_path / "n" / "map-route_1_b.png").is_file()
 
 
 def test_path_leaving_the_terrain_is_refused_before_work(tmp_path):

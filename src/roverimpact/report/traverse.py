@@ -268,11 +268,12 @@ def statistics(poses: pd.DataFrame, wheels: pd.DataFrame, segments: pd.DataFrame
 
 
 def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
-    """Draw ``map.png/svg`` and ``speed.png/svg`` (per path: ``map-<path>``...) and write
-    ``report.html`` in a traverse output folder; ``terrain`` and ``config`` default to those
-    of the folder's ``traverse.toml``."""
+    """Draw ``map.png/svg`` and ``speed.png/svg`` (per path: ``map-<path>``..., the path's
+    name made a file name by :func:`~roverimpact.traverse.schema.file_tag`: "route 1/a"
+    gives ``map-route_1_a.png``) and write ``report.html`` in a traverse output folder;
+    ``terrain`` and ``config`` default to those of the folder's ``traverse.toml``."""
     from ..traverse.run import build_terrain
-    from ..traverse.schema import traverse_from_dict
+    from ..traverse.schema import file_tag, traverse_from_dict
 
     folder = Path(folder)
     poses, wheels, segments, man, text = load_traverse_results(folder)
@@ -294,7 +295,7 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
     names = list(dict.fromkeys(poses["path"]))
     figs = []
     for name in names:
-        tag = "" if len(names) == 1 else f"-{name}"
+        tag = "" if len(names) == 1 else f"-{file_tag(str(name))}"
         f1 = plot_map(terrain, poses, wheels, path=name, title=f"{config.name}: {name}")
         f2 = plot_speed(poses, segments, wheels, v_ref=config.drive.speed,
                         v_max=config.drive.v_max, path=name)

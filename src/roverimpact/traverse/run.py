@@ -53,24 +53,20 @@ def _terrain(spec_json: str):
     from ..models.terrain_synth import synthetic_mars
 
     if spec.kind == "synthetic":
-        hr = spec.height_ratio
         try:
-            return synthetic_mars(spec.size, spec.spacing, seed=spec.seed, hurst=spec.hurst,
-                                  rms=spec.rms, corner_wavelength=spec.corner_wavelength,
-                                  rock_abundance=spec.rock_abundance, d_min=spec.d_min,
-                                  d_max=spec.d_max,
-                                  height_ratio=tuple(hr) if isinstance(hr, tuple) else hr,
-                                  origin=spec.origin)
+            return synthetic_mars(spec.size, spec.spacing, seed=spec.seed,
+                                  **spec.synthetic_params())
         except InputError as exc:
             raise ConfigError(f"terrain: {exc}") from None
     f = Path(spec.file)
     if not f.is_file():
         raise ConfigError(f"terrain.file {f}: {no_file(f)}")
     suffix = f.suffix.lower()
+    origin = spec.origin if spec.origin is not None else (0.0, 0.0)
     if suffix == ".npy":
-        return HeightField.from_npy(f, spec.spacing, spec.origin)
+        return HeightField.from_npy(f, spec.spacing, origin)
     if suffix == ".csv":
-        return HeightField.from_csv(f, spec.spacing, spec.origin)
+        return HeightField.from_csv(f, spec.spacing, origin)
     return HeightField.from_geotiff(f)
 
 

@@ -33,7 +33,7 @@ them). SI units; angles in degrees where a key ends in ``_deg``. Layout::
 
     [drive]
     speed = 0.1                           # reference speed u_ref [m/s]
-    look_ahead = 0.1                      # m, default 2 x path spacing
+    look_ahead = 0.1                      # m, default 2 x path spacing (>= spacing)
     v_max = 0.2                           # m/s, caps the speed limit (optional)
     segment = 1.0                         # m, length of the speed-limit segments
 
@@ -71,6 +71,7 @@ from __future__ import annotations
 import itertools
 import math
 import os
+import re
 from pathlib import Path
 from typing import Any, Literal
 
@@ -88,8 +89,8 @@ from ..scenario.schema import (
 )
 
 __all__ = ["BandSpec", "DriveSpec", "LimitsSpec", "PathSpec", "RunSpec", "SuspensionSpec",
-           "TerrainSpec", "TraverseConfig", "TraverseContactsSpec", "load_traverse",
-           "traverse_from_dict"]
+           "TerrainSpec", "TraverseConfig", "TraverseContactsSpec", "file_tag",
+           "load_traverse", "suspension_parameters", "traverse_from_dict"]
 
 Pair = tuple[float, float]
 
@@ -122,26 +123,49 @@ def _check_grid_memory(size, spacing: float) -> None:
             "terrain smaller or coarser")
 
 
+#: The keys of a synthetic terrain (``synthetic_mars``'s) with their defaults: refused
+#: with ``kind = "file"``, where they would be ignored
+SYNTHETIC_DEFAULTS = {"rock_abundance": 0.1, "hurst": 0.8, "rms": 0.1,
+                      "corner_wavelength": 10.0, "d_min": 0.1, "d_max": 2.0,
+                      "height_ratio": 0.5}
+
+
 class TerrainSpec(StrictModel):
-    """``[terrain]``: a seeded synthetic Mars terrain or a height-field file."""
+    """``[terrain]``: a seeded synthetic Mars terrain or a height-field file.
+
+    The synthetic terrain's keys (:data:`SYNTHETIC_DEFAULTS`, ``size``, ``seed``) are None
+    when not given (:meth:`synthetic_params` fills in the defaults), so that a key that
+    does not apply is refused rather than ignored: those with ``kind = "file"``, and
+    ``spacing`` and ``origin`` with a GeoTIFF (which carries its own)."""
 
     kind: Literal["synthetic", "file"] = "synthetic"
     size: Pair | None = None
     spacing: float | None = Field(None, gt=0.0, allow_inf_nan=False)
-    origin: Pair = (0.0, 0.0)
-    seed: int | None = None
-    rock_abundance: float = Field(0.1, gt=0.0, lt=1.0)
-    hurst: float = Field(0.8, gt=0.0, lt=1.0)
-    rms: float = Field(0.1, ge=0.0, allow_inf_nan=False)
-    corner_wavelength: float = Field(10.0, gt=0.0, allow_inf_nan=False)
-    d_min: float = Field(0.1, gt=0.0, allow_inf_nan=False)
-    d_max: float = Field(2.0, gt=0.0, allow_inf_nan=False)
-    height_ratio: float | Pair = 0.5
+    origin: Pair | None = None
+    seed: int | None = Field(None, ge=0)
+    rock_abundance: float | None = Field(None, ge=0.0, lt=1.0)
+    hurst: float | None = Field(None, gt=0.0, le=1.0)
+    rms: float | None = Field(None, ge=0.0, allow_inf_nan=False)
+    corner_wavelength: float | None = Field(None, gt=0.0, allow_inf_nan=False)
+    d_min: float | None = Field(None, gt=0.0, allow_inf_nan=False)
+    d_max: float | None = Field(None, gt=0.0, allow_inf_nan=False)
+    height_ratio: float | Pair | None = None
     file: str | None = None
+
+    def synthetic_params(self) -> dict:
+        """``synthetic_mars``'s keyword arguments besides size, spacing and seed: the keys
+        given, the defaults for the others."""
+        out = {k: (d if getattr(self, k) is None else getattr(self, k))
+               for k, d in SYNTHETIC_DEFAULTS.items()}
+        hr = out["height_ratio"]
+        out["height_ratio"] = tuple(hr) if isinstance(hr, (tuple, list)) else hr
+        out["origin"] = self.origin if self.origin is not None else (0.0, 0.0)
+        return out
 
     @model_validator(mode="after")
     def _kind(self):
-        _finite_pair(self.origin, "terrain.origin")
+        if self.origin is not None:
+            _finite_pair(self.origin, "terrain.origin")
         synth = ("size", "seed")
         if self.kind == "synthetic":
             missing = [k for k in (*synth, "spacing") if getattr(self, k) is None]
@@ -152,21 +176,31 @@ class TerrainSpec(StrictModel):
             if not all(math.isfinite(s) and s > 0 for s in self.size):
                 raise ValueError(f"terrain.size must be two lengths > 0 m, got "
                                  f"{list(self.size)}")
-            if not self.d_min < self.d_max:
-                raise ValueError(f"terrain.d_min < d_max needed, got {self.d_min}, "
-                                 f"{self.d_max}")
+            p = self.synthetic_params()
+            if not p["d_min"] < p["d_max"]:
+                raise ValueError(f"terrain.d_min < d_max needed, got {p['d_min']}, "
+                                 f"{p['d_max']}")
             _check_grid_memory(self.size, self.spacing)
         else:
             if self.file is None:
                 raise ValueError("kind = 'file' needs terrain.file (.npy, .csv, .tif)")
-            if any(getattr(self, k) is not None for k in synth):
-                raise ValueError("terrain.size and terrain.seed are for a synthetic terrain")
+            given = [k for k in (*synth, *SYNTHETIC_DEFAULTS) if getattr(self, k) is not None]
+            if given:
+                raise ValueError(f"terrain.{', terrain.'.join(given)}: for a synthetic "
+                                 "terrain only; a height-field file (kind = 'file') has its "
+                                 "own heights: remove them")
             suffix = Path(self.file).suffix.lower()
             if suffix not in (".npy", ".csv", ".tif", ".tiff"):
                 raise ValueError(f"terrain.file {self.file!r}: use a .npy, .csv or GeoTIFF "
                                  "(.tif) height field")
             if suffix in (".npy", ".csv") and self.spacing is None:
                 raise ValueError(f"terrain.file {self.file!r} needs terrain.spacing (m)")
+            if suffix in (".tif", ".tiff"):
+                given = [k for k in ("spacing", "origin") if getattr(self, k) is not None]
+                if given:
+                    raise ValueError(f"terrain.{' and terrain.'.join(given)}: a GeoTIFF "
+                                     f"({self.file!r}) carries its own grid spacing and "
+                                     "origin: remove them")
         return self
 
 
@@ -212,6 +246,22 @@ class TraverseContactsSpec(StrictModel):
     loop_closure: bool = True
     loops: list[LoopSpec] = Field(default_factory=list)
     wheels: list[str] | None = None
+
+    @model_validator(mode="after")
+    def _mu(self):
+        if self.ground == "coulomb" and self.mu is None:
+            raise ValueError('contacts.ground = "coulomb" needs contacts.mu (the friction '
+                             "coefficient, >= 0)")
+        if self.ground != "coulomb" and self.mu is not None:
+            raise ValueError(f"contacts.mu is for ground = \"coulomb\" only; with ground = "
+                             f"{self.ground!r} the supports are "
+                             + ("frictionless" if self.ground == "normal" else "held (no slip)")
+                             + ": remove mu, or set ground = \"coulomb\"")
+        values = (list(self.mu.values()) if isinstance(self.mu, dict)
+                  else [] if self.mu is None else [self.mu])
+        if any(not (x >= 0.0) for x in values):  # inf allowed: no slip
+            raise ValueError(f"contacts.mu must be >= 0, got {self.mu}")
+        return self
 
     def scenario_contacts(self):
         """The scenario's :class:`~roverimpact.scenario.schema.ContactsSpec`."""
@@ -283,6 +333,15 @@ class SuspensionSpec(StrictModel):
     n_beta: int = Field(5, ge=1, le=100)
     seed: int = 0
 
+    @field_validator("variables")
+    @classmethod
+    def _bounds(cls, v):
+        for name, (lo, hi) in v.items():
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise ValueError(f"variable {name!r}: bounds must be finite with lo < hi, got "
+                                 f"[{lo}, {hi}]")
+        return v
+
 
 class RunSpec(StrictModel):
     """``[run]``: stations per task (``chunk``), a local Dask cluster of ``workers``
@@ -323,9 +382,33 @@ class TraverseConfig(StrictModel):
         if self.suspension is not None and self.model.name not in ("rover2d", "rocker_bogie"):
             raise ValueError("[suspension] needs a built-in rover (model.name 'rover2d' or "
                              "'rocker_bogie'): the optimiser varies its parameters")
-        names = [p.name or f"path{i}" for i, p in enumerate(self.all_paths())]
+        if self.suspension is not None:
+            bad = [v for v in self.suspension.variables
+                   if v not in suspension_parameters(self.model.name)]
+            if bad:
+                raise ValueError(
+                    f"suspension.variables: {', '.join(map(repr, bad))}: not a numeric "
+                    f"parameter of {self.model.name}; choose from "
+                    f"{', '.join(suspension_parameters(self.model.name))}")
+        paths = self.all_paths()
+        names = [p.name for p in paths]
         if len(set(names)) != len(names):
             raise ValueError(f"path names must differ, got {names}")
+        tags = {}
+        for n in names:
+            tags.setdefault(file_tag(n).casefold(), []).append(n)
+        same = [v for v in tags.values() if len(v) > 1]
+        if same:
+            raise ValueError(f"paths {same[0]} would share the figure files "
+                             f"map-{file_tag(same[0][0])}.png (a file name keeps letters, "
+                             "digits, '.', '-' and '_' of a path name, case aside): rename one")
+        la = self.drive.look_ahead
+        short = [p for p in paths if la is not None and la < p.spacing]
+        if short:
+            raise ValueError(f"drive.look_ahead = {la:g} m is shorter than path "
+                             f"{short[0].name!r}'s spacing ({short[0].spacing:g} m): the "
+                             "contacts between two stations would be missed; give "
+                             "look_ahead >= the spacing (default twice the spacing)")
         return self
 
     @field_validator("contact_law")
@@ -347,6 +430,25 @@ class TraverseConfig(StrictModel):
     def look_ahead(self, path: PathSpec) -> float:
         """The look-ahead of ``path`` [m]: ``drive.look_ahead`` or twice its spacing."""
         return self.drive.look_ahead or 2.0 * path.spacing
+
+
+def suspension_parameters(model: str | None) -> list[str]:
+    """The numeric parameters of a built-in rover (``[suspension] variables``)."""
+    from dataclasses import fields
+
+    from ..models import RockerBogieParams, Rover2DParams
+
+    cls = {"rover2d": Rover2DParams, "rocker_bogie": RockerBogieParams}.get(model)
+    return [] if cls is None else sorted(f.name for f in fields(cls)
+                                         if f.type in ("float", float))
+
+
+def file_tag(name: str) -> str:
+    """The part of a file name that stands for path ``name`` (``map-<tag>.png``): its
+    letters, digits, '.', '-' and '_', every other run of characters (a '/', spaces) one
+    '_'."""
+    tag = re.sub(r"[^\w.-]+", "_", name)
+    return "_" if tag.strip(".") == "" else tag
 
 
 def traverse_from_dict(raw: dict | TraverseConfig, *, where: str = "traverse",
