@@ -222,6 +222,17 @@ def _corrupt_manifest(o: Path, res: Path) -> None:
     (o / "res" / "manifest.json").write_text("{not json")
 
 
+def _traverse_bad_manifest(o: Path, res: Path) -> None:
+    """A traverse output folder whose tables are there and whose manifest.json is cut."""
+    import pandas as pd
+
+    (o / "t").mkdir()
+    for name in ("poses", "wheels", "segments"):
+        pd.DataFrame({"path": ["a"], "s": [0.0]}).to_parquet(o / "t" / f"{name}.parquet")
+    (o / "t" / "manifest.json").write_text('{"name": "x", "stat')
+    (o / "t" / "traverse.toml").write_text(TRAV)
+
+
 def _not_a_study_table(o: Path, res: Path) -> None:
     import pandas as pd
 
@@ -250,7 +261,8 @@ def _existing_folder(o: Path, res: Path) -> None:
 
 SETUP = {"results": _results_copy, "corrupt_results": _corrupt_results,
          "corrupt_manifest": _corrupt_manifest, "not_a_table": _not_a_study_table,
-         "full": _full_reproduction, "exists": _existing_folder}
+         "full": _full_reproduction, "exists": _existing_folder,
+         "traverse_bad_manifest": _traverse_bad_manifest}
 
 # --- the cases ---------------------------------------------------------------------------
 # (id, argv, outputs that must not be created or changed, word in the message, set-up)
@@ -515,6 +527,8 @@ CASES = [
                        "--scheduler", "tcp://127.0.0.1:9"], ["{o}/t"], "not both", None),
     ("traverse-report-not-folder", ["traverse-report", "{d}"], [],
      "not a traverse output folder", None),
+    ("traverse-report-damaged-manifest", ["traverse-report", "{o}/t"], ["{o}/t"],
+     "manifest.json: damaged", "traverse_bad_manifest"),
     # traverse: every key checked before any work, none silently ignored
     ("traverse-suspension-variable", ["traverse", "{d}/trav_susp_name.toml", "-o", "{o}/t"],
      ["{o}/t"], "'chasis_com_above_pivot': not a numeric parameter of rocker_bogie", None),

@@ -48,7 +48,18 @@ def load_traverse_results(folder: str | Path):
         tables = [pd.read_parquet(folder / f) for f in (POSES, WHEELS, SEGMENTS)]
     except Exception as exc:  # a damaged file: one line naming it
         raise ConfigError(f"{folder}: cannot read the traverse tables ({exc})") from None
-    man = json.loads((folder / MANIFEST).read_text()) if (folder / MANIFEST).is_file() else {}
+    man = {}
+    if (folder / MANIFEST).is_file():
+        try:
+            man = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+        except (ValueError, UnicodeDecodeError) as exc:  # JSONDecodeError is a ValueError
+            raise ConfigError(f"{folder / MANIFEST}: damaged, not a JSON file ({exc}); it is "
+                              "the run's record (stations, time, versions): run the traverse "
+                              "again") from None
+        if not isinstance(man, dict):
+            raise ConfigError(f"{folder / MANIFEST}: damaged, not a JSON object; it is the "
+                              "run's record (stations, time, versions): run the traverse "
+                              "again")
     text = (folder / CONFIG_COPY).read_text() if (folder / CONFIG_COPY).is_file() else ""
     return (*tables, man, text)
 
