@@ -270,6 +270,40 @@ def test_path_names_with_a_slash(tmp_path, capfd):
     assert (tmp_path / "n" / "map-route_1_b.png").is_file()
 
 
+def test_summary_table_at_80_columns():
+    """At 80 columns (a terminal, a pipe, a log) no number is split over two lines and the
+    path's name stays; the columns that do not fit are left out, and the caption says so.
+    (Numbers were cut as "0.00521" + "1", the path column shrank to nothing.)"""
+    import io
+
+    from rich.console import Console
+
+    from roverimpact.cli._traverse import _print_summary
+
+    rows = [{"path": "straight", "length [m]": 0.8, "stations": 17, "failed poses": 0,
+             "impacts": 18, "max T_c^- [J]": 0.005211, "max F_pred [N]": 42.15,
+             "max F_model [N]": 59.39, "lowest limit [m/s]": 0.1764, "at s [m]": 0.65},
+            {"path": "route 1/a rather long name", "length [m]": 1234.5, "stations": 24691,
+             "failed poses": 3, "impacts": 12345, "max T_c^- [J]": 0.0123456,
+             "max F_pred [N]": 1234.5, "max F_model [N]": 2345.6,
+             "lowest limit [m/s]": float("inf"), "at s [m]": float("nan")}]
+    table = pd.DataFrame(rows)
+    for width in (80, 60):
+        buf = io.StringIO()
+        _print_summary(table, Console(width=width, file=buf, markup=False, emoji=False))
+        text = buf.getvalue()
+        assert max(len(line) for line in text.splitlines()) <= width
+        lines = text.splitlines()
+        body = [ln for ln in lines if ln.startswith((" straight", " route"))]
+        assert body[0].split()[0] == "straight" and body[1].split()[:2] == ["route", "1/a"]
+        for number in ("0.005211", "59.39", "0.1764", "12345", "2346", "inf"):
+            assert any(number in ln.split() for ln in body), (width, number, text)
+        assert "left out at" in text
+    buf = io.StringIO()
+    _print_summary(table, Console(width=160, file=buf, markup=False, emoji=False))
+    assert "left out" not in buf.getvalue() and "24691" in buf.getvalue()
+
+
 def test_path_leaving_the_terrain_is_refused_before_work(tmp_path):
     raw = SHORT.replace("[5.5, 0.0]]", "[6.9, 0.0]]")
     f = tmp_path / "t.toml"

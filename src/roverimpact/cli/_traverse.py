@@ -29,13 +29,51 @@ def _f(x, fmt="{:.4g}") -> str:
     return "n/a" if x != x else ("inf" if x == float("inf") else fmt.format(x))
 
 
-def _print_summary(table) -> None:
+#: The summary's columns left out first, in this order, where the terminal is too narrow
+#: for all of them (the path, its largest peak force and its lowest limit always stay)
+DROP_FIRST = ("stations", "failed poses", "length [m]", "at s [m]", "max F_pred [N]",
+              "impacts", "max T_c^- [J]")
+
+
+def _min_widths(cols, cells) -> dict:
+    """Each summary column's least width: a number's widest cell (or header word: headers
+    wrap at words), the path's name up to 10 characters (longer names fold)."""
+    out = {}
+    for i, c in enumerate(cols):
+        longest = max((len(x) for x in cells[c]), default=1)
+        word = max((len(w) for w in str(c).split()), default=1)
+        out[c] = min(max(longest, word), 10) if i == 0 else max(longest, word)
+    return out
+
+
+def _print_summary(table, out=None) -> None:
+    """The summary table on ``out`` (default the console). A number is never split: every
+    number column is at least as wide as its widest cell; where the terminal is narrower
+    than that, the columns of :data:`DROP_FIRST` are left out in turn, and the caption says
+    which."""
+    out = console if out is None else out
     cols = list(table.columns)
-    tab = new_table("Traverse: impacts and speed limits", *cols)
-    for _, row in table.iterrows():
-        tab.add_row(*[str(row[c]) if isinstance(row[c], str) else _f(float(row[c]))
-                      for c in cols])
-    console.print(tab)
+    cells = {c: [str(v) if isinstance(v, str) or table[c].dtype.kind in "iu"
+                 else _f(float(v)) for v in table[c]] for c in cols}
+    least = _min_widths(cols, cells)
+    shown = list(cols)
+    left: list[str] = []
+    # one space of padding either side of each column, one between columns (new_table)
+    while sum(least[c] for c in shown) + 3 * len(shown) - 1 > out.width:
+        more = [c for c in DROP_FIRST if c in shown]
+        if not more:
+            break
+        shown.remove(more[0])
+        left.append(more[0])
+    tab = new_table("Traverse: impacts and speed limits", *shown)
+    for col, c in zip(tab.columns, shown, strict=True):
+        col.min_width = least[c]
+    for row in zip(*(cells[c] for c in shown), strict=True):
+        tab.add_row(*row)
+    if left:
+        tab.caption = (f"left out at {out.width} columns: {', '.join(left)} (--json prints "
+                       "every column)")
+    out.print(tab)
 
 
 def _compile_plan(config: Path, workers, scheduler) -> tuple:
