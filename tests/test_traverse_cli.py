@@ -207,6 +207,10 @@ def test_schema_refusals():
     bad({"suspension": {"variables": {"chasis_com_above_pivot": [0.0, 0.2]}}},
         "'chasis_com_above_pivot': not a numeric parameter of rocker_bogie; choose from")
     bad({"suspension": {"variables": {"chassis_com_above_pivot": [0.2, 0.0]}}}, "lo < hi")
+    # one beta would be the lower end of each segment's range (the optimiser refuses it,
+    # and the refusal ended in segments.parquet's setting_note)
+    bad({"suspension": {"variables": {"chassis_com_above_pivot": [0.0, 0.2]}, "n_beta": 1}},
+        "n_beta")
     for key, value in (("hurst", 0.5), ("rock_abundance", 0.3), ("seed", 1)):
         raw = json.loads(json.dumps(base))
         raw["terrain"] = {"kind": "file", "file": "dem.npy", "spacing": 0.05, key: value}

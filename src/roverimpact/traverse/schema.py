@@ -330,7 +330,7 @@ class SuspensionSpec(StrictModel):
     stability_margin: float = Field(0.05, allow_inf_nan=False)
     min_clearance: float = Field(0.0, allow_inf_nan=False)
     n_starts: int = Field(3, ge=1, le=100)
-    n_beta: int = Field(5, ge=1, le=100)
+    n_beta: int = Field(5, ge=2, le=100)  # over each segment's range of beta
     seed: int = 0
 
     @field_validator("variables")
