@@ -317,6 +317,32 @@ def test_path_leaving_the_terrain_is_refused_before_work(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_window_too_long_is_refused_and_too_short_is_flagged(short, tmp_path):
+    """limits.window: a window whose frozen-pose range (half the smallest wheel radius in
+    it: 0.05 m/s at 1 s) does not reach drive.speed is refused before any work (every
+    limit was that range, 0.05 m/s, below the reference 0.1 m/s at which F_model was
+    under F_allow); a window that ends while the force still rises flags those impacts
+    (F_model_rising) and says so, their F_model being below the default window's."""
+    import tomllib
+
+    raw = tomllib.loads(SHORT)
+    raw["limits"]["window"] = 1.0
+    with pytest.raises(ConfigError, match=r"limits.window = 1 s.*up to 0.05 m/s"):
+        run_traverse(raw, tmp_path / "o")
+    assert not (tmp_path / "o").exists()
+    _, out = short
+    W0 = pd.read_parquet(out / "wheels.parquet")
+    assert not W0["F_model_rising"].any()  # the default window holds every peak
+    raw["limits"]["window"] = 0.001
+    raw.pop("band")
+    with pytest.warns(UserWarning, match=r"impact\(s\) still loading when limits.window"):
+        res = run_traverse(raw)
+    rising = res.wheels["F_model_rising"].to_numpy()
+    assert rising.any()
+    assert np.all(res.wheels["F_model"].to_numpy()[rising]
+                  < W0["F_model"].to_numpy()[rising])
+
+
 def test_closed_form_model_is_the_rigid_1dof_limit(short):
     """limits.model = "closed-form": the limits are the closed form's (the weight model's
     column v_lim_closed of the default run), no F_model column."""

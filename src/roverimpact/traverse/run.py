@@ -121,6 +121,17 @@ def _check_inputs(cfg: TraverseConfig, where: str) -> None:
         if j not in mbm.lockable_joints:
             raise ConfigError(f"{where}: contacts.locked: {j!r} is not a suspension joint "
                               f"of {mbm.name!r} ({mbm.lockable_joints})")
+    lim = cfg.limits
+    if lim.F_allow is not None and lim.model == "weight":
+        from .refine import model_speed_cap
+
+        cap = model_speed_cap(mbm, lim.window)
+        if cap <= cfg.drive.speed:
+            raise ConfigError(
+                f"{where}: limits.window = {lim.window:g} s: the weight model (pose frozen "
+                f"while the rover travels half its smallest wheel radius) covers speeds up "
+                f"to {cap:.3g} m/s, not the reference drive.speed = {cfg.drive.speed:g} m/s: "
+                "shorten the window (default 0.05 s) or lower the speed")
     terrain = build_terrain(cfg.terrain)
     # the rover's reach from its base: wheel centres + radius + look-ahead + 2 cells
     import pinocchio as pin
@@ -200,7 +211,7 @@ def _tables(cfg, mbm, path_name, st: Stations, i0: int, res):
     if weight:
         v_closed = v_lim
         laws = [law] + [law.model_copy(update={"k": kk, "e": ee}) for kk, ee in grid]
-        Fm, Vm = _weight_model(cfg, mbm, res, has_impact, v_closed, laws)
+        Fm, Vm, F_cut = _weight_model(cfg, mbm, res, has_impact, v_closed, laws)
         F_model, v_lim = Fm[0], Vm[0]
         if grid:       # the nominal law with the grid (the model need not be monotone)
             with warnings.catch_warnings(), np.errstate(all="ignore"):
@@ -230,6 +241,7 @@ def _tables(cfg, mbm, path_name, st: Stations, i0: int, res):
         wheels["F_pred"] = F.ravel()
     if F_model is not None:
         wheels["F_model"] = F_model.ravel()
+        wheels["F_model_rising"] = F_cut.ravel()
     if F_lo is not None:
         wheels["F_lo"], wheels["F_hi"] = F_lo.ravel(), F_hi.ravel()
     wheels["v_lim"] = v_lim.ravel()
@@ -274,6 +286,22 @@ def _tables(cfg, mbm, path_name, st: Stations, i0: int, res):
     return pd.DataFrame(poses), wdf
 
 
+def _closed_form_duration(law, impact, kk, ww) -> np.ndarray:
+    """The contact duration [s] of each impact (kk, ww) by the law's 1-DoF closed form
+    (rigid supports, no weight; 0 where it has none). A weight-model force still rising
+    at the end of a window shorter than this is an impact cut before its peak; one still
+    rising after it is the wheel taking its weight share (climbing), which the window is
+    meant to cut (docs/traverse.md)."""
+    from ..contact import predict
+
+    m, v = impact.m_eff[kk, ww], impact.v_n[kk, ww]
+    out = np.zeros(m.shape)
+    ok = np.isfinite(m) & (m > 0) & np.isfinite(v) & (v > 0)
+    if ok.any():
+        out[ok] = predict(law, m[ok], v[ok]).duration
+    return out
+
+
 def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
     """The weight model (:mod:`roverimpact.traverse.refine`) of every impact for each law
     spec of ``laws``: peak forces (L, k, nw) [N] at the reference speed and speed limits
@@ -281,19 +309,22 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
     capped at the top speed ``drive.v_max`` and at the model's own cap
     (:func:`~roverimpact.traverse.refine.model_speed_cap`); a rigid lock (m_eff = inf)
     keeps the closed form's limit 0, and so does an impact the model cannot take (a contact
-    normal along the wheel's axis: NaN ``F_model``)."""
+    normal along the wheel's axis: NaN ``F_model``). Third: (k, nw), the nominal law's
+    force still rising when ``limits.window`` ends, the window shorter than the impact's
+    closed-form duration (:func:`_closed_form_duration`): its peak is later, and higher."""
     from .refine import impact_models, model_speed_cap, peak_forces, speed_limits
 
     k, nw = has_impact.shape
     L = len(laws)
     F_model = np.full((L, k, nw), np.nan)
+    cut = np.zeros((k, nw), dtype=bool)
     v_lim = np.broadcast_to(np.where(has_impact, v_closed, np.inf), (L, k, nw)).copy()
     st = res.extra.get("states")
     lim = cfg.limits
     u = cfg.drive.speed
     items = np.argwhere(has_impact & np.isfinite(res.impact.m_eff))
     if st is None or items.size == 0:
-        return F_model, v_lim
+        return F_model, v_lim, cut
     ok_index = res.extra["ok_index"]
     pos = np.full(k, -1)
     pos[ok_index] = np.arange(ok_index.size)
@@ -308,8 +339,11 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
     s0 = v_closed[kk, ww] / u
     for i, spec in enumerate(laws):
         law = spec.to_law()
-        F_model[i, kk, ww] = peak_forces(models, law, ground, t_max=lim.window,
-                                         v_ref=lim.ground_law.v_ref).peak_force
+        pk = peak_forces(models, law, ground, t_max=lim.window, v_ref=lim.ground_law.v_ref)
+        F_model[i, kk, ww] = pk.peak_force
+        if i == 0:  # still rising when the window ends, within the impact itself
+            cut[kk, ww] = (~pk.ended & (pk.time_of_peak >= lim.window * (1.0 - 1e-6))
+                           & (lim.window < _closed_form_duration(law, res.impact, kk, ww)))
         vl = speed_limits(models, law, ground, u, lim.F_allow, s0=s0, s_max=cap / u,
                           t_max=lim.window, v_ref=lim.ground_law.v_ref)
         # no model (a contact normal along the wheel's axis): the closed form's limit
@@ -317,7 +351,7 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
         if i == 0:                      # the nominal law's limits start the band's search
             s0 = np.where(np.isfinite(v_lim[0, kk, ww]) & (v_lim[0, kk, ww] > 0),
                           v_lim[0, kk, ww] / u, s0)
-    return F_model, v_lim
+    return F_model, v_lim, cut
 
 
 def _pose_columns(mbm, q) -> dict:
@@ -524,6 +558,15 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
     wheels = pd.concat([parts[n][1] for n in range(len(chunks))], ignore_index=True)
     segments = segments_table(cfg, poses, wheels)
     timings = {"stations": float(elapsed)}
+    rising = int(wheels["F_model_rising"].sum()) if "F_model_rising" in wheels else 0
+    if rising:
+        msg = (f"{rising} impact(s) still loading when limits.window = "
+               f"{cfg.limits.window:g} s ended (wheels.parquet: F_model_rising): their F_model "
+               "is below the peak and their speed limits too high; lengthen the window")
+        if note:
+            note(msg)
+        else:
+            warnings.warn(msg, UserWarning, stacklevel=2)
     if cfg.suspension is not None:
         from .suspension import least_risk_settings
 
