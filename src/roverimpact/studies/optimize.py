@@ -77,6 +77,16 @@ __all__ = [
 ]
 
 
+def finite_bounds(variables: dict) -> dict:
+    """``variables`` (name -> (lo, hi)) if every pair is finite with lo < hi (the check of
+    ``[optimize]`` and of a traverse's ``[suspension]``)."""
+    for name, (lo, hi) in variables.items():
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise ValueError(f"variable {name!r}: bounds must be finite with lo < hi, got "
+                             f"[{lo}, {hi}]")
+    return variables
+
+
 class OptimizeSpec(StrictModel):
     """The ``[optimize]`` table (SI units; angles in degrees)."""
 
@@ -91,14 +101,7 @@ class OptimizeSpec(StrictModel):
     seed: int = 0
     maxiter: int = Field(100, ge=1)
 
-    @field_validator("variables")
-    @classmethod
-    def _bounds(cls, v):
-        for name, (lo, hi) in v.items():
-            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise ValueError(f"variable {name!r}: bounds must be finite with lo < hi, got "
-                                 f"[{lo}, {hi}]")
-        return v
+    _bounds = field_validator("variables")(finite_bounds)
 
     @field_validator("beta_deg")
     @classmethod

@@ -87,6 +87,7 @@ from ..scenario.schema import (
     check_gravity,
     gravity_magnitude,
 )
+from ..studies.optimize import finite_bounds
 
 __all__ = ["BandSpec", "DriveSpec", "LimitsSpec", "PathSpec", "RunSpec", "SuspensionSpec",
            "TerrainSpec", "TraverseConfig", "TraverseContactsSpec", "file_tag",
@@ -333,14 +334,7 @@ class SuspensionSpec(StrictModel):
     n_beta: int = Field(5, ge=2, le=100)  # over each segment's range of beta
     seed: int = 0
 
-    @field_validator("variables")
-    @classmethod
-    def _bounds(cls, v):
-        for name, (lo, hi) in v.items():
-            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise ValueError(f"variable {name!r}: bounds must be finite with lo < hi, got "
-                                 f"[{lo}, {hi}]")
-        return v
+    _bounds = field_validator("variables")(finite_bounds)
 
 
 class RunSpec(StrictModel):
