@@ -326,6 +326,23 @@ def _impacts(draw):
     sv = np.linalg.svd(W, compute_uv=False)
     sv = sv[sv > 1e-9 * sv[0]]
     assume(sv[0] / sv[-1] < 1e2)
+    # ... and contacts wedged exactly: normals whose non-negative combination cancels (0 in
+    # the convex hull of the whitened unit normals, off the bilateral rows), which the
+    # condition above does not see once the dependent direction is dropped (found when
+    # hypothesis drew e3, -0.406 e3 + 0.4375 e4 and -e4: Lemke's pivoting breaks down there)
+    Wn = np.linalg.solve(L, N.T)
+    if pb:
+        Q = np.linalg.qr(np.linalg.solve(L, B.T))[0]
+        Wn = Wn - Q @ (Q.T @ Wn)
+    keep = np.linalg.norm(Wn, axis=0) > 1e-9
+    if keep.sum() >= 2:
+        from scipy.optimize import nnls
+
+        U = Wn[:, keep] / np.linalg.norm(Wn[:, keep], axis=0)
+        big = 1e3  # the row of weights that makes sum(lambda) = 1
+        lam, res = nnls(np.vstack([U, big * np.ones(U.shape[1])]),
+                        np.concatenate([np.zeros(n), [big]]))
+        assume(np.linalg.norm(U @ lam) > 1e-3)
     return M, N, B, v
 
 
