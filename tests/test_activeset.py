@@ -340,8 +340,8 @@ def _impacts(draw):
 
         U = Wn[:, keep] / np.linalg.norm(Wn[:, keep], axis=0)
         big = 1e3  # the row of weights that makes sum(lambda) = 1
-        lam, res = nnls(np.vstack([U, big * np.ones(U.shape[1])]),
-                        np.concatenate([np.zeros(n), [big]]))
+        lam, _ = nnls(np.vstack([U, big * np.ones(U.shape[1])]),
+                      np.concatenate([np.zeros(n), [big]]))
         assume(np.linalg.norm(U @ lam) > 1e-3)
     return M, N, B, v
 
