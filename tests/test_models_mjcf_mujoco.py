@@ -31,6 +31,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+import roverimpact as ri
 from roverimpact.exceptions import ModelError
 from roverimpact.models import load_robot
 from roverimpact.models.mjcf import mujoco_state_to_pinocchio, pinocchio_state_to_mujoco
@@ -692,3 +693,32 @@ def test_example_script_prints_the_figures_quoted_in_the_docs(capsys):
         assert figure in out
     for figure in ("24.00 kg", "14.14 kg", "7.07 kg", "1.313 J", "0.589 J"):
         assert figure in docs
+
+
+def test_a_joint_named_as_its_child_link(files, tmp_path):
+    """URDF's common style joint "wheel_fl" -> link "wheel_fl": Pinocchio makes a JOINT and
+    a BODY frame of that name, and naming it in a scenario (wheel frame, obstacle frame,
+    loops, points) ended in "Several frames match the filter" (a traceback). The name is
+    the link's; the joint frame becomes "wheel_fl:joint". The rover gives the numbers of
+    the same file with distinct joint names, and M equals MuJoCo's."""
+    clash = ROVER_URDF.replace('_joint" type="continuous"', '" type="continuous"')
+    assert clash != ROVER_URDF
+    (tmp_path / "clash.urdf").write_text(clash)
+    mbm = load_robot(tmp_path / "clash.urdf", floating_base=True)
+    model = mbm.model
+    assert model.frames[model.getFrameId("wheel_fl")].type == pin.FrameType.BODY
+    assert model.existFrame("wheel_fl:joint") and model.existJointName("wheel_fl")
+    wheels = ("wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr")
+    out = []
+    for f, spin in ((files / "rover.urdf", "{}_joint"), (tmp_path / "clash.urdf", "{}")):
+        sc = {"model": {"file": str(f), "base": {"kind": "floating"},
+                        "wheels": {w: {"frame": w, "radius": 0.15, "spin": spin.format(w)}
+                                   for w in wheels}},
+              "configuration": {"base": {"z": 0.3}}, "velocity": {"u": 0.4},
+              "obstacle": {"wheel": "wheel_fl", "beta_deg": 60.0}}
+        e = ri.energy_of(sc)
+        pt = ri.energy_of({**sc, "obstacle": {"frame": "wheel_rl", "point": [0.0, 0.0, 0.0],
+                                              "normal": [-1.0, 0.0, 0.0]}})
+        out.append((float(e.T), float(e.T_c_minus), float(e.m_eff), float(pt.T_c_minus)))
+    np.testing.assert_allclose(out[1], out[0], rtol=1e-12)
+    assert out[0][1] > 0 and out[0][3] > 0

@@ -384,6 +384,27 @@ def _urdf_mimic(root) -> list[list]:
     return out
 
 
+def _unique_frame_names(model) -> None:
+    """One frame per name: a URDF joint named as its child link (``rocker_left`` ->
+    link ``rocker_left``, a common style) gives Pinocchio a JOINT and a BODY frame of that
+    name, and ``getFrameId(name)`` raises "Several frames match". The name stays the link's
+    (BODY frame; a URDF link's frame is its parent joint's frame, so the placement is the
+    same); the others become ``name:joint`` (``name:fixed_joint``, ...). Joint names are
+    unchanged."""
+    seen: dict[str, list[int]] = {}
+    for i, f in enumerate(model.frames):
+        seen.setdefault(f.name, []).append(i)
+    for name, ids in seen.items():
+        if len(ids) < 2:
+            continue
+        keep = next((i for i in ids if model.frames[i].type == pin.FrameType.BODY), ids[0])
+        for i in ids:
+            if i != keep:
+                f = model.frames[i]
+                f.name = f"{name}:{str(f.type).rsplit('.', 1)[-1].lower()}"
+                model.frames[i] = f
+
+
 def load_robot(path: str | Path, *, floating_base: bool | None = None,
                mujoco_check: bool = True) -> MultibodyModel:
     """Load a URDF (``.urdf``) or MJCF (``.xml``, ``.mjcf``) file as a :class:`MultibodyModel`.
@@ -474,6 +495,7 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
                     if ln.strip().startswith("Error:")]
             raise ModelError(f"{path}: Pinocchio cannot build a model from it ("
                              + (f"{said[0]}; " if said else "") + f"{msg})") from None
+        _unique_frame_names(model)
         extra["mujoco_check"] = "off"
         if mujoco_check and model.nv > 0:
             from .mujoco_check import check_urdf
