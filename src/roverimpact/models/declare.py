@@ -179,10 +179,13 @@ def _frame_joint(model, fid: int) -> int:
     return int(model.frames[fid].parentJoint)
 
 
-def _check_spin(model, name: str, spin: str, jid: int, frame: str) -> None:
+def _check_spin(model, name: str, spin: str, jid: int, frame: str, axis, others: dict
+                ) -> None:
     """A declared spin joint must be a hinge (revolute or continuous) that carries the
-    wheel's frame: the frame's own joint or one of its ancestors. A slide or another
-    wheel's hinge would be driven at u / r while the wheel itself does not turn."""
+    wheel's frame (the frame's own joint or one of its ancestors), no other wheel
+    (``others``: name -> the joint of its frame), and turns about the wheel's ``axis``
+    when one is declared (in the frame's axes). A slide, another wheel's hinge, a rocker or
+    a steering hinge would be driven at u / r while the wheel itself does not roll."""
     sj = model.getJointId(spin)
     if not _is_revolute(model, sj):
         kind = "prismatic (slide)" if _is_prismatic(model, sj) else _short(model, sj)
@@ -195,6 +198,32 @@ def _check_spin(model, name: str, spin: str, jid: int, frame: str) -> None:
         raise ModelError(f"model.wheels.{name}.spin: joint {spin!r} does not carry the "
                          f"wheel's frame {frame!r} (that frame moves with joint "
                          f"{model.names[jid]!r}); give the hinge the wheel turns on")
+    for other, ojid in others.items():  # a rocker or a bogie hinge: it turns other wheels
+        k = ojid
+        while k > 0 and k != sj:
+            k = model.parents[k]
+        if k == sj:
+            raise ModelError(f"model.wheels.{name}.spin: joint {spin!r} also carries wheel "
+                             f"{other!r}: a wheel spins on a hinge of its own; give the hinge "
+                             "the wheel turns on")
+    # the wheel's axis: declared (in the frame's axes), else that of the hinge the frame
+    # moves with, when it is another one (a steering hinge given as spin instead)
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    a_w = None
+    if axis is not None:
+        a_w = data.oMf[model.getFrameId(frame)].rotation @ np.asarray(axis, float)
+    elif jid != sj and _is_revolute(model, jid):
+        a_w = placed_axis(model, jid)
+    if a_w is not None:
+        a_s = placed_axis(model, sj)
+        if np.linalg.norm(np.cross(a_w / np.linalg.norm(a_w), a_s)) > 1e-6:
+            raise ModelError(f"model.wheels.{name}.spin: joint {spin!r} turns about "
+                             f"{np.round(a_s, 6).tolist()} (world, at the neutral "
+                             f"configuration), not about the wheel's axis "
+                             f"{np.round(a_w / np.linalg.norm(a_w), 6).tolist()}: the wheel "
+                             "cannot roll on it (a steering hinge?); give the hinge the wheel "
+                             "turns on")
 
 
 def declare_wheels(mbm: MultibodyModel, specs: dict) -> None:
@@ -209,6 +238,8 @@ def declare_wheels(mbm: MultibodyModel, specs: dict) -> None:
     model = mbm.model
     geoms = (mbm.params or {}).get("geoms") or []
     wheels = []
+    joints_of = {n: _frame_joint(model, model.getFrameId(sp.frame)) for n, sp in specs.items()
+                 if model.existFrame(sp.frame)}
     for name, sp in specs.items():
         if not model.existFrame(sp.frame):
             known = sorted({f.name for f in model.frames if f.name != "universe"})
@@ -223,7 +254,8 @@ def declare_wheels(mbm: MultibodyModel, specs: dict) -> None:
             raise ModelError(f"model.wheels.{name}.spin: unknown joint {spin!r}; joints: "
                              f"{list(model.names[1:])}")
         if spin is not None and sp.spin is not None:
-            _check_spin(model, name, spin, jid, sp.frame)
+            _check_spin(model, name, spin, jid, sp.frame, sp.axis,
+                        {n: j for n, j in joints_of.items() if n != name})
         axis = sp.axis
         if axis is None:
             if spin is not None:
