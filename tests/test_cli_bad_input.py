@@ -59,6 +59,8 @@ def _write_inputs(d: Path) -> None:
         "normal0.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='front'\n"
                         "normal=[0,0,0]\n",
         "wheel.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='nose'\nbeta_deg=10\n",
+        "coulomb_all.toml": "constraints = 'all'\n[model]\nname='rover2d'\n[contacts]\n"
+                            "ground='coulomb'\nmu=0.0\n[obstacle]\nwheel='front'\nbeta_deg=30\n",
         "beta_true.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='front'\nbeta_deg=true\n",
         "radius.toml": "[model]\nname='rover2d'\nparams={wheel_radius=-0.1}\n[obstacle]\n"
                        "wheel='front'\nbeta_deg=10\n",
@@ -300,6 +302,8 @@ CASES = [
     ("energy-beta", ["energy", "{d}/beta120.toml"], [], "beta_deg", None),
     ("energy-normal", ["energy", "{d}/normal0.toml"], [], "non-zero", None),
     ("energy-wheel", ["energy", "{d}/wheel.toml"], [], "unknown wheel", None),
+    ("energy-coulomb-all", ["energy", "{d}/coulomb_all.toml"], [],
+     'contacts.ground = "coulomb" needs constraints = "auto"', None),
     ("energy-beta-bool", ["energy", "{d}/beta_true.toml"], [], "got true, a boolean", None),
     ("energy-radius", ["energy", "{d}/radius.toml"], [], "wheel_radius", None),
     ("energy-model", ["energy", "{d}/model.toml"], [], "model.name", None),

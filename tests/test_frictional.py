@@ -652,7 +652,7 @@ def test_holding_rows_obstacle_friction_and_bilateral_labels():
     [
         ({"friction": "viscous"}, "friction must be one of"),
         ({"mu": None}, "needs contacts.mu"),
-        ({"mu": {"ground:rear": 0.3}}, "missing"),
+        ({"mu": {"obstacle:front": 0.3}}, r"missing \['ground:rear'\]"),
         ({"mu": {"ground:rear": 0.3, "obstacle:front": 0.3, "x": 1.0}}, "unknown"),
         ({"obstacle_row": 7}, "obstacle_row must index"),
     ],
@@ -740,3 +740,15 @@ def test_rocker_bogie_sweep_every_item_is_a_solution(mu):
         _check_solution(ri_, s.M, s.v, Nn[i], T, B, mus, 0.0)
     meth = _solve(s.M, s.v, Nn, T, mu, 0.0, B, FACETS, 1e-9, 1e-9, False)[0]["meth"]
     assert (meth == 1).any() and (mu == 0.5 or (meth >= 2).any())
+
+
+def test_a_contact_without_tangent_rows_needs_no_mu():
+    """A scenario's obstacle row is its normal alone (no friction on the face in T_c^-):
+    a per-contact mu mapping need not name it (it had to, and the value changed nothing),
+    while a contact with tangent rows must still be given one (test_holding_rows_bad_input)."""
+    labels, M, A, v, obs = _rover_rows(np.arange(5.0, 90.0, 10.0))
+    full = holding_rows(labels, M, A, v, obstacle_row=obs, friction="coulomb",
+                        mu={"ground:rear": 0.3, "obstacle:front": 0.9})
+    np.testing.assert_array_equal(
+        holding_rows(labels, M, A, v, obstacle_row=obs, friction="coulomb",
+                     mu={"ground:rear": 0.3}), full)

@@ -956,12 +956,16 @@ def _mu_of(mu, labels, uni) -> np.ndarray:
     if isinstance(mu, dict):
         names = [labels[i].rpartition(":")[0] for i in uni]
         unknown = sorted(set(mu) - set(names) - {"default"})
-        missing = [nm for nm in names if nm not in mu] if "default" not in mu else []
+        # a contact without tangent rows (a scenario's obstacle: its row is the normal) has
+        # no use for a mu: it may be given, it is not needed
+        rubbing = {lab.rpartition(":")[0] for lab in labels if lab.endswith((":long", ":lat"))}
+        missing = [nm for nm in names if nm not in mu and nm in rubbing
+                   ] if "default" not in mu else []
         if unknown or missing:
             raise ConfigError(f"contacts.mu: give a value per contact {names} (or a 'default')"
                               + (f"; unknown {unknown}" if unknown else "")
                               + (f"; missing {missing}" if missing else ""))
-        return np.array([float(mu.get(nm, mu.get("default"))) for nm in names])
+        return np.array([float(mu.get(nm, mu.get("default", 0.0))) for nm in names])
     mu = np.asarray(mu, dtype=float)
     if mu.ndim == 0:
         return np.full(len(uni), float(mu))

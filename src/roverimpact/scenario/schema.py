@@ -560,6 +560,12 @@ class Scenario(StrictModel):
     def _band_needs_law(self):
         if self.band is not None and self.contact_law is None:
             raise ValueError("[band] needs [contact_law] (the law whose k and e vary)")
+        if self.contacts.ground == "coulomb" and self.constraints != "auto":
+            raise ValueError(
+                'contacts.ground = "coulomb" needs constraints = "auto": the friction cone '
+                "decides which contacts stick, slide or separate; with "
+                f"{self.constraints!r} the tangent rows would be held whatever mu (as "
+                'ground = "noslip"): use ground = "noslip" or "normal" for that')
         return self
 
     @classmethod
