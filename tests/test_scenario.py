@@ -614,3 +614,22 @@ def test_booleans_where_the_schema_takes_them():
     """Boolean options, and builder parameters (which may be boolean), are untouched."""
     e = ri.energy_of(sc(ROVER2D, model={"params": {"middle_wheel": True}}))
     assert np.isfinite(float(e.T_c_minus))
+
+
+def test_ground_wheels_off_the_ground_are_named():
+    """On flat ground (no [terrain]) a ground wheel off z = 0 in [configuration] (the base
+    raised 5 cm, or a suspension joint set) is held as if it touched: a GroundGapWarning
+    names it with its gap (the rover raised 5 cm: every wheel 0.05 m above). At the
+    nominal pose none is off."""
+    import warnings
+
+    from roverimpact.exceptions import GroundGapWarning
+
+    nominal = ri.rocker_bogie().params["q_nominal"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", GroundGapWarning)
+        ri.ImpactSetup.from_scenario(sc(RB))
+    with pytest.warns(GroundGapWarning, match=r"'right_front' 0\.05 m above") as rec:
+        ri.ImpactSetup.from_scenario(sc(RB, configuration={"base": {"z": nominal[2] + 0.05}}))
+    assert sum("0.05 m above" in str(r.message) for r in rec) == 1
+    assert str(rec[0].message).count("m above") == 5  # the ground wheels: all but the hit one

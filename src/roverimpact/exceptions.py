@@ -36,9 +36,14 @@ class HeldRowsWarning(UserWarning):
     every wheel), and T_c^- is then near T whatever the face."""
 
 
+class GroundGapWarning(UserWarning):
+    """A ground wheel of a scenario on flat ground (no ``[terrain]``) is off the plane
+    z = 0 in its configuration: its ground rows treat it as touching all the same."""
+
+
 class StudyInterrupted(KeyboardInterrupt):
     """A study stopped by Ctrl-C: its message says what is kept and how to continue."""
 
 
-__all__ = ["ConfigError", "HeldRowsWarning", "InputError", "ModelError", "RoverImpactError",
-           "SolverError", "StudyInterrupted"]
+__all__ = ["ConfigError", "GroundGapWarning", "HeldRowsWarning", "InputError", "ModelError",
+           "RoverImpactError", "SolverError", "StudyInterrupted"]

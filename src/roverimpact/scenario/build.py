@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from ..energy import RTOL, partition, row_masses
-from ..exceptions import ConfigError, InputError, ModelError
+from ..exceptions import ConfigError, GroundGapWarning, InputError, ModelError
 from ..unilateral import active_set
 from .schema import (
     BaseSpec,
@@ -245,9 +245,12 @@ class ImpactSetup:
         if scenario.contacts.loop_closure and mbm.loop_closure is not None:
             # declared loops' positions are checked where they are attached
             _check_loops(mbm, q, v, positions=not scenario.contacts.loops)
-        return cls.from_state(mbm, q, v, obstacle=scenario.obstacle,
-                              contacts=scenario.contacts, constraints=scenario.constraints,
-                              scenario=scenario, ground_normals=normals)
+        setup = cls.from_state(mbm, q, v, obstacle=scenario.obstacle,
+                               contacts=scenario.contacts, constraints=scenario.constraints,
+                               scenario=scenario, ground_normals=normals)
+        if ts is None:
+            _warn_ground_gaps(mbm, q, scenario, setup._cs.data)
+        return setup
 
     @classmethod
     def from_state(cls, mbm, q, v, *, obstacle: ObstacleSpec,
@@ -420,6 +423,42 @@ def _loop_joints(mbm, row) -> list[str]:
     return [model.names[j] for j in range(1, model.njoints)
             if cols & set(range(model.joints[j].idx_v,
                                 model.joints[j].idx_v + model.joints[j].nv))]
+
+
+#: how far [m] a ground wheel may be off the plane z = 0 (as [terrain]'s default gap_tol)
+GROUND_GAP_TOL = 1e-6
+
+
+def _warn_ground_gaps(mbm, q, scenario: Scenario, data) -> None:
+    """A :class:`~roverimpact.exceptions.GroundGapWarning` naming the ground wheels whose
+    lowest rim point is more than :data:`GROUND_GAP_TOL` off z = 0 at ``q`` (a base left
+    at z = 0, a suspension joint set in [configuration]): their ground rows would hold a
+    wheel in the air or in the ground."""
+    import warnings
+
+    import pinocchio as pin
+
+    wheels = ground_wheels(mbm, scenario.obstacle, scenario.contacts)
+    if not wheels:
+        return
+    model = mbm.model  # ``data``: a Data of this model to use (the setup's, no new one)
+    pin.framesForwardKinematics(model, data, np.asarray(q, float))
+    off = []
+    for w in wheels:
+        oMf = data.oMf[model.getFrameId(w.frame)]
+        a = oMf.rotation @ np.asarray(w.axis, float)
+        a_z = a[2] / np.linalg.norm(a)
+        gap = oMf.translation[2] - w.radius * np.sqrt(max(0.0, 1.0 - a_z * a_z))
+        if abs(gap) > GROUND_GAP_TOL:
+            off.append(f"{w.name!r} {abs(gap):.3g} m {'above' if gap > 0 else 'below'}")
+    if off:
+        warnings.warn(
+            f"ground wheels off the ground z = 0 in [configuration]: {', '.join(off)}; their "
+            "ground rows hold them as if they touched. Set configuration.base (z, roll, "
+            "pitch) and the joints so that they touch, leave them out of "
+            "contacts.ground_wheels, or add [terrain] (plane = {point = [0, 0, 0], normal = "
+            "[0, 0, 1]}): terrain.pose places the rover on it",
+            GroundGapWarning, stacklevel=3)
 
 
 def _check_loops(mbm, q, v, *, positions: bool) -> None:
