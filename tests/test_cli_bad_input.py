@@ -439,6 +439,8 @@ CASES = [
      "did you mean 'model.params.h'", None),
     ("sweep-unit", ["sweep", "{d}/study_deg.toml", "-o", "{o}/r"], ["{o}/r"],
      "write a plain number", None),
+    ("sweep-scenario", ["sweep", "{ex}/rover2d_beta45.toml", "-o", "{o}/r"], ["{o}/r"],
+     "a scenario file, not a study", None),
     ("sweep-grid-num-1", ["sweep", "{d}/study_num1.toml", "-o", "{o}/r"], ["{o}/r"],
      "num = 1 gives start", None),
     ("sweep-empty-grid", ["sweep", "{d}/study_empty.toml", "-o", "{o}/r"], ["{o}/r"], "num",

@@ -237,6 +237,10 @@ def load_study(path: str | Path) -> tuple[Study, str]:
     """
     path = Path(path)
     raw = read_toml(path)
+    if "base" not in raw and ("model" in raw or "obstacle" in raw):
+        raise ConfigError(f"{path}: a scenario file, not a study: a study names its scenario "
+                          "in [base] (or base = \"scenario.toml\") and what varies in [grid], "
+                          "[[cases]] or [random] (docs/studies.md)")
     text = path.read_text(encoding="utf-8")
     if isinstance(raw.get("base"), str):
         # the base lives in another file: the copy written next to results inlines it
