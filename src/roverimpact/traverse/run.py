@@ -311,7 +311,8 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
     keeps the closed form's limit 0, and so does an impact the model cannot take (a contact
     normal along the wheel's axis: NaN ``F_model``). Third: (k, nw), the nominal law's
     force still rising when ``limits.window`` ends, the window shorter than the impact's
-    closed-form duration (:func:`_closed_form_duration`): its peak is later, and higher."""
+    closed-form duration (:func:`_closed_form_duration`), and a limit below the cap: its
+    peak is later and higher, its limit may be too high."""
     from .refine import impact_models, model_speed_cap, peak_forces, speed_limits
 
     k, nw = has_impact.shape
@@ -351,6 +352,9 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
         if i == 0:                      # the nominal law's limits start the band's search
             s0 = np.where(np.isfinite(v_lim[0, kk, ww]) & (v_lim[0, kk, ww] > 0),
                           v_lim[0, kk, ww] / u, s0)
+    # only where the limit binds (below the cap): a grazing contact (v_n ~ 1e-5 m/s, a few
+    # N taking its weight share for longer than the window) keeps the cap
+    cut &= v_lim[0] < cap * (1.0 - 1e-9)
     return F_model, v_lim, cut
 
 
