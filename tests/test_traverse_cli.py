@@ -203,6 +203,8 @@ def test_schema_refusals():
     bad({"contacts": {"ground": "coulomb"}}, "needs contacts.mu")
     bad({"contacts": {"ground": "coulomb", "mu": -0.5}}, "mu must be >= 0")
     bad({"contacts": {"mu": 0.5}}, "mu is for ground")
+    bad({"contacts": {"ground": "coulomb", "mu": 0.5}, "constraints": "all"},
+        'needs constraints = "auto"')
     bad({"contacts": {"ground": "noslip", "mu": 0.5}}, "held")
     bad({"suspension": {"variables": {"chasis_com_above_pivot": [0.0, 0.2]}}},
         "'chasis_com_above_pivot': not a numeric parameter of rocker_bogie; choose from")

@@ -373,6 +373,11 @@ class TraverseConfig(StrictModel):
                              "is limited)")
         if self.band is not None and self.contact_law is None:
             raise ValueError("[band] needs [contact_law] (the law whose k and e vary)")
+        if self.contacts.ground == "coulomb" and self.constraints != "auto":
+            raise ValueError(  # as a scenario's (roverimpact.scenario.schema.Scenario)
+                'contacts.ground = "coulomb" needs constraints = "auto": with '
+                f"{self.constraints!r} every tangent row would be held whatever mu (as "
+                'ground = "noslip")')
         if self.suspension is not None and self.model.name not in ("rover2d", "rocker_bogie"):
             raise ValueError("[suspension] needs a built-in rover (model.name 'rover2d' or "
                              "'rocker_bogie'): the optimiser varies its parameters")
