@@ -154,6 +154,7 @@ SETUPS = [
 ]
 
 
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.GroundGapWarning")  # bogie set
 @pytest.mark.parametrize("extra", SETUPS)
 def test_impact_block_is_the_setup_of_each_scenario(extra):
     """M, v, the active set and the active rows of each member of a block equal those of

@@ -280,6 +280,7 @@ def _close(model, q, theta_left) -> np.ndarray:
     return q
 
 
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.GroundGapWarning")  # posed on purpose
 def test_loop_rows_are_finite_differences_of_the_residual_away_from_the_nominal_pose(sc):
     mbm = scenario_model(sc)
     model = mbm.model

@@ -425,15 +425,16 @@ def _loop_joints(mbm, row) -> list[str]:
                                 model.joints[j].idx_v + model.joints[j].nv))]
 
 
-#: how far [m] a ground wheel may be off the plane z = 0 (as [terrain]'s default gap_tol)
-GROUND_GAP_TOL = 1e-6
+#: how far a ground wheel may be off the plane z = 0, in wheel radii: a compliant ground's
+#: deflection (a MuJoCo state's 0.3 mm under a 0.1 m wheel) is touching
+GROUND_GAP_TOL = 0.01
 
 
 def _warn_ground_gaps(mbm, q, scenario: Scenario, data) -> None:
     """A :class:`~roverimpact.exceptions.GroundGapWarning` naming the ground wheels whose
-    lowest rim point is more than :data:`GROUND_GAP_TOL` off z = 0 at ``q`` (a base left
-    at z = 0, a suspension joint set in [configuration]): their ground rows would hold a
-    wheel in the air or in the ground."""
+    lowest rim point is more than :data:`GROUND_GAP_TOL` radii off z = 0 at ``q`` (a base
+    left at z = 0, a suspension joint set in [configuration]): their ground rows would hold
+    a wheel in the air or in the ground."""
     import warnings
 
     import pinocchio as pin
@@ -449,7 +450,7 @@ def _warn_ground_gaps(mbm, q, scenario: Scenario, data) -> None:
         a = oMf.rotation @ np.asarray(w.axis, float)
         a_z = a[2] / np.linalg.norm(a)
         gap = oMf.translation[2] - w.radius * np.sqrt(max(0.0, 1.0 - a_z * a_z))
-        if abs(gap) > GROUND_GAP_TOL:
+        if abs(gap) > GROUND_GAP_TOL * w.radius:
             off.append(f"{w.name!r} {abs(gap):.3g} m {'above' if gap > 0 else 'below'}")
     if off:
         warnings.warn(
