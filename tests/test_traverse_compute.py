@@ -286,3 +286,17 @@ def test_reference_speed_is_a_map_speed_on_a_slope():
     s = ri.ImpactSetup.from_scenario(sc)
     lin_sc = pin.Quaternion(s.q[3:7]).toRotationMatrix() @ s.v[:3]
     assert np.linalg.norm(lin_sc) == pytest.approx(0.2, rel=1e-6)
+
+
+def test_contact_duration_is_the_closed_form():
+    """traverse.limits.contact_duration (the window check of the weight model): Hertz's
+    duration 2.9432 delta_max / v (Johnson, Contact Mechanics, eq. 11.24 with the 1-DoF
+    delta_max), NaN without an impact or for a rigid lock."""
+    from roverimpact.traverse.limits import contact_duration
+
+    spec = ContactLawSpec(name="hertz", k=1e6)
+    m, v = np.array([10.0, 2.0, 10.0, np.inf]), np.array([0.5, 0.1, 0.0, 0.5])
+    d = contact_duration(spec, m, v)
+    dmax = (2.5 * m[:2] * v[:2] ** 2 / (2 * 1e6)) ** 0.4
+    np.testing.assert_allclose(d[:2], 2.9432 * dmax / v[:2], rtol=1e-4)
+    assert np.isnan(d[2:]).all()

@@ -49,18 +49,30 @@ def peak_force(spec, m_eff, v_n, *, k: float | None = None, e: float | None = No
     non-finite ``m_eff``) give NaN, except ``m_eff = inf`` with ``v_n > 0`` (the other held
     rows block the normal: a rigid lock) which gives inf.
     """
+    return _closed_form(spec, m_eff, v_n, "peak_force", k=k, e=e, locked=np.inf)
+
+
+def contact_duration(spec, m_eff, v_n) -> np.ndarray:
+    """Closed-form contact duration [s] of ``spec`` for each impact, as :func:`peak_force`
+    (NaN without an impact and for a rigid lock)."""
+    return _closed_form(spec, m_eff, v_n, "duration")
+
+
+def _closed_form(spec, m_eff, v_n, what: str, *, k=None, e=None, locked=np.nan):
+    """Field ``what`` of the law's closed-form prediction for each impact (see
+    :func:`peak_force`); ``locked`` where ``m_eff = inf`` and ``v_n > 0``."""
     m, v = np.broadcast_arrays(np.asarray(m_eff, float), np.asarray(v_n, float))
     out = np.full(m.shape, np.nan)
     ok = np.isfinite(m) & (m > 0) & np.isfinite(v) & (v > 0)
-    out[np.isinf(m) & (v > 0)] = np.inf
+    out[np.isinf(m) & (v > 0)] = locked
     if not ok.any():
         return out
     if law_class(spec.name).needs_mass and spec.c is None:     # damping from e and m_eff
         mo, vo = m[ok], v[ok]
-        out[ok] = [float(_law(spec, k, e, mi).predict(mi, vi).peak_force)
+        out[ok] = [float(getattr(_law(spec, k, e, mi).predict(mi, vi), what))
                    for mi, vi in zip(mo, vo, strict=True)]
     else:
-        out[ok] = np.asarray(_law(spec, k, e).predict(m[ok], v[ok]).peak_force, float)
+        out[ok] = np.asarray(getattr(_law(spec, k, e).predict(m[ok], v[ok]), what), float)
     return out
 
 

@@ -34,7 +34,7 @@ from .._io import no_file
 from ..exceptions import ConfigError, InputError, ModelError
 from ..studies.store import atomic_parquet, atomic_write_bytes, check_out_dir, versions
 from .compute import evaluate_stations
-from .limits import band_laws, peak_force, speed_limit_energy, speed_limit_force
+from .limits import band_laws, contact_duration, peak_force, speed_limit_energy, speed_limit_force
 from .path import Stations, stations
 from .schema import TerrainSpec, TraverseConfig, load_traverse, traverse_from_dict
 
@@ -286,22 +286,6 @@ def _tables(cfg, mbm, path_name, st: Stations, i0: int, res):
     return pd.DataFrame(poses), wdf
 
 
-def _closed_form_duration(law, impact, kk, ww) -> np.ndarray:
-    """The contact duration [s] of each impact (kk, ww) by the law's 1-DoF closed form
-    (rigid supports, no weight; 0 where it has none). A weight-model force still rising
-    at the end of a window shorter than this is an impact cut before its peak; one still
-    rising after it is the wheel taking its weight share (climbing), which the window is
-    meant to cut (docs/traverse.md)."""
-    from ..contact import predict
-
-    m, v = impact.m_eff[kk, ww], impact.v_n[kk, ww]
-    out = np.zeros(m.shape)
-    ok = np.isfinite(m) & (m > 0) & np.isfinite(v) & (v > 0)
-    if ok.any():
-        out[ok] = predict(law, m[ok], v[ok]).duration
-    return out
-
-
 def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
     """The weight model (:mod:`roverimpact.traverse.refine`) of every impact for each law
     spec of ``laws``: peak forces (L, k, nw) [N] at the reference speed and speed limits
@@ -311,8 +295,8 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
     keeps the closed form's limit 0, and so does an impact the model cannot take (a contact
     normal along the wheel's axis: NaN ``F_model``). Third: (k, nw), the nominal law's
     force still rising when ``limits.window`` ends, the window shorter than the impact's
-    closed-form duration (:func:`_closed_form_duration`), and a limit below the cap: its
-    peak is later and higher, its limit may be too high."""
+    closed-form duration (:func:`~roverimpact.traverse.limits.contact_duration`), and a
+    limit below the cap: its peak is later and higher, its limit may be too high."""
     from .refine import impact_models, model_speed_cap, peak_forces, speed_limits
 
     k, nw = has_impact.shape
@@ -343,8 +327,11 @@ def _weight_model(cfg, mbm, res, has_impact, v_closed, laws):
         pk = peak_forces(models, law, ground, t_max=lim.window, v_ref=lim.ground_law.v_ref)
         F_model[i, kk, ww] = pk.peak_force
         if i == 0:  # still rising when the window ends, within the impact itself
+            # a force still rising after the impact's closed-form duration is the wheel
+            # taking its weight share (climbing), which the window is meant to cut
             cut[kk, ww] = (~pk.ended & (pk.time_of_peak >= lim.window * (1.0 - 1e-6))
-                           & (lim.window < _closed_form_duration(law, res.impact, kk, ww)))
+                           & (lim.window < contact_duration(spec, res.impact.m_eff[kk, ww],
+                                                            res.impact.v_n[kk, ww])))
         vl = speed_limits(models, law, ground, u, lim.F_allow, s0=s0, s_max=cap / u,
                           t_max=lim.window, v_ref=lim.ground_law.v_ref)
         # no model (a contact normal along the wheel's axis): the closed form's limit
