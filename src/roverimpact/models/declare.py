@@ -88,12 +88,25 @@ def placed_axis(model, j: int, frame: int = 0) -> np.ndarray | None:
     ancestor (0: the world), through the joint placements at zero angles of the joints
     between them (None for a joint without an axis)."""
     a = joint_axis(model, j)
+    return None if a is None else _placed(model, j, a, frame)
+
+
+def _placed(model, j: int, a: np.ndarray, frame: int = 0) -> np.ndarray:
+    """Vector ``a`` given in the axes of joint ``j``, in the axes of its ancestor ``frame``
+    (0: the world) at zero angles of the joints between them."""
     parents, placements = model.parents, model.jointPlacements
     k = j
-    while a is not None and k > 0 and k != frame:
+    while k > 0 and k != frame:
         a = placements[k].rotation @ a  # into the parent joint's axes
         k = parents[k]
     return a
+
+
+def _carries(model, j: int, k: int) -> bool:
+    """Joint ``j`` is joint ``k`` or one of its ancestors (it moves what ``k`` moves)."""
+    while k > 0 and k != j:
+        k = model.parents[k]
+    return k == j
 
 
 def detect_base(model) -> BaseInfo:
@@ -191,28 +204,21 @@ def _check_spin(model, name: str, spin: str, jid: int, frame: str, axis, others:
         kind = "prismatic (slide)" if _is_prismatic(model, sj) else _short(model, sj)
         raise ModelError(f"model.wheels.{name}.spin: joint {spin!r} is a {kind} joint; a "
                          "wheel spins about a hinge (revolute or continuous joint)")
-    k = jid
-    while k > 0 and k != sj:
-        k = model.parents[k]
-    if k != sj:
+    if not _carries(model, sj, jid):
         raise ModelError(f"model.wheels.{name}.spin: joint {spin!r} does not carry the "
                          f"wheel's frame {frame!r} (that frame moves with joint "
                          f"{model.names[jid]!r}); give the hinge the wheel turns on")
     for other, ojid in others.items():  # a rocker or a bogie hinge: it turns other wheels
-        k = ojid
-        while k > 0 and k != sj:
-            k = model.parents[k]
-        if k == sj:
+        if _carries(model, sj, ojid):
             raise ModelError(f"model.wheels.{name}.spin: joint {spin!r} also carries wheel "
                              f"{other!r}: a wheel spins on a hinge of its own; give the hinge "
                              "the wheel turns on")
     # the wheel's axis: declared (in the frame's axes), else that of the hinge the frame
     # moves with, when it is another one (a steering hinge given as spin instead)
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, pin.neutral(model))
     a_w = None
     if axis is not None:
-        a_w = data.oMf[model.getFrameId(frame)].rotation @ np.asarray(axis, float)
+        f = model.frames[model.getFrameId(frame)]
+        a_w = _placed(model, int(f.parentJoint), f.placement.rotation @ np.asarray(axis, float))
     elif jid != sj and _is_revolute(model, jid):
         a_w = placed_axis(model, jid)
     if a_w is not None:
