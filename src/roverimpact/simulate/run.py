@@ -138,13 +138,16 @@ def _with_locks(mbm, loop, locked, q_ref):
 
 
 # ---------------------------------------------------------------------- initial state
-def _rigid_velocity(sys: ContactSystem, q, axis: np.ndarray, mbm=None) -> np.ndarray:
+def _rigid_velocity(sys: ContactSystem, mbm, q, axis: np.ndarray) -> np.ndarray:
     """Generalized velocity translating the whole rover rigidly at unit speed along
-    ``axis``: its base (a free-flyer, or a planar x-z-pitch chain; ``base_info(mbm)``, or
-    detected from the model) translates and every other joint is still, as the
-    indicator's ``[velocity] u`` drives it. Another root: every wheel centre at unit speed
-    along ``axis``, no wheel frame turning (min-norm least squares; then a suspension may
-    move, as nothing else pins it)."""
+    ``axis``: its base (a free-flyer, or a planar x-z-pitch chain) translates and every
+    other joint is still, as the indicator's ``[velocity] u`` drives it
+    (:func:`roverimpact.scenario.build.velocity` with ``base_linear = axis``). Another root:
+    every wheel centre at unit speed along ``axis``, no wheel frame turning (min-norm least
+    squares; then a suspension may move, as nothing else pins it)."""
+    from ..scenario.build import velocity
+    from ..scenario.schema import VelocitySpec
+
     _, J = sys.wheel_kinematics(q)
     nw = J.shape[0]
     A = J.reshape(nw * 6, sys.nv)
@@ -153,7 +156,10 @@ def _rigid_velocity(sys: ContactSystem, q, axis: np.ndarray, mbm=None) -> np.nda
         Jl = sys.loop(q)[1]
         A = np.vstack([A, Jl])
         b = np.concatenate([b, np.zeros(Jl.shape[0])])
-    w = _base_translation(sys.model, q, axis, mbm)
+    try:
+        w = velocity(mbm, q, VelocitySpec(base_linear=tuple(float(x) for x in axis)))
+    except ConfigError:  # a fixed root, or a planar one asked to move out of its plane
+        w = None
     if w is None or np.linalg.norm(A @ w - b) > 1e-9 * math.sqrt(nw):
         w = np.linalg.lstsq(A, b, rcond=None)[0]
     if np.linalg.norm(A @ w - b) > 1e-6 * math.sqrt(nw):
@@ -163,27 +169,7 @@ def _rigid_velocity(sys: ContactSystem, q, axis: np.ndarray, mbm=None) -> np.nda
     return w
 
 
-def _base_translation(model, q, axis: np.ndarray, mbm=None) -> np.ndarray | None:
-    """``v`` moving the base along the world ``axis`` at unit speed, every other joint
-    still; None for a root that is neither a free-flyer nor a planar chain."""
-    from ..models.declare import base_info, detect_base
-
-    info = base_info(mbm) if mbm is not None else detect_base(model)
-    v = np.zeros(model.nv)
-    if info.kind == "floating":
-        j = model.joints[model.getJointId(info.joints[0])]
-        quat = np.asarray(q[j.idx_q + 3:j.idx_q + 7], dtype=float)
-        R = pin.Quaternion(quat).normalized().toRotationMatrix()
-        v[j.idx_v:j.idx_v + 3] = R.T @ axis      # Pinocchio: the base's own axes
-        return v
-    if info.kind == "planar" and abs(axis[1]) < 1e-12:
-        jx, jz = (model.joints[model.getJointId(n)] for n in info.joints[:2])
-        v[jx.idx_v], v[jz.idx_v] = axis[0], axis[2]
-        return v
-    return None
-
-
-def _settle(sys: ContactSystem, q, cfg: SimulationConfig, mass: float, *, up=None,
+def _settle(sys: ContactSystem, mbm, q, cfg: SimulationConfig, mass: float, *, up=None,
             free=None):
     """Place the wheels on the ground and solve the static equilibrium (v = 0).
 
@@ -195,7 +181,7 @@ def _settle(sys: ContactSystem, q, cfg: SimulationConfig, mass: float, *, up=Non
     the ground is kept).
     """
     ground = sys.planes[0]
-    w_z = _rigid_velocity(sys, q, np.array([0.0, 0.0, 1.0]) if up is None else up)
+    w_z = _rigid_velocity(sys, mbm, q, np.array([0.0, 0.0, 1.0]) if up is None else up)
     nw = len(sys.fids)
     law = ground.law
     delta0 = (mass * cfg.g / max(nw, 1) / law.k) ** (1.0 / law.n) if cfg.g > 0 else 0.0
@@ -256,9 +242,9 @@ def _settle(sys: ContactSystem, q, cfg: SimulationConfig, mass: float, *, up=Non
     return pin.integrate(sys.model, q, x[: sys.nv] * scale_x)
 
 
-def _driving_velocity(sys: ContactSystem, q, u: float, mbm=None) -> np.ndarray:
+def _driving_velocity(sys: ContactSystem, mbm, q, u: float) -> np.ndarray:
     """Rigid translation at speed u along +x with each wheel rolling if it has a spin joint."""
-    v = u * _rigid_velocity(sys, q, np.array([1.0, 0.0, 0.0]), mbm)
+    v = u * _rigid_velocity(sys, mbm, q, np.array([1.0, 0.0, 0.0]))
     if not sys.planes or sys.planes[0].name != "ground":
         return v
     cs = sys.contacts(q, v)
@@ -414,13 +400,13 @@ def initial_state(mbm, config: SimulationConfig | dict | None = None, *, q0=None
         return _start_on_terrain(sys, mbm, config, q, terrain, pose, pose_wheels)
     if config.settle and config.ground:
         q = _settled_on_ground(sys, mbm, config, q)
-    return q, _driving_velocity(sys, q, config.speed, mbm)
+    return q, _driving_velocity(sys, mbm, q, config.speed)
 
 
 def _settled_on_ground(sys: ContactSystem, mbm, config: SimulationConfig, q):
     """``q`` posed with every wheel on the ground plane, then in static equilibrium."""
     q = _pose_on_ground(mbm, sys, q)
-    return _settle(sys, q, config, float(sum(i.mass for i in sys.model.inertias)))
+    return _settle(sys, mbm, q, config, float(sum(i.mass for i in sys.model.inertias)))
 
 
 def _pose_on_ground(mbm, sys: ContactSystem, q):
@@ -455,7 +441,7 @@ def _start_on_terrain(sys: ContactSystem, mbm, config: SimulationConfig, q, terr
     if config.settle:
         nbar, _, drive = drive_frame(sys, mbm, q)
         spins = spin_joints(sys)
-        q = _settle(sys, q, config, float(sum(i.mass for i in sys.model.inertias)),
+        q = _settle(sys, mbm, q, config, float(sum(i.mass for i in sys.model.inertias)),
                     up=nbar, free=lambda qq: ground_motions(mbm, qq, nbar, drive, spins))
     return q, terrain_velocity(sys, mbm, q, config.speed, terrain, pose_wheels)
 
@@ -587,7 +573,7 @@ def _start_state(sys: ContactSystem, mbm, config: SimulationConfig, q0, v0, terr
     elif v0 is None:  # as initial_state
         if config.settle and config.ground:
             q = _settled_on_ground(sys, mbm, config, q)
-        v = _driving_velocity(sys, q, config.speed, mbm)
+        v = _driving_velocity(sys, mbm, q, config.speed)
     else:
         v = np.asarray(v0, dtype=float).copy()
         if v.shape != (sys.nv,):
