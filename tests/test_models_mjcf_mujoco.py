@@ -35,6 +35,7 @@ import roverimpact as ri
 from roverimpact.exceptions import ModelError
 from roverimpact.models import load_robot
 from roverimpact.models.mjcf import mujoco_state_to_pinocchio, pinocchio_state_to_mujoco
+from tests.reference.rovers import FREE_ROOT_ARM_MJCF
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -625,11 +626,7 @@ def test_floating_base_false_welds_free_bodies(files, tmp_path):
     """floating_base=False on a file whose bodies have free joints: they are removed and
     the bodies stay where the file puts them. Reference: MuJoCo's mj_fullM of the same
     text with the <freejoint/> deleted by hand."""
-    text = ("<mujoco><worldbody><body name='base' pos='0.3 0 1' euler='0 20 0'>"
-            "<freejoint name='fly'/><geom type='box' size='.2 .1 .1'/>"
-            "<body name='arm' pos='0.2 0 0'><joint name='j' axis='0 1 0'/>"
-            "<geom type='capsule' fromto='0 0 0 0.4 0 0' size='0.05'/></body></body>"
-            "</worldbody></mujoco>")
+    text = FREE_ROOT_ARM_MJCF
     (tmp_path / "free.xml").write_text(text)
     as_is = load_robot(tmp_path / "free.xml")  # default: the file's free joint
     assert as_is.model.nv == 7 and as_is.model.names[1] == "fly"

@@ -12,6 +12,7 @@ import roverimpact as ri
 from roverimpact.exceptions import ConfigError, InputError, ModelError
 from roverimpact.models import export_urdf, rocker_bogie, rover2d
 from roverimpact.scenario import Scenario, energy_of, load_scenario, sweep_energy
+from tests.reference.rovers import FREE_ROOT_ARM_MJCF
 
 ROVER2D = {"model": {"name": "rover2d"}, "velocity": {"u": 0.5}, "constraints": "all",
            "obstacle": {"wheel": "front", "beta_deg": 45.0}}
@@ -567,11 +568,7 @@ def test_fixed_base_on_a_file_with_a_free_root(tmp_path):
     it where the file places it, as model.floating_base = false does. Reference: the
     effective mass 1 / (n^T J M^-1 J^T n) of the hit point, from Pinocchio on the same
     text without the <freejoint/> (an arm on a pitched base, hit at its tip)."""
-    text = ("<mujoco><worldbody><body name='base' pos='0.3 0 1' euler='0 20 0'>"
-            "<freejoint name='fly'/><geom type='box' size='.2 .1 .1'/>"
-            "<body name='arm' pos='0.2 0 0'><joint name='j' axis='0 1 0'/>"
-            "<geom type='capsule' fromto='0 0 0 0.4 0 0' size='0.05'/></body></body>"
-            "</worldbody></mujoco>")
+    text = FREE_ROOT_ARM_MJCF
     (tmp_path / "free.xml").write_text(text)
     (tmp_path / "welded.xml").write_text(text.replace("<freejoint name='fly'/>", ""))
     ref = ri.load_robot(tmp_path / "welded.xml").model

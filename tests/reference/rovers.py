@@ -28,3 +28,12 @@ def random_state(model, rng):
     q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
     v = rng.normal(size=model.nv)
     return q, v
+
+
+#: An arm of one hinge on a base pitched 20 degrees, free in the file (<freejoint
+#: name='fly'>): the tests of a fixed base on a file with a free root
+FREE_ROOT_ARM_MJCF = ("<mujoco><worldbody><body name='base' pos='0.3 0 1' euler='0 20 0'>"
+                      "<freejoint name='fly'/><geom type='box' size='.2 .1 .1'/>"
+                      "<body name='arm' pos='0.2 0 0'><joint name='j' axis='0 1 0'/>"
+                      "<geom type='capsule' fromto='0 0 0 0.4 0 0' size='0.05'/></body>"
+                      "</body></worldbody></mujoco>")
