@@ -33,6 +33,36 @@ def test_partition_rejects(M, A, v, pattern):
         ri.partition(M, A, v)
 
 
+@pytest.mark.parametrize("k", [None, 2, 70])  # one system, the item kernel, the lanes
+@pytest.mark.parametrize("bad_pivot", [0, 2])
+def test_asymmetric_and_not_positive_definite_is_called_asymmetric(k, bad_pivot):
+    """The symmetry test runs inside the Cholesky factorisation, which stops at the first
+    pivot that is not positive. A matrix asymmetric past that pivot (here at [3, 1]) and one
+    asymmetric before it are both reported as not symmetric, numpy's own verdict
+    (``M != M.T``), whichever pivot fails."""
+    M = np.diag([2.0, 3.0, 4.0, 5.0])
+    M[bad_pivot, bad_pivot] = -1.0
+    M[3, 1] += 0.5
+    assert not np.allclose(M, M.T)
+    A, v = np.ones((1, 4)), np.ones(4)
+    if k is not None:
+        M = _stack_bad(np.eye(4), M, k)
+    with pytest.raises(ri.InputError, match=r"M is not symmetric .*\|M\[1,3\] - M\[3,1\]\| = 0.5"):
+        ri.partition(M, A, v)
+    M_sym = np.diag([2.0, 3.0, 4.0, 5.0])
+    M_sym[bad_pivot, bad_pivot] = -1.0
+    if k is not None:
+        M_sym = _stack_bad(np.eye(4), M_sym, k)
+    with pytest.raises(ri.InputError, match="M is not positive definite"):
+        ri.partition(M_sym, A, v)
+
+
+def _stack_bad(good, bad, k):
+    out = np.repeat(good[None], k, axis=0)
+    out[1] = bad
+    return out
+
+
 def test_batch_index_is_named():
     M = np.stack([np.eye(3)] * 5)
     M[3, 1, 1] = -0.5

@@ -317,30 +317,36 @@ def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
     v (n,): the one-item kernel on the arrays as they are, without the broadcasting
     bookkeeping (the same numbers, checks and errors). Raises ``_NOT_ONE_SYSTEM`` (numba's,
     for another layout) or returns None (other shapes) where the general path must take
-    over."""
-    n = len(M)  # other shapes: the kernel says so
-    out = np.empty((1, _one.OUT_V + 2 * n if want_velocities else _one.OUT_V))
-    _one.partition_kernel.get()(M, A, v, _ZERO_INDEX3, -1, rtol, want_velocities, out)
-    row = out[0]
-    status = row[_one.OUT_STATUS]
+    over. The kernel returns the energies and the rank (Python floats, made numpy scalars
+    here as the batched path gives them) and writes only the velocities, when wanted."""
+    if want_velocities:
+        n = len(M)  # other shapes: the kernel says so
+        out = np.empty((1, 2 * n))
+        status, T, Tc, Ta, r = _one.partition_kernel.get()(M, A, v, _ZERO_INDEX3, -1, rtol,
+                                                           True, out)
+    else:
+        status, T, Tc, Ta, r = _one.partition_kernel.get()(M, A, v, _ZERO_INDEX3, -1, rtol,
+                                                           False, _NO_OUT)
     if status:
         if status == _one.STATUS_SHAPE:
             return None
         _raise_status(np.array([status], dtype=np.int64), M, A, v, _ZERO_INDEX, _ZERO_INDEX,
                       _ZERO_INDEX, ())
-    T, Tc = row[_one.OUT_T], row[_one.OUT_TC]
     if not math.isfinite(T + Tc):
         raise_overflow(np.array([T + Tc]), M, v, _ZERO_INDEX, _ZERO_INDEX, ())
-    r = int(row[_one.OUT_RANK])
+    r = int(r)
     rank = _RANKS[r] if r < len(_RANKS) else np.int64(r)
     if want_velocities:
-        return _new_partition(T, Tc, row[_one.OUT_TA], row[_one.OUT_V:_one.OUT_V + n],
-                              row[_one.OUT_V + n:], rank)
-    return _new_partition(T, Tc, row[_one.OUT_TA], None, None, rank)
+        row = out[0]
+        return _new_partition(_F64(T), _F64(Tc), _F64(Ta), row[:n], row[n:], rank)
+    return _new_partition(_F64(T), _F64(Tc), _F64(Ta), None, None, rank)
 
 
 _ZERO_INDEX3 = np.zeros((3, 1), dtype=np.int64)
 _ZERO_INDEX3.flags.writeable = False
+#: the one-system kernel's ``out`` when no velocities are wanted: it is not written then
+_NO_OUT = np.empty((1, 0))
+_F64 = np.float64
 #: ranks as numpy integers, as the batched path gives them, made once (a new np.int64
 #: per call costs a tenth of the call)
 _RANKS = tuple(np.int64(r) for r in range(65))

@@ -53,7 +53,11 @@ def factor(Mi, L, invd):  # pragma: no cover - compiled
     """Check ``Mi`` (finite, symmetric, positive definite) and factor it, ``Mi = L L^T``.
 
     ``invd`` receives ``1 / diag(L)``. Symmetry: ``|M_ij - M_ji| <= SYM_RTOL * max|M_kk|``
-    (a NaN or inf off the diagonal fails this test too; the caller classifies it).
+    (a NaN or inf off the diagonal fails this test too; the caller classifies it). The
+    symmetry test runs inside the factorisation, on each ``M_ij`` as it is read (one pass
+    over M, not two: 0.1-0.2 us of a one-item partition of 4-5, n = 18); a matrix that is
+    both asymmetric and not positive definite is reported asymmetric, as a separate first
+    pass would.
     """
     n = Mi.shape[0]
     maxdiag = 0.0
@@ -64,21 +68,20 @@ def factor(Mi, L, invd):  # pragma: no cover - compiled
         if abs(d) > maxdiag:
             maxdiag = abs(d)
     tol = SYM_RTOL * maxdiag
+    thresh = n * _EPS * maxdiag
     ok = True
     for j in range(n):
-        Mj = Mi[j]
-        for i in range(j + 1, n):
-            ok &= abs(Mj[i] - Mi[i, j]) <= tol
-    if not ok:
-        return STATUS_ASYMMETRIC_M
-    thresh = n * _EPS * maxdiag
-    for j in range(n):
         Lj = L[j]
-        s = Mi[j, j]
+        Mj = Mi[j]
+        s = Mj[j]
         for k in range(j):
             s -= Lj[k] * Lj[k]
-        if not s > thresh:
-            return STATUS_NOT_PD
+        if not s > thresh:  # the columns not yet read decide between the two codes
+            for c in range(j, n):
+                Mc = Mi[c]
+                for i in range(c + 1, n):
+                    ok &= abs(Mi[i, c] - Mc[i]) <= tol
+            return STATUS_NOT_PD if ok else STATUS_ASYMMETRIC_M
         d = np.sqrt(s)
         Lj[j] = d
         inv = 1.0 / d
@@ -86,10 +89,11 @@ def factor(Mi, L, invd):  # pragma: no cover - compiled
         for i in range(j + 1, n):
             Li = L[i]
             t = Mi[i, j]
+            ok &= abs(t - Mj[i]) <= tol
             for k in range(j):
                 t -= Li[k] * Lj[k]
             Li[j] = t * inv
-    return STATUS_OK
+    return STATUS_OK if ok else STATUS_ASYMMETRIC_M
 
 
 @shared(fastmath=FASTMATH)
@@ -240,9 +244,10 @@ STATUS_SHAPE = -1
 
 
 def items_signature():
-    """``(M, A, v, index, m, rtol, want_vc, out)`` of :func:`partition_kernel`."""
-    return types.void(ro(f8, 2), ro(f8, 2), ro(f8, 1), ro(i8, 2), i8, f8, boolean,
-                      rw(f8, 2))
+    """``(M, A, v, index, m, rtol, want_vc, out) -> (status, T, T_c, T_a, rank)`` of
+    :func:`partition_kernel`."""
+    return types.UniTuple(f8, 5)(ro(f8, 2), ro(f8, 2), ro(f8, 1), ro(i8, 2), i8, f8, boolean,
+                                 rw(f8, 2))
 
 
 @kernel(items_signature(), fastmath=FASTMATH, loop_vectorize=False)
@@ -252,12 +257,17 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
     index[:, b]`` (the inputs stacked along their first axis). ``out[b]`` receives
     ``T, T_c, T_a, rank, status`` and, if ``want_vc``, ``v_c`` and ``v_a`` (columns
     :data:`OUT_V` onwards; an item that fails its checks: NaN energies, rank 0, and
-    velocities left as they were). The caller checks the shapes and indices, except with
-    ``m = -1``: one system (M (n, n), A (m, n), v (n,), ``index`` zero) passed as it is,
-    whose shapes the kernel checks (status :data:`STATUS_SHAPE` if they do not match).
+    velocities left as they were). The caller checks the shapes and indices. Returns zeros.
 
-    Few arguments on purpose: numba unboxes every array argument of every call, a
-    noticeable share of a one-system call of a few microseconds
+    With ``m = -1``, one system (M (n, n), A (m, n), v (n,), ``index`` zero) passed as it
+    is: the kernel checks its shapes and returns ``(status, T, T_c, T_a, rank)``
+    (``status`` :data:`STATUS_SHAPE` if the shapes do not match); ``out`` (1, 2 n)
+    receives ``v_c`` and ``v_a`` if ``want_vc``, and is not touched otherwise (a caller may
+    pass one array of shape (1, 0) every time).
+
+    Few arguments and results returned, not written, on purpose: numba unboxes every
+    array argument of every call, and reading an output row back costs a Python call per
+    number, together a large share of a one-system call of a few microseconds
     (``benchmarks/bench_single.py``). A :class:`~._jit.Kernel`: compiled for one
     signature on first use (``.get()``), with LLVM's loop vectoriser off: its loops run
     over one item's n and m (a few to a few tens), too short for vector code to pay for
@@ -266,11 +276,12 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
     n = 5 to 60 faster with it (``benchmarks/bench_single.py --vectoriser``)."""
     nb = index.shape[1]
     n = M.shape[1]
-    if m < 0:  # one system as it is (index zero): the shapes must match exactly
+    one = m < 0
+    if one:  # one system as it is (index zero): the shapes must match exactly
         m = A.shape[0]
-        if n == 0 or M.shape[0] != n or A.shape[1] != n or v.shape[0] != n or nb != 1:
-            out[0, OUT_STATUS] = STATUS_SHAPE
-            return
+        if (n == 0 or M.shape[0] != n or A.shape[1] != n or v.shape[0] != n or nb != 1
+                or (want_vc and (out.shape[0] != 1 or out.shape[1] != 2 * n))):
+            return float(STATUS_SHAPE), 0.0, 0.0, 0.0, 0.0
     # one scratch buffer: every allocation costs about as much as a short loop
     buf = np.empty(n * n + 2 * m * n + 2 * m + 5 * n + 4)
     L = buf[:n * n].reshape(n, n)  # only the lower triangle is written and read
@@ -294,6 +305,18 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
     dummy = buf[o:o + n]
     o += n
     res = buf[o:o + 4]
+    if one:
+        vc_row = out[0, :n] if want_vc else dummy
+        code = factor(M, L, invd)
+        if code == STATUS_OK:
+            code = partition_factored(L, invd, A, v, rtol, want_vc, W, H, hn, u, y, z, cn,
+                                      vc_row, res)
+        if code != STATUS_OK:
+            return float(code), np.nan, np.nan, np.nan, 0.0
+        if want_vc:
+            for i in range(n):
+                out[0, n + i] = v[i] - vc_row[i]
+        return 0.0, res[0], res[1], res[2], res[3]
     last = -1
     last_code = STATUS_OK
     for b in range(nb):
@@ -322,6 +345,7 @@ def partition_kernel(M, A, v, index, m, rtol, want_vc, out):  # pragma: no cover
             if want_vc:
                 for i in range(n):
                     row[OUT_V + n + i] = vb[i] - vc_row[i]
+    return 0.0, 0.0, 0.0, 0.0, 0.0
 
 
 @intrinsic
