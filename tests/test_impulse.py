@@ -168,3 +168,37 @@ def test_conflicting_targets_rejected():
     A = np.vstack([c.A, c.A])
     with pytest.raises(ri.InputError, match="contradict"):
         ri.impulsive_impact(c.M, A, c.v, [0.2, 0.9])
+
+
+def test_different_restitution_on_coupled_rows_can_add_energy():
+    """Newton's law on coupled rows with different e, as the docstring warns: unit point
+    mass, rows x (e = 1) and x + y (e = 0), v = (-1, -0.2). By hand: x^+ = 1, x^+ + y^+ = 0,
+    so v^+ = (1, -1), T^+ = 1 J against T^- = 0.52 J."""
+    r = ri.impulsive_impact(np.eye(2), [[1.0, 0.0], [1.0, 1.0]], [-1.0, -0.2],
+                            restitution=[1.0, 0.0])
+    np.testing.assert_allclose(r.v_plus, [1.0, -1.0], atol=1e-14)
+    assert r.T_minus == pytest.approx(0.52) and r.T_plus == pytest.approx(1.0)
+    assert r.energy_lost == pytest.approx(-0.48)
+
+
+def test_a_separating_row_is_held_like_the_others():
+    """Every row of A holds (the bilateral map): two unit masses already separating at
+    1 m/s with e = 0.5 are pulled to approach at 0.5 m/s, by a negative impulse
+    (p = -0.75 N s from momentum: each mass changes by 0.75 m/s)."""
+    r = ri.impulsive_impact(np.eye(2), [[-1.0, 1.0]], [0.0, 1.0], restitution=0.5)
+    np.testing.assert_allclose(r.v_plus, [0.75, 0.25], atol=1e-14)
+    assert float(r.impulse[0]) == pytest.approx(-0.75)
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"A": [[0.0, 0.0]]}, "A row 0 is all zeros (unbatched)"),
+    ({"A": [[[1.0, 0.0]], [[0.0, 0.0]]]}, "A row 0 is all zeros (batch index 1)"),
+    ({"persistent": [[1.0, 0.0], [0.0, 0.0]]}, "persistent row 1 is all zeros"),
+])
+def test_a_row_of_zeros_is_refused(kw, message):
+    """A contact or persistent row with no direction is an error, as in unilateral_impact
+    (it used to give a zero impulse without a word)."""
+    args = {"A": [[0.0, 1.0]], "persistent": None} | kw
+    with pytest.raises(ri.InputError) as exc:
+        ri.impulsive_impact(np.eye(2), args["A"], [1.0, -1.0], 0.5, args["persistent"])
+    assert message in str(exc.value)

@@ -167,3 +167,30 @@ def check_mass_matrix(M: np.ndarray, name: str = "M") -> None:
     low = ~(pivots > pd_floor(flat)[:, None]).all(axis=-1)
     if low.any():
         raise mass_matrix_error(M, int(np.argmax(low)), STATUS_NOT_PD, name)
+
+
+def check_rows(x, name, n):
+    """Rows ``x`` (..., rows, n), or (n,) for one: an array with ``n`` columns, finite, and
+    no row all zeros (a contact normal or constraint row with no direction)."""
+    R = as_array(x, name, min_ndim=1)
+    if R.ndim == 1:
+        R = R[None, :]
+    if R.shape[-1] != n:
+        raise InputError(
+            f"{name} must have shape (..., rows, n) with n = {n} columns to match M, "
+            f"got {R.shape}"
+        )
+    # one reduction for both checks: the largest |entry| of a row is NaN/inf if the row
+    # holds one (then the exact scan names it) and 0 for an all-zero row
+    big = np.max(np.abs(R), axis=-1) if R.size else np.zeros(R.shape[:-1])
+    if not np.isfinite(big).all():
+        check_finite(R, name, 2)
+    zero = big == 0.0
+    if zero.any():
+        where = np.argwhere(zero)[0]
+        idx = tuple(int(i) for i in where[:-1])
+        raise InputError(
+            f"{name} row {int(where[-1])} is all zeros ({fmt_index(idx)}): every contact "
+            "normal or constraint row must have nonzero length"
+        )
+    return R

@@ -99,10 +99,10 @@ import numpy as np
 from . import _validation
 from ._kernels.friction import MU_INF, friction_kernel
 from ._kernels.lemke import STATUS_INFEASIBLE, STATUS_LOCKED, STATUS_MAXITER
-from ._validation import as_array, broadcast_batch, fmt_index
+from ._validation import as_array, broadcast_batch, check_rows, fmt_index
 from .energy import RTOL, flat_index, raise_overflow, scalarize
 from .exceptions import InputError, SolverError
-from .unilateral import TOL, check_residual, check_rows
+from .unilateral import TOL, check_residual
 
 #: default number of friction directions (facets of the polyhedral cone) of a contact
 #: with two tangent rows

@@ -18,7 +18,15 @@ Dependent rows make :math:`G` singular; the minimum-norm solution
 
 For contact rows that share one restitution coefficient and persistent rows already at
 rest, :math:`v^+ = v^- - (1 + e) P_c v^-` and the kinetic energy lost is
-:math:`(1 - e^2)\, T_c^-`.
+:math:`(1 - e^2)\, T_c^-`. With a different ``e`` per row on rows that are coupled
+through :math:`M` (:math:`G` not diagonal), Newton's law applied to all of them at once
+can add energy: a known defect of the law (Stronge, *Impact Mechanics*, 2000, ch. 5;
+``tests/test_impulse.py`` has a case that gains 0.48 J of 0.52).
+
+Every row of ``A`` is a contact that holds through the impact: a row already separating
+(:math:`A_i v^- > 0`) is pulled back to :math:`-e\, A_i v^-` like any other. Which contacts
+hold is :func:`roverimpact.unilateral_impact`'s decision (it reduces to this map for the
+contacts it finds holding).
 """
 
 from __future__ import annotations
@@ -51,7 +59,9 @@ class ImpactResult:
     T_minus, T_plus : float or (...,) ndarray
         Kinetic energy before and after [J].
     energy_lost : float or (...,) ndarray
-        ``T_minus - T_plus`` [J]; never negative for ``e`` in [0, 1].
+        ``T_minus - T_plus`` [J]: ``(1 - e^2) T_c_minus`` (never negative) when every
+        contact row has the same ``e`` and the persistent rows are at rest before the
+        impact; with different ``e`` on coupled rows it can be negative (module notes).
     T_c_minus : float or (...,) ndarray
         Effective kinetic energy: ``T_c`` of ``v`` with all rows ``[A; B]`` [J].
     rank : int or (...,) ndarray
@@ -85,8 +95,8 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     M : (..., n, n) array_like
         Symmetric positive-definite mass matrix.
     A : (..., m, n) array_like, or (n,) for a single contact
-        Contact rows; row i times ``v`` is the normal velocity of contact i, negative
-        when approaching.
+        Contact rows, none all zeros; row i times ``v`` is the normal velocity of contact
+        i, negative when approaching. Every row holds through the impact (module notes).
     v : (..., n) array_like
         Generalized velocity just before the impact.
     restitution : float or (..., m) array_like
@@ -104,8 +114,8 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     Raises
     ------
     InputError
-        For bad arrays, ``e`` outside [0, 1], or dependent rows whose restitution
-        targets contradict each other (no impulse can meet them all).
+        For bad arrays, a row all zeros, ``e`` outside [0, 1], or dependent rows whose
+        restitution targets contradict each other (no impulse can meet them all).
 
     Examples
     --------
@@ -120,14 +130,9 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     if v is None:
         raise InputError("v is required: the generalized velocity (..., n) before impact")
     M, A, v, batch, n, m = prepare(M, A, v)
+    A = _validation.check_rows(A, "A", n)
     if persistent is not None:
-        B = as_array(persistent, "persistent", min_ndim=1)
-        if B.ndim == 1:
-            B = B[None, :]
-        if B.shape[-1] != n:
-            raise InputError(
-                f"persistent must have shape (..., p, n) with n = {n}, got {B.shape}"
-            )
+        B = _validation.check_rows(persistent, "persistent", n)
         batch = broadcast_batch(M=M.shape[:-2], A=A.shape[:-2], v=v.shape[:-1],
                                 persistent=B.shape[:-2])
     else:

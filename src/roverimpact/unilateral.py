@@ -67,7 +67,7 @@ import numpy as np
 
 from . import _validation
 from ._kernels.lemke import STATUS_INFEASIBLE, STATUS_LOCKED, STATUS_MAXITER, impact_kernel
-from ._validation import as_array, broadcast_batch, check_rtol, fmt_index
+from ._validation import as_array, broadcast_batch, check_rows, check_rtol, fmt_index
 from .energy import RTOL, flat_index, raise_overflow, scalarize
 from .exceptions import InputError, SolverError
 
@@ -147,31 +147,6 @@ def check_residual(resid: np.ndarray, batch: tuple) -> None:
             f"relative residual {worst:.2g}): the problem is too ill-conditioned; check the "
             "scaling of M and of the contact rows"
         )
-
-
-def check_rows(x, name, n):
-    R = as_array(x, name, min_ndim=1)
-    if R.ndim == 1:
-        R = R[None, :]
-    if R.shape[-1] != n:
-        raise InputError(
-            f"{name} must have shape (..., rows, n) with n = {n} columns to match M, "
-            f"got {R.shape}"
-        )
-    # one reduction for both checks: the largest |entry| of a row is NaN/inf if the row
-    # holds one (then the exact scan names it) and 0 for an all-zero row
-    big = np.max(np.abs(R), axis=-1) if R.size else np.zeros(R.shape[:-1])
-    if not np.isfinite(big).all():
-        _validation.check_finite(R, name, 2)
-    zero = big == 0.0
-    if zero.any():
-        where = np.argwhere(zero)[0]
-        idx = tuple(int(i) for i in where[:-1])
-        raise InputError(
-            f"{name} row {int(where[-1])} is all zeros ({fmt_index(idx)}): every contact "
-            "normal or constraint row must have nonzero length"
-        )
-    return R
 
 
 def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, want_vplus):
