@@ -30,6 +30,7 @@ from hypothesis.extra import numpy as hnp
 import roverimpact as ri
 from roverimpact.frictional import (
     FACETS,
+    frictional_active_set,
     frictional_impact,
 )
 from roverimpact.scenario.build import holding_rows
@@ -752,3 +753,24 @@ def test_a_contact_without_tangent_rows_needs_no_mu():
     np.testing.assert_array_equal(
         holding_rows(labels, M, A, v, obstacle_row=obs, friction="coulomb",
                      mu={"ground:rear": 0.3}), full)
+
+
+@pytest.mark.parametrize("s", [1e-170, 1e-155, 1e-100, 1.0, 1e100, 1e160, 1e170])
+def test_row_scale_changes_only_the_impulse_unit(s):
+    """Rows scaled by s (a contact written in other units): the same motion, impulses by
+    1/s, slack and slip by s. By hand, for a unit point at (0.3, -1) m/s on the floor with
+    mu = 0.1 and e = 0.5: normal impulse 1.5 N s, friction 0.15 N s, v+ = (0.15, 0.5),
+    sliding. Rows of 1e-155 gave NaN and rows of 1e160 no impact at all before the rows
+    were scaled inside (G = N M^-1 N^T under- or overflowed), as unilateral_impact does."""
+    B = np.array([[0.0, 0.0, s]])  # a bilateral row of the same scale: z held
+    r = frictional_impact(np.eye(3), [0.3, -1.0, 0.0], [[0.0, s, 0.0]],
+                             [[[s, 0.0, 0.0]]], 0.1, restitution=0.5, bilateral=B)
+    np.testing.assert_allclose(r.v_plus, [0.15, 0.5, 0.0], rtol=1e-13, atol=1e-15)
+    assert r.state.tolist() == ["sliding"]
+    assert float(r.impulse[0]) * s == pytest.approx(1.5, rel=1e-13)
+    assert float(r.impulse_tangent[0, 0]) * s == pytest.approx(-0.15, rel=1e-13)
+    assert float(r.slip[0, 0]) / s == pytest.approx(0.15, rel=1e-13)
+    assert abs(float(r.slack[0])) <= 1e-13 * s  # N v+ + e N v- of a holding contact
+    hold_n, hold_t = frictional_active_set(np.eye(3), [0.3, -1.0, 0.0], [[0.0, s, 0.0]],
+                                              [[[s, 0.0, 0.0]]], 0.1, bilateral=B)
+    assert hold_n.tolist() == [True] and hold_t.tolist() == [[False]]

@@ -272,6 +272,11 @@ def _tangent_rows(tangent, k, n):
     return Tg, ntan
 
 
+#: Largest |entry| of the contact and bilateral rows outside which :func:`frictional_impact`
+#: scales them before the kernel (far from where G = N M^-1 N^T under- or overflows)
+ROW_SCALE_RANGE = (1e-50, 1e50)
+
+
 @functools.lru_cache(maxsize=64)
 def _directions(ntan: tuple[int, ...], facets: int):
     """Directions per contact and their coefficients on the tangent rows."""
@@ -330,6 +335,24 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
     flat = [np.ascontiguousarray(a.reshape(math.prod(a.shape[: a.ndim - c]),
                                            *a.shape[a.ndim - c:]))
             for a, c in ((M, 2), (N, 2), (Tg, 3), (B, 2), (v, 1), (e, 1), (mu, 1))]
+    # rows of tiny or huge entries (1e-155 gave NaN, 1e160 no impact: G = N M^-1 N^T under-
+    # or overflowed in the kernel) are scaled as in unilateral_impact: each contact's
+    # normal and tangent rows divided by one power of two, about the largest |entry| of its
+    # normal row over the batch, each bilateral row by its own. Exact: impulses scale by
+    # 1/s and velocities along the rows by s (B v+ = 0 does not depend on B's scale). Only
+    # then: rows of ordinary size go to the kernel as given, so that an item gives the same
+    # bits alone as in a batch (the scale of a batch mixes with M's and B's in rounding)
+    big = np.max(np.abs(flat[1]), axis=(0, 2))
+    s = np.ones(k)
+    if pb:
+        sB = np.max(np.abs(flat[3]), axis=-1, keepdims=True)
+    if ((big < ROW_SCALE_RANGE[0]) | (big > ROW_SCALE_RANGE[1])).any() or (
+            pb and ((sB < ROW_SCALE_RANGE[0]) | (sB > ROW_SCALE_RANGE[1])).any()):
+        s = np.ldexp(1.0, np.frexp(big)[1])
+        flat[1] = flat[1] / s[:, None]
+        flat[2] = flat[2] / s[:, None, None]
+        if pb:
+            flat[3] = flat[3] / np.ldexp(1.0, np.frexp(sB)[1])
     out = {
         "P": np.zeros((nb, k)), "Pt": np.zeros((nb, k, tm)),
         "vplus": np.empty((nb, n) if want_vplus else (0, n)),
@@ -347,6 +370,10 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
     }
     friction_kernel.get()(*flat, *idx, ntan, nd, coef, math.cos(math.pi / int(facets)),
                           float(rtol), float(tol), bool(want_vplus), *out.values())
+    out["P"] /= s
+    out["Pt"] /= s[:, None]
+    out["slack"] *= s
+    out["slip"] *= s[:, None]
     _raise_status(out, M, idx[0], batch)
     if not np.isfinite(out["Tm"]).all():  # finite M and v, 1/2 v^T M v above float64
         raise_overflow(out["Tm"], M, v, idx[0], idx[4], batch)
@@ -408,6 +435,9 @@ def frictional_impact(M, v, normal, tangent, mu, restitution=0.0, bilateral=None
         ``t = 2`` in 3-D). The list form gives each contact its own rows, ``(t_i, n)``
         or ``(..., t_i, n)``, or ``None`` (frictionless contact). All-zero tangent rows
         make a contact frictionless in that batch item. ``None``: no friction anywhere.
+        The rows are taken as given, not checked against the normal: in generalized
+        coordinates a true tangent row can be parallel to the normal row (a contact point
+        that moves along one line), so a row that is not the slip velocity is not caught.
     mu : float or (..., k) array_like
         Friction coefficient of each contact, ``>= 0``; ``inf`` = no slip while the
         contact holds (its tangent rows are then held as bilateral rows).
