@@ -204,9 +204,9 @@ def _panda():
 
 
 def test_panda_comparison_runs():
-    model = _panda()
+    model = _panda().model
     q = np.array(safety.READY_POSES["panda"])
-    df = safety.arm_effective_masses(model, q, payload=1.0, region="chest")
+    df = safety.arm_effective_masses(_panda(), q, payload=1.0, region="chest")
     assert len(df) == model.njoints - 1 == 9
     assert df.attrs["M_total"] == pytest.approx(sum(i.mass for i in model.inertias[1:]))
     assert np.all(df["m_min"] > 0) and np.all(df["m_min"] <= df["m_max"])
@@ -218,7 +218,7 @@ def test_panda_comparison_runs():
     # cross-check one entry with point_effective_mass along sampled directions
     p = model.inertias[model.getJointId("panda_joint7")].lever
     U = np.random.default_rng(2).normal(size=(300, 3))
-    m = safety.point_effective_mass(model, q, "panda_link7", U, point=p)
+    m = safety.point_effective_mass(_panda(), q, "panda_link7", U, point=p)
     assert m.min() >= link7["m_min"] * (1 - 1e-9) and m.max() <= link7["m_max"] * (1 + 1e-9)
 
 
@@ -243,13 +243,172 @@ def test_public_exports():
 
 
 def test_load_arm_is_load_robot():
-    """load_arm is the models layer's loader (either spelling); the arm functions also take
-    the MultibodyModel that load_robot returns. (API check: same code path, same numbers.)"""
+    """load_arm is the models layer's loader (either spelling): the MultibodyModel that
+    load_robot returns, with the fingers' mimic row. (API check: same code path, same
+    numbers.)"""
     mbm = ri.load_robot("example-robot-data:panda")
     model = _panda()
-    assert model.nq == mbm.model.nq and model.name == mbm.model.name
+    assert model.model.nq == mbm.model.nq and model.name == mbm.name
+    assert model.loop_names == mbm.loop_names == ["mimic:panda_finger_joint2"]
     q = np.array(safety.READY_POSES["panda"])
     u = np.random.default_rng(4).normal(size=(5, 3))
     np.testing.assert_array_equal(safety.point_effective_mass(mbm, q, "panda_link7", u),
                                   safety.point_effective_mass(model, q, "panda_link7", u))
     assert safety.arm_effective_masses(mbm, q).equals(safety.arm_effective_masses(model, q))
+
+
+# ---------------------------------------------------------------------------------------
+# Coupled joints (<mimic>): the reference enforces the coupling by hand, v = S z
+# ---------------------------------------------------------------------------------------
+
+#: Two links about z, j2 mimics j1 (theta_2 = theta_1); link i: mass m_i, centre of mass
+#: at 0.25 m, I_zz about it; link 2 hinged at x = 0.5 m of link 1.
+MIMIC_ARM_URDF = """<?xml version="1.0"?>
+<robot name="mimic_arm">
+  <link name="base"/>
+  <link name="link1"><inertial><origin xyz="0.25 0 0"/><mass value="2.0"/>
+    <inertia ixx="0.001" iyy="0.04" izz="0.04" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="link2"><inertial><origin xyz="0.25 0 0"/><mass value="1.0"/>
+    <inertia ixx="0.001" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="link1"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="10" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="link1"/><child link="link2"/>
+    <origin xyz="0.5 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="1"/>
+    <mimic joint="j1" multiplier="1.0" offset="0"/></joint>
+</robot>
+"""
+
+
+def _reduced_reference(urdf, q, frame, point):
+    """``(M_z, J_z)`` of a URDF's point with its ``<mimic>`` couplings enforced by hand:
+    plain Pinocchio (whose URDF parser keeps every joint independent), the couplings
+    read from the file, ``v = S z`` (a mimic joint's rate is ``multiplier`` times its
+    leader's), ``M_z = S^T M S``, ``J_z = J_p S`` (world axes)."""
+    import xml.etree.ElementTree as ET
+
+    model = pin.buildModelFromUrdf(str(urdf))
+    data = model.createData()
+    S = np.eye(model.nv)
+    drop = []
+    for j in ET.parse(urdf).getroot().iter("joint"):
+        mm = j.find("mimic")
+        if mm is not None:
+            f = model.joints[model.getJointId(j.get("name"))].idx_v
+            lead = model.joints[model.getJointId(mm.get("joint"))].idx_v
+            S[f, lead] = float(mm.get("multiplier", 1.0))
+            S[f, f] = 0.0
+            drop.append(f)
+    S = np.delete(S, drop, axis=1)
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    fid = model.getFrameId(frame)
+    J = pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
+    r = data.oMf[fid].rotation @ np.asarray(point, dtype=float)
+    Jp = J[:3] - pin.skew(r) @ J[3:]
+    return S.T @ M @ S, Jp @ S
+
+
+def _reference_masses(Mz, Jz, U):
+    """1 / (u^T J_z M_z^-1 J_z^T u) per row u of U (unit rows)."""
+    G = Jz @ np.linalg.solve(Mz, Jz.T)
+    return 1.0 / np.einsum("ki,ij,kj->k", U, G, U)
+
+
+def test_mimic_arm_holds_the_coupling(tmp_path):
+    r"""Tip of link 2 of MIMIC_ARM_URDF along y at q = 0, by hand. With v = (w, w):
+
+        M = [[I1 + m1 0.25^2 + I2 + m2 0.75^2, I2 + m2 0.25 0.75], [., I2 + m2 0.25^2]]
+          = [[0.7475, 0.2075], [0.2075, 0.0825]],  M_z = sum of M = 1.245 kg m^2
+        J_y(tip) = [1.0, 0.5] m  ->  a_z = 1.5 m,  m_y = 1.245 / 1.5^2 = 0.553333 kg
+
+    (joints independent, as before the fix: 0.300808 kg). Then the reduced reference at
+    other configurations and the per-link table."""
+    urdf = tmp_path / "mimic_arm.urdf"
+    urdf.write_text(MIMIC_ARM_URDF)
+    tip = [0.5, 0.0, 0.0]
+    for model in (safety.load_arm(urdf), ri.load_robot(urdf)):
+        got = safety.point_effective_mass(model, [0.0, 0.0], "link2", [0, 1, 0], point=tip)
+        assert got == pytest.approx(1.245 / 1.5**2, rel=1e-12)
+    model = safety.load_arm(urdf)
+    rng = np.random.default_rng(5)
+    U = rng.normal(size=(6, 3))
+    U[:, 2] = 0.0  # in the plane; out of it the point cannot move
+    U /= np.linalg.norm(U, axis=1)[:, None]
+    for th in (0.3, -1.2, 2.0):
+        q = np.array([th, th])
+        Mz, Jz = _reduced_reference(urdf, q, "link2", tip)
+        np.testing.assert_allclose(
+            safety.point_effective_mass(model, q, "link2", U, point=tip),
+            _reference_masses(Mz, Jz, U), rtol=1e-10)
+        df = safety.arm_effective_masses(model, q).set_index("link")
+        for link, com in (("link1", [0.25, 0, 0]), ("link2", [0.25, 0, 0])):
+            Mz, Jz = _reduced_reference(urdf, q, link, com)
+            lam = np.linalg.eigvalsh(Jz @ np.linalg.solve(Mz, Jz.T))
+            # one DoF: the point moves along one direction only
+            assert df.at[link, "m_min"] == pytest.approx(1 / lam[-1], rel=1e-10)
+            assert df.at[link, "m_max"] == np.inf
+
+
+def test_mimic_arm_cli(tmp_path, capsys):
+    """`safety arm` on the mimic arm prints the coupled masses (reduced reference)."""
+    import json
+
+    from roverimpact.cli import main
+
+    urdf = tmp_path / "mimic_arm.urdf"
+    urdf.write_text(MIMIC_ARM_URDF)
+    assert main(["safety", "arm", str(urdf), "--q", "0.3,0.3", "--json"]) == 0
+    links = {r["link"]: r for r in json.loads(capsys.readouterr().out)["links"]}
+    Mz, Jz = _reduced_reference(urdf, np.array([0.3, 0.3]), "link2", [0.25, 0, 0])
+    lam = np.linalg.eigvalsh(Jz @ np.linalg.solve(Mz, Jz.T))
+    assert links["link2"]["m_min"] == pytest.approx(1 / lam[-1], rel=1e-10)
+
+
+def test_panda_fingers_mimic_matches_reduced_reference():
+    """Panda (finger_joint2 mimics finger_joint1): points of the hand, a finger and link 7
+    along random directions, and the per-link table, against the reduced reference."""
+    from roverimpact.models.robot_data import example_robot_urdf
+
+    urdf = example_robot_urdf("panda")
+    model = _panda()
+    q = np.array(safety.READY_POSES["panda"])
+    rng = np.random.default_rng(6)
+    U = rng.normal(size=(8, 3))
+    U /= np.linalg.norm(U, axis=1)[:, None]
+    for frame, point in (("panda_hand_tcp", [0, 0, 0]), ("panda_leftfinger", [0, 0.01, 0.04]),
+                         ("panda_link7", [0.02, 0, 0.05])):
+        Mz, Jz = _reduced_reference(urdf, q, frame, point)
+        np.testing.assert_allclose(
+            safety.point_effective_mass(model, q, frame, U, point=point),
+            _reference_masses(Mz, Jz, U), rtol=1e-9)
+    df = safety.arm_effective_masses(model, q).set_index("link")
+    pm = model.model
+    for link in ("panda_link6", "panda_link7", "panda_leftfinger", "panda_rightfinger"):
+        com = pm.inertias[int(pm.frames[pm.getFrameId(link)].parentJoint)].lever
+        Mz, Jz = _reduced_reference(urdf, q, link, com)
+        lam = np.linalg.eigvalsh(Jz @ np.linalg.solve(Mz, Jz.T))
+        assert df.at[link, "m_min"] == pytest.approx(1 / lam[-1], rel=1e-9)
+        assert df.at[link, "m_max"] == pytest.approx(1 / lam[0], rel=1e-6)
+
+
+def test_panda_agrees_with_energy_scenario():
+    """examples/panda_tool_impact.toml: the scenario path's m_eff along n with the other
+    rows (the fingers' mimic row) held is the safety path's mass of the same point, and
+    both are the reduced reference's (3.96695 kg; 3.96587 kg with the fingers free)."""
+    from pathlib import Path
+
+    from roverimpact.models.robot_data import example_robot_urdf
+    from roverimpact.scenario import ImpactSetup, load_scenario
+
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "examples"
+                       / "panda_tool_impact.toml")
+    setup = ImpactSetup.from_scenario(sc)
+    m_eff = setup.partition().m_eff
+    got = safety.point_effective_mass(_panda(), setup.q, "panda_hand_tcp", setup.normal)
+    assert got == pytest.approx(float(m_eff), rel=1e-10)
+    Mz, Jz = _reduced_reference(example_robot_urdf("panda"), setup.q, "panda_hand_tcp",
+                                [0, 0, 0])
+    assert got == pytest.approx(_reference_masses(Mz, Jz, setup.normal[None])[0], rel=1e-10)

@@ -108,7 +108,7 @@ def arm_cmd(
     )
 
     _check_mass(payload, "--payload", "payload m_L", allow_zero=True)
-    model = load_arm(robot)
+    mbm = load_arm(robot)
     if q is not None:
         try:
             qv = np.array([float(x) for x in q.split(",")])
@@ -117,8 +117,8 @@ def arm_cmd(
     elif robot.startswith("erd:") and robot[4:] in READY_POSES:
         qv = np.array(READY_POSES[robot[4:]])
     else:
-        qv = pin.neutral(model)
-    df = arm_effective_masses(model, qv, payload=payload, points=points, region=region)
+        qv = pin.neutral(mbm.model)
+    df = arm_effective_masses(mbm, qv, payload=payload, points=points, region=region)
     if as_json:
         print_json({"robot": robot, "points": points, "region": region, "payload": payload,
                     "q": qv, "M_total": df.attrs["M_total"],

@@ -10,9 +10,18 @@ It depends on the configuration, the link and the direction: :func:`arm_effectiv
 shows how far the standard's single number :math:`M/2 + m_L`
 (:func:`roverimpact.safety.iso_ts_15066.iso_robot_mass`) is from it.
 
+Coupled joints (URDF ``<mimic>``, MJCF joint equalities, closed loops) are the model's
+loop-closure rows :math:`B` (:mod:`roverimpact.models.joints`), held as in the scenario
+path (``roverimpact energy``): the mass is that of the row with :math:`B v = 0`,
+
+.. math::  m_u = \frac{1}{u^T J_p N J_p^T u},\qquad
+    N = M^{-1} - M^{-1} B^T (B M^{-1} B^T)^{+} B M^{-1},
+
+the same as the reduced model's (:math:`v = S z`: :math:`M_z = S^T M S`, :math:`J_z = J_p S`).
+
 Everything model-side comes from :mod:`roverimpact.models`: the robot file through
-:func:`~roverimpact.models.load_robot`, :math:`M(q)` from
-:func:`~roverimpact.models.constraints.mass_matrix` and :math:`J_p` from
+:func:`~roverimpact.models.load_robot`, :math:`M(q)` and :math:`B` from its
+:class:`~roverimpact.models.kinematics.ConstraintSet` and :math:`J_p` from
 :func:`~roverimpact.models.constraints.point_jacobian`. Pinocchio is imported lazily.
 """
 
@@ -24,18 +33,15 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import as_array, check_rtol
-from ..energy import row_masses
+from ..energy import projector, row_masses
 from ..exceptions import InputError, ModelError
 from .iso_ts_15066 import BodyRegion, body_region, iso_robot_mass, max_transient_speed
 
 __all__ = ["READY_POSES", "arm_effective_masses", "load_arm", "point_effective_mass"]
 
 
-
-
 def load_arm(source: str | Path):
-    """Load a fixed-base arm as a ``pinocchio.Model`` (a thin wrapper of
-    :func:`roverimpact.models.load_robot`).
+    """Load a fixed-base arm (:func:`roverimpact.models.load_robot`).
 
     Parameters
     ----------
@@ -47,8 +53,9 @@ def load_arm(source: str | Path):
 
     Returns
     -------
-    pinocchio.Model
-        The ``model`` of the :class:`~roverimpact.models.MultibodyModel`.
+    MultibodyModel
+        Its ``model`` is the ``pinocchio.Model``; its loop closure holds the couplings of
+        ``<mimic>`` joints, which the functions of this module keep.
 
     Raises
     ------
@@ -57,7 +64,7 @@ def load_arm(source: str | Path):
     """
     from ..models import load_robot
 
-    return load_robot(source).model
+    return load_robot(source)
 
 
 #: A configuration away from singularities for the arms of example-robot-data (rad, m).
@@ -68,26 +75,32 @@ READY_POSES = {
 
 
 def _arm(model, q):
-    """(pinocchio.Model, checked q) from a ``pinocchio.Model`` or a ``MultibodyModel``."""
-    model = getattr(model, "model", model)
+    """(ConstraintSet of the model's coupling rows, checked q) from a ``MultibodyModel`` or
+    a ``pinocchio.Model`` (which carries no couplings: every joint is independent)."""
+    from ..models import MultibodyModel
+    from ..models.constraints import LoopClosure
+    from ..models.kinematics import ConstraintSet
+
+    if not isinstance(model, MultibodyModel):
+        model = MultibodyModel(model, name=model.name)
+    held = [] if model.loop_closure is None else [LoopClosure(tuple(model.loop_names))]
+    cs = ConstraintSet(model, held)
+    nq = model.model.nq
     q = as_array(q, "q", min_ndim=1)
-    if q.shape != (model.nq,):
-        raise InputError(f"q must have shape ({model.nq},) for this model, got {q.shape}")
+    if q.shape != (nq,):
+        raise InputError(f"q must have shape ({nq},) for this model, got {q.shape}")
     if not np.all(np.isfinite(q)):
         raise InputError("q contains NaN or inf")
-    return model, q
+    return cs, q
 
 
-def _kinematics(model, q):
-    """``(data, M)``: joint Jacobians and frame placements at ``q``, and M(q) (n, n)."""
-    import pinocchio as pin
-
+def _kinematics(cs, q):
+    """``(data, M, B)``: joint Jacobians and frame placements at ``q``, M(q) (n, n) and the
+    rows B (p, n) of the model's joint couplings and loops, held through the contact."""
     from ..models.constraints import mass_matrix
 
-    data = model.createData()
-    pin.computeJointJacobians(model, data, q)
-    pin.updateFramePlacements(model, data)
-    return data, mass_matrix(model, data, q)
+    cs.kinematics(q)
+    return cs.data, mass_matrix(cs.mbm.model, cs.data, q), cs.rows(q)
 
 
 def _jacobian(model, data, frame_id: int, p_frame: np.ndarray) -> np.ndarray:
@@ -120,15 +133,19 @@ def _body_type():
 def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: float = 1e-10):
     r"""Exact effective mass of a point of a link along one or many unit directions.
 
-    .. math::  m_u = \frac{1}{u^T J_p(q) M(q)^{-1} J_p(q)^T u}
+    .. math::  m_u = \frac{1}{u^T J_p(q) N(q) J_p(q)^T u}
 
-    computed with :func:`roverimpact.energy.row_masses` (``m_eff_free``, as
-    :func:`roverimpact.effective_mass`) on the rows :math:`a = u^T J_p`.
+    (:math:`N = M^{-1}` for independent joints; with the model's coupling rows :math:`B`
+    held, see the module docstring) computed with :func:`roverimpact.energy.row_masses`
+    (``m_eff`` with ``held=B``, as :func:`roverimpact.effective_mass`) on the rows
+    :math:`a = u^T J_p`.
 
     Parameters
     ----------
-    model : pinocchio.Model or MultibodyModel
-        Fixed-base arm (e.g. :func:`load_arm` or :func:`roverimpact.models.load_robot`).
+    model : MultibodyModel or pinocchio.Model
+        Fixed-base arm (:func:`load_arm` or :func:`roverimpact.models.load_robot`). A bare
+        ``pinocchio.Model`` carries no couplings: a ``<mimic>`` joint would move on its
+        own.
     q : (nq,) array_like
         Configuration.
     link : str
@@ -147,7 +164,8 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
         [kg]; ``inf`` where the point cannot move along the direction.
     """
     rtol = check_rtol(rtol)
-    model, q = _arm(model, q)
+    cs, q = _arm(model, q)
+    model = cs.mbm.model
     u = as_array(direction, "direction", min_ndim=1)
     single = u.ndim == 1
     u = np.atleast_2d(u)
@@ -158,13 +176,13 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
         raise InputError("direction must be finite and non-zero")
     u = u / nrm[:, None]
     fid, p = _resolve_point(model, link, point)
-    data, M = _kinematics(model, q)
+    data, M, B = _kinematics(cs, q)
     Jp = _jacobian(model, data, fid, p)
     A = u @ Jp  # (k, nv)
     moving = np.linalg.norm(A, axis=1) > rtol * max(np.linalg.norm(Jp), 1e-300)
     out = np.full(len(u), np.inf)
     if moving.any():
-        out[moving] = row_masses(M, A[moving])[1]
+        out[moving] = row_masses(M, A[moving], B)[0]
     return float(out[0]) if single else out
 
 
@@ -197,16 +215,18 @@ def arm_effective_masses(model, q, *, payload: float = 0.0, points: str = "com",
     joint origin), the exact effective mass over all unit directions u ranges between
 
     .. math::  m_{min} = 1/\lambda_{max}(G),\quad m_{max} = 1/\lambda_{min}(G),\quad
-        G = J_p M^{-1} J_p^T \;(3\times3),
+        G = J_p N J_p^T \;(3\times3)
 
-    (``inf`` where the point cannot move along some direction). The table also gives the
-    ISO speed limit for ``region`` with the standard's crude mass and with the exact
-    lightest / heaviest direction.
+    (:math:`N` as in :func:`point_effective_mass`: :math:`M^{-1}` with the model's coupling
+    rows held; ``inf`` where the point cannot move along some direction). The table also
+    gives the ISO speed limit for ``region`` with the standard's crude mass and with the
+    exact lightest / heaviest direction.
 
     Parameters
     ----------
-    model : pinocchio.Model or MultibodyModel
-        Fixed-base arm; ``M`` of the standard is the summed mass of its moving bodies.
+    model : MultibodyModel or pinocchio.Model
+        Fixed-base arm, as in :func:`point_effective_mass`; ``M`` of the standard is the
+        summed mass of its moving bodies.
     q : (nq,) array_like
         Configuration.
     payload : float, optional
@@ -228,16 +248,20 @@ def arm_effective_masses(model, q, *, payload: float = 0.0, points: str = "com",
 
     if points not in ("com", "origin"):
         raise InputError(f"points must be 'com' or 'origin', got {points!r}")
-    model, q = _arm(model, q)
+    cs, q = _arm(model, q)
+    model = cs.mbm.model
     reg = body_region(region)
     M_total = float(sum(model.inertias[j].mass for j in range(1, model.njoints)))
     m_iso = float(iso_robot_mass(M_total, payload))
-    data, M = _kinematics(model, q)
-    Minv = np.linalg.inv(M)
+    data, M, B = _kinematics(cs, q)
+    # N = M^-1 - M^-1 B^T (B M^-1 B^T)^+ B M^-1 = (I - P_c) M^-1, P_c of the held rows B
+    N = np.linalg.inv(M)
+    if len(B):
+        N = N - projector(M, B) @ N
     rows = []
     for body, jid, fid, p in _link_points(model, points):
         Jp = _jacobian(model, data, fid, p)
-        G = Jp @ Minv @ Jp.T
+        G = Jp @ N @ Jp.T
         lam = np.linalg.eigvalsh(0.5 * (G + G.T))
         lmax = lam[-1]
         if lmax <= 0:
