@@ -399,7 +399,7 @@ CASES = [
     ("safety-arm-type", ["safety", "arm", "{d}/robot.stl"], [], "unknown robot file type",
      None),
     ("safety-arm-erd", ["safety", "arm", "erd:no_such_robot"], [], "no_such_robot", None),
-    ("safety-arm-q", ["safety", "arm", "erd:panda", "--q", "1,2"], [], "q must have shape",
+    ("safety-arm-q", ["safety", "arm", "erd:panda", "--q", "1,2"], [], "q must have 9 numbers",
      None),
     ("safety-arm-q-text", ["safety", "arm", "erd:panda", "--q", "a,b"], [], "comma-separated",
      None),

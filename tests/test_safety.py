@@ -234,7 +234,7 @@ def test_cli_safety(capsys):
     assert main(["safety", "arm", "erd:panda", "--payload", "1", "--region", "chest"]) == 0
     assert "M (moving parts) = 16.822 kg" in capsys.readouterr().out
     assert main(["safety", "arm", "erd:panda", "--q", "1,2"]) == 2
-    assert "q must have shape (9,)" in capsys.readouterr().err
+    assert "q must have 9 numbers" in capsys.readouterr().err
 
 
 def test_public_exports():
@@ -412,3 +412,66 @@ def test_panda_agrees_with_energy_scenario():
     Mz, Jz = _reduced_reference(example_robot_urdf("panda"), setup.q, "panda_hand_tcp",
                                 [0, 0, 0])
     assert got == pytest.approx(_reference_masses(Mz, Jz, setup.normal[None])[0], rel=1e-10)
+
+
+# ---------------------------------------------------------------------------------------
+# Continuous joints: (cos theta, sin theta) in q
+# ---------------------------------------------------------------------------------------
+
+
+def test_continuous_joint_takes_a_unit_cos_sin_pair(tmp_path):
+    r"""MIMIC_ARM_URDF with j2 continuous and no coupling: q = (theta_1, cos theta_2,
+    sin theta_2). Tip of link 2 along y at theta = 0, by hand (M as in
+    test_mimic_arm_holds_the_coupling, a = J_y = [1.0, 0.5] m):
+
+        det M = 0.7475 0.0825 - 0.2075^2 = 0.0186125
+        a M^-1 a^T = (0.0825 - 2 0.2075 0.5 + 0.7475 0.25) / det = 3.324379 1/kg
+        m_y = 0.300808 kg
+
+    A pair of norm 2, 0.5 or 0 is no angle: one ModelError naming the joint (it gave
+    0.9449 kg for norm 0.5, and "M is not positive definite" for norm 2)."""
+    urdf = tmp_path / "cont_arm.urdf"
+    urdf.write_text(MIMIC_ARM_URDF.replace('type="revolute"><parent link="link1"',
+                                           'type="continuous"><parent link="link1"')
+                    .replace('<mimic joint="j1" multiplier="1.0" offset="0"/>', ""))
+    model = safety.load_arm(urdf)
+    tip = [0.5, 0, 0]
+    got = safety.point_effective_mass(model, [0.0, 1.0, 0.0], "link2", [0, 1, 0], point=tip)
+    assert got == pytest.approx(0.0186125 / 0.061875, rel=1e-12)
+    for q in ([0, 2, 0], [0, 0.5, 0], [0, 0, 0]):
+        with pytest.raises(ModelError, match=r"joint 'j2' has norm .*a continuous joint "
+                                             r"takes two numbers, cos theta and sin theta"):
+            safety.point_effective_mass(model, q, "link2", [0, 1, 0], point=tip)
+        with pytest.raises(ModelError, match="joint 'j2'"):
+            safety.arm_effective_masses(model, q)
+    with pytest.raises(InputError, match=r"shape \(3,\).*continuous joint takes two numbers"):
+        safety.point_effective_mass(model, [0.0, 0.5], "link2", [0, 1, 0])
+
+
+def test_cli_continuous_joint(tmp_path, capsys):
+    """`safety arm --q`: the 3 coordinates with a unit (cos, sin) pair, or one angle per
+    joint (as [configuration.joints] of a scenario); a pair of norm 2 is an error (it
+    printed inf everywhere with exit 0), and so is a count that is neither."""
+    import json
+
+    from roverimpact.cli import main
+
+    urdf = tmp_path / "cont_arm.urdf"
+    urdf.write_text(MIMIC_ARM_URDF.replace('type="revolute"><parent link="link1"',
+                                           'type="continuous"><parent link="link1"')
+                    .replace('<mimic joint="j1" multiplier="1.0" offset="0"/>', ""))
+    assert main(["safety", "arm", str(urdf), "--q", "0,2,0"]) == 2
+    err = capsys.readouterr().err
+    assert "joint 'j2' has norm 2" in err and "cos theta and sin theta" in err
+    assert main(["safety", "arm", str(urdf), "--q", "1,2,3,4"]) == 2
+    err = capsys.readouterr().err
+    assert "q must have 3 numbers" in err and "or 2 (one value per joint" in err
+    th = 0.5
+    q = [0.2, np.cos(th), np.sin(th)]
+    want = safety.arm_effective_masses(safety.load_arm(urdf), q)
+    for arg in (f"0.2,{th}", ",".join(repr(float(x)) for x in q)):
+        assert main(["safety", "arm", str(urdf), "--q", arg, "--json"]) == 0
+        out = json.loads(capsys.readouterr().out)
+        np.testing.assert_allclose(out["q"], q, rtol=1e-15)
+        np.testing.assert_allclose([r["m_min"] for r in out["links"]], want["m_min"],
+                                   rtol=1e-12)

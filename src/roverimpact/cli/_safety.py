@@ -88,8 +88,10 @@ def regions_cmd(
 @safety_app.command("arm")
 def arm_cmd(
     robot: str = typer.Argument(..., help="URDF file or erd:<name> (example-robot-data)."),
-    q: str = typer.Option(None, "--q", help="Configuration, comma-separated (rad / m); "
-                          "default: the ready pose for known robots, else the neutral one."),
+    q: str = typer.Option(None, "--q", help="Configuration, comma-separated: Pinocchio's "
+                          "nq coordinates (a continuous joint takes two: cos, sin), or one "
+                          "value per joint (rad / m; continuous joints by angle); default: "
+                          "the ready pose for known robots, else the neutral one."),
     payload: float = typer.Option(0.0, "--payload", help="Payload m_L [kg] (ISO formula)."),
     region: str = typer.Option("chest", "--region", help="Body region for the speed limits."),
     points: str = typer.Option("com", "--points", help="'com' or 'origin' of each link."),
@@ -106,14 +108,16 @@ def arm_cmd(
         arm_effective_masses,
         load_arm,
     )
+    from ..safety.arm import arm_configuration
 
     _check_mass(payload, "--payload", "payload m_L", allow_zero=True)
     mbm = load_arm(robot)
     if q is not None:
         try:
-            qv = np.array([float(x) for x in q.split(",")])
+            values = [float(x) for x in q.split(",")]
         except ValueError:
             raise InputError(f"--q must be comma-separated numbers, got {q!r}") from None
+        qv = arm_configuration(mbm, values)
     elif robot.startswith("erd:") and robot[4:] in READY_POSES:
         qv = np.array(READY_POSES[robot[4:]])
     else:

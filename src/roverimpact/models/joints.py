@@ -96,9 +96,12 @@ def check_configuration(model, q, what: str = "q") -> None:
         bad = np.abs(norm - 1.0) > UNIT_TOL
         if np.any(bad):
             value = float(np.ravel(norm)[np.flatnonzero(np.ravel(bad))[0]])
+            takes = ("a continuous joint takes two numbers, cos theta and sin theta; "
+                     if _kind(model.joints[model.getJointId(name)]) == "continuous" else "")
             raise ModelError(
                 f"{what} is not a configuration of the model: the {part} of joint {name!r} "
-                f"has norm {value:.6g}, not 1 (normalise it: pinocchio.normalize(model, q))")
+                f"has norm {value:.6g}, not 1 ({takes}normalise it: "
+                "pinocchio.normalize(model, q))")
 
 
 def _kind(jm) -> str:

@@ -79,6 +79,7 @@ def _arm(model, q):
     a ``pinocchio.Model`` (which carries no couplings: every joint is independent)."""
     from ..models import MultibodyModel
     from ..models.constraints import LoopClosure
+    from ..models.joints import check_configuration
     from ..models.kinematics import ConstraintSet
 
     if not isinstance(model, MultibodyModel):
@@ -88,10 +89,62 @@ def _arm(model, q):
     nq = model.model.nq
     q = as_array(q, "q", min_ndim=1)
     if q.shape != (nq,):
-        raise InputError(f"q must have shape ({nq},) for this model, got {q.shape}")
-    if not np.all(np.isfinite(q)):
-        raise InputError("q contains NaN or inf")
+        two = _two_numbers(model)
+        raise InputError(f"q must have shape ({nq},) for this model{f' ({two})' if two else ''}"
+                         f", got {q.shape}")
+    check_configuration(model.model, q)  # NaN, a (cos, sin) pair or quaternion not unit
     return cs, q
+
+
+def _two_numbers(mbm) -> str:
+    """``"a continuous joint takes two numbers, cos theta and sin theta: 'a', 'b'"``, or
+    ``""`` for a model without continuous joints."""
+    from ..models.joints import joint_coordinate
+
+    cont = [repr(nm) for nm in mbm.model.names[1:]
+            if joint_coordinate(mbm, nm).kind == "continuous"]
+    if not cont:
+        return ""
+    return f"a continuous joint takes two numbers, cos theta and sin theta: {', '.join(cont)}"
+
+
+def arm_configuration(model, values) -> np.ndarray:
+    """The configuration ``q`` (nq,) of a list of numbers, as ``safety arm --q`` reads it.
+
+    Parameters
+    ----------
+    model : MultibodyModel
+    values : sequence of float
+        Either Pinocchio's ``nq`` coordinates (a continuous joint takes two, cos theta and
+        sin theta), or, when the model has 1-DoF joints only and the count differs from
+        ``nq``, one value per joint in the model's order [rad or m; continuous joints by
+        angle], set by name as ``[configuration.joints]`` of a scenario sets them (a mimic
+        joint's value must agree with its leader's).
+
+    Raises
+    ------
+    InputError
+        A count that is neither.
+    """
+    from ..models.joints import joint_coordinate
+    from ..scenario.build import configuration
+    from ..scenario.schema import ConfigurationSpec
+
+    names = list(model.model.names[1:])
+    values = as_array(values, "q", min_ndim=1)
+    nq = model.model.nq
+    if values.shape == (nq,):
+        return values
+    per_joint = len(names) != nq and all(joint_coordinate(model, nm).one_dof
+                                         for nm in names)
+    if not (per_joint and values.shape == (len(names),)):
+        alt = (f", or {len(names)} (one value per joint: {', '.join(names)}; continuous "
+               "joints by angle)") if per_joint else ""
+        two = _two_numbers(model)
+        raise InputError(f"q must have {nq} numbers (Pinocchio's coordinates"
+                         f"{f'; {two}' if two else ''}){alt}, got {values.size}")
+    return configuration(model, ConfigurationSpec(
+        joints={nm: float(x) for nm, x in zip(names, values, strict=True)}))
 
 
 def _kinematics(cs, q):
