@@ -475,3 +475,24 @@ def test_cli_continuous_joint(tmp_path, capsys):
         np.testing.assert_allclose(out["q"], q, rtol=1e-15)
         np.testing.assert_allclose([r["m_min"] for r in out["links"]], want["m_min"],
                                    rtol=1e-12)
+
+
+def test_ready_pose_under_every_spelling(capsys):
+    """`safety arm` starts from the ready pose for either spelling of the same robot of
+    example-robot-data (example-robot-data:panda got the neutral pose: m_min of link 1
+    1930 kg instead of 13 774 kg)."""
+    import json
+
+    from roverimpact.cli import main
+
+    ready = safety.READY_POSES["panda"]
+    spellings = ("erd:panda", "example-robot-data:panda",
+                 "erd:panda_description/urdf/panda.urdf",
+                 "example-robot-data:panda_description/urdf/panda.urdf")
+    for robot in spellings:
+        assert main(["safety", "arm", robot, "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["q"] == ready
+    from roverimpact.safety.arm import ready_pose
+
+    assert all(ready_pose(robot) == ready for robot in spellings)
+    assert ready_pose("erd:ur5") is None and ready_pose("my_arm.urdf") is None

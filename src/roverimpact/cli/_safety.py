@@ -91,7 +91,8 @@ def arm_cmd(
     q: str = typer.Option(None, "--q", help="Configuration, comma-separated: Pinocchio's "
                           "nq coordinates (a continuous joint takes two: cos, sin), or one "
                           "value per joint (rad / m; continuous joints by angle); default: "
-                          "the ready pose for known robots, else the neutral one."),
+                          "the ready pose for known robots (either spelling), else the "
+                          "neutral one."),
     payload: float = typer.Option(0.0, "--payload", help="Payload m_L [kg] (ISO formula)."),
     region: str = typer.Option("chest", "--region", help="Body region for the speed limits."),
     points: str = typer.Option("com", "--points", help="'com' or 'origin' of each link."),
@@ -103,12 +104,8 @@ def arm_cmd(
     import pinocchio as pin
 
     from ..exceptions import InputError
-    from ..safety import (
-        READY_POSES,
-        arm_effective_masses,
-        load_arm,
-    )
-    from ..safety.arm import arm_configuration
+    from ..safety import arm_effective_masses, load_arm
+    from ..safety.arm import arm_configuration, ready_pose
 
     _check_mass(payload, "--payload", "payload m_L", allow_zero=True)
     mbm = load_arm(robot)
@@ -118,8 +115,8 @@ def arm_cmd(
         except ValueError:
             raise InputError(f"--q must be comma-separated numbers, got {q!r}") from None
         qv = arm_configuration(mbm, values)
-    elif robot.startswith("erd:") and robot[4:] in READY_POSES:
-        qv = np.array(READY_POSES[robot[4:]])
+    elif (pose := ready_pose(robot)) is not None:
+        qv = np.array(pose)
     else:
         qv = pin.neutral(mbm.model)
     df = arm_effective_masses(mbm, qv, payload=payload, points=points, region=region)

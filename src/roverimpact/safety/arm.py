@@ -74,6 +74,21 @@ READY_POSES = {
 }
 
 
+def ready_pose(source: str | Path) -> list[float] | None:
+    """The :data:`READY_POSES` entry of a robot of example-robot-data under any spelling
+    (``"erd:panda"``, ``"example-robot-data:panda"``,
+    ``"erd:panda_description/urdf/panda.urdf"``: the same file), else ``None``."""
+    from ..models.robot_data import example_robot_file, is_example_robot
+
+    if not is_example_robot(str(source)):
+        return None
+    path = example_robot_file(str(source)).resolve()
+    for name, pose in READY_POSES.items():
+        if example_robot_file(f"erd:{name}").resolve() == path:
+            return list(pose)
+    return None
+
+
 def _arm(model, q):
     """(ConstraintSet of the model's coupling rows, checked q) from a ``MultibodyModel`` or
     a ``pinocchio.Model`` (which carries no couplings: every joint is independent)."""
