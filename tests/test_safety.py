@@ -496,3 +496,22 @@ def test_ready_pose_under_every_spelling(capsys):
 
     assert all(ready_pose(robot) == ready for robot in spellings)
     assert ready_pose("erd:ur5") is None and ready_pose("my_arm.urdf") is None
+
+
+def test_head_region_speeds_are_null(capsys):
+    """No transient contact with the head: `safety arm --json --region face` gives the
+    speed keys as null (docs/robot-safety.md), not left out; the table prints "-"."""
+    import json
+
+    from roverimpact.cli import main
+
+    for region in ("face", "skull_forehead"):
+        assert main(["safety", "arm", "erd:panda", "--json", "--region", region]) == 0
+        links = json.loads(capsys.readouterr().out)["links"]
+        assert all(r["v_iso"] is None and r["v_exact_worst"] is None
+                   and r["v_exact_best"] is None for r in links)
+        assert all(r["m_min"] > 0 for r in links)
+    df = safety.arm_effective_masses(_panda(), safety.READY_POSES["panda"], region="face")
+    assert df[["v_iso", "v_exact_worst", "v_exact_best"]].isna().all().all()
+    assert main(["safety", "arm", "erd:panda", "--region", "face"]) == 0
+    assert "transient contact not permitted" in capsys.readouterr().out

@@ -128,19 +128,18 @@ def arm_cmd(
     if as_csv:
         print_csv(list(df.columns), df.itertuples(index=False))
         return
-    cols = ["link", "m_R ISO [kg]", "m_min [kg]", "m_max [kg]", "m_min/m_R"]
-    if "v_iso" in df:
-        cols += ["v ISO [m/s]", "v exact, worst dir. [m/s]", "v exact, best dir. [m/s]"]
+    cols = ["link", "m_R ISO [kg]", "m_min [kg]", "m_max [kg]", "m_min/m_R", "v ISO [m/s]",
+            "v exact, worst dir. [m/s]", "v exact, best dir. [m/s]"]
     tab = new_table(f"{robot}: effective mass per link ({points}), region {region}", *cols)
 
     def f(x):
-        return "inf" if math.isinf(x) else f"{x:.3f}"
+        return "-" if math.isnan(x) else "inf" if math.isinf(x) else f"{x:.3f}"
 
     for r in df.itertuples():
-        row = [r.link, f(r.m_R_iso), f(r.m_min), f(r.m_max), f(r.ratio_min)]
-        if "v_iso" in df:
-            row += [f(r.v_iso), f(r.v_exact_worst), f(r.v_exact_best)]
-        tab.add_row(*row)
+        tab.add_row(r.link, f(r.m_R_iso), f(r.m_min), f(r.m_max), f(r.ratio_min),
+                    f(r.v_iso), f(r.v_exact_worst), f(r.v_exact_best))
+    if df["v_iso"].isna().all():
+        tab.caption = f"-: transient contact not permitted for {region} (no F_transient)."
     console.print(tab)
     console.print(f"M (moving parts) = {df.attrs['M_total']:.3f} kg, payload {payload:g} kg, "
                   f"q = {np.round(qv, 4).tolist()}", highlight=False)

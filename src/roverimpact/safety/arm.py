@@ -310,7 +310,8 @@ def arm_effective_masses(model, q, *, payload: float = 0.0, points: str = "com",
     pandas.DataFrame
         One row per moving body: ``link``, ``joint``, ``m_R_iso`` [kg], ``m_min``, ``m_max``
         [kg], ``ratio_min`` (m_min / m_R_iso), ``v_iso``, ``v_exact_worst`` (for m_max),
-        ``v_exact_best`` (for m_min) [m/s].
+        ``v_exact_best`` (for m_min) [m/s]; the speeds are NaN for a region where the
+        standard permits no transient contact (skull/forehead, face).
     """
     import pandas as pd
 
@@ -346,7 +347,9 @@ def arm_effective_masses(model, q, *, payload: float = 0.0, points: str = "com",
             "ratio_min": m_min / m_iso,
         })
     df = pd.DataFrame(rows)
-    if reg.F_transient is not None:
+    if reg.F_transient is None:  # no transient contact permitted (head): no speed
+        df["v_iso"] = df["v_exact_worst"] = df["v_exact_best"] = np.nan
+    else:
         df["v_iso"] = max_transient_speed(reg, m_iso)
         df["v_exact_worst"] = max_transient_speed(reg, df["m_max"].to_numpy())
         df["v_exact_best"] = max_transient_speed(reg, df["m_min"].to_numpy())
