@@ -515,3 +515,18 @@ def test_head_region_speeds_are_null(capsys):
     assert df[["v_iso", "v_exact_worst", "v_exact_best"]].isna().all().all()
     assert main(["safety", "arm", "erd:panda", "--region", "face"]) == 0
     assert "transient contact not permitted" in capsys.readouterr().out
+
+
+def test_model_as_robot_file_or_bad_type():
+    """point_effective_mass takes a robot file as the CLI does ("erd:panda" gave a raw
+    AttributeError), and anything else that is not a model is one InputError."""
+    q = safety.READY_POSES["panda"]
+    u = [[0, 0, 1], [1, 0, 0]]
+    np.testing.assert_array_equal(
+        safety.point_effective_mass("erd:panda", q, "panda_link7", u),
+        safety.point_effective_mass(_panda(), q, "panda_link7", u))
+    assert safety.arm_effective_masses("example-robot-data:panda", q).equals(
+        safety.arm_effective_masses(_panda(), q))
+    for bad in (None, 3.0):
+        with pytest.raises(InputError, match="model must be a MultibodyModel"):
+            safety.point_effective_mass(bad, q, "panda_link7", [0, 0, 1])

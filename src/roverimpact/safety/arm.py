@@ -28,6 +28,7 @@ Everything model-side comes from :mod:`roverimpact.models`: the robot file throu
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -90,15 +91,24 @@ def ready_pose(source: str | Path) -> list[float] | None:
 
 
 def _arm(model, q):
-    """(ConstraintSet of the model's coupling rows, checked q) from a ``MultibodyModel`` or
-    a ``pinocchio.Model`` (which carries no couplings: every joint is independent)."""
+    """(ConstraintSet of the model's coupling rows, checked q) from a ``MultibodyModel``, a
+    robot file (:func:`load_arm`) or a ``pinocchio.Model`` (which carries no couplings:
+    every joint is independent)."""
+    import pinocchio as pin
+
     from ..models import MultibodyModel
     from ..models.constraints import LoopClosure
     from ..models.joints import check_configuration
     from ..models.kinematics import ConstraintSet
 
-    if not isinstance(model, MultibodyModel):
+    if isinstance(model, (str, os.PathLike)):
+        model = load_arm(model)
+    elif isinstance(model, pin.Model):
         model = MultibodyModel(model, name=model.name)
+    elif not isinstance(model, MultibodyModel):
+        raise InputError("model must be a MultibodyModel (load_arm, load_robot), a robot "
+                         "file (URDF/MJCF path, erd:<name>) or a pinocchio.Model, got "
+                         f"{type(model).__name__}")
     held = [] if model.loop_closure is None else [LoopClosure(tuple(model.loop_names))]
     cs = ConstraintSet(model, held)
     nq = model.model.nq
@@ -210,8 +220,9 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
 
     Parameters
     ----------
-    model : MultibodyModel or pinocchio.Model
-        Fixed-base arm (:func:`load_arm` or :func:`roverimpact.models.load_robot`). A bare
+    model : MultibodyModel, str, Path or pinocchio.Model
+        Fixed-base arm (:func:`load_arm` or :func:`roverimpact.models.load_robot`), or a
+        robot file or ``"erd:<name>"`` that :func:`load_arm` loads. A bare
         ``pinocchio.Model`` carries no couplings: a ``<mimic>`` joint would move on its
         own.
     q : (nq,) array_like
@@ -292,7 +303,7 @@ def arm_effective_masses(model, q, *, payload: float = 0.0, points: str = "com",
 
     Parameters
     ----------
-    model : MultibodyModel or pinocchio.Model
+    model : MultibodyModel, str, Path or pinocchio.Model
         Fixed-base arm, as in :func:`point_effective_mass`; ``M`` of the standard is the
         summed mass of its moving bodies.
     q : (nq,) array_like
