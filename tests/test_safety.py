@@ -530,3 +530,18 @@ def test_model_as_robot_file_or_bad_type():
     for bad in (None, 3.0):
         with pytest.raises(InputError, match="model must be a MultibodyModel"):
             safety.point_effective_mass(bad, q, "panda_link7", [0, 0, 1])
+
+
+def test_transfer_energy_broadcasts_like_the_speed():
+    """E = F^2 / (2K) per force, chest K = 25 N/mm: 100 N -> 0.2 J, 280 N -> 1.568 J (an
+    array gave a raw TypeError while max_transient_speed broadcast); 1/2 mu v^2 = E."""
+    F = np.array([100.0, 280.0])
+    E = safety.transfer_energy("chest", force=F)
+    np.testing.assert_allclose(E, [0.2, 1.568], rtol=1e-14)
+    v = safety.max_transient_speed("chest", 11.0, force=F)
+    np.testing.assert_allclose(0.5 * safety.reduced_mass(40.0, 11.0) * v**2, E, rtol=1e-12)
+    assert isinstance(safety.transfer_energy("chest"), float)
+    with pytest.raises(InputError, match="force must be positive"):
+        safety.transfer_energy("chest", force=[100.0, -1.0])
+    with pytest.raises(InputError, match="force"):
+        safety.transfer_energy("chest", force="abc")

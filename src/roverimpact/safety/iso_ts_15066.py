@@ -227,20 +227,22 @@ def reduced_mass(m_H, m_R):
     return out[()] if out.ndim == 0 else out
 
 
-def transfer_energy(region: str | BodyRegion, *, force=None) -> float:
+def transfer_energy(region: str | BodyRegion, *, force=None):
     r"""Energy the body region can absorb, :math:`E = F^2 / (2K)` [J].
 
-    ``force`` defaults to the region's transient force limit.
+    ``force`` [N] (float or array_like) defaults to the region's transient force limit;
+    an array gives an array, as in :func:`max_transient_speed`.
     """
     r = body_region(region)
-    F = r.F_transient if force is None else float(force)
+    F = r.F_transient if force is None else force
     if F is None:
         raise InputError(
             f"ISO/TS 15066 gives no transient force for {r.label!r} (contact with the head is "
             "to be avoided); pass force= explicitly"
         )
-    F = float(_positive(F, "force"))
-    return F * F / (2.0 * r.K)
+    F = _positive(F, "force")
+    out = F * F / (2.0 * r.K)
+    return float(out) if out.ndim == 0 else out
 
 
 def max_transient_speed(region: str | BodyRegion, m_R, *, force=None, pressure=None,
