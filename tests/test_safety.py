@@ -545,3 +545,17 @@ def test_transfer_energy_broadcasts_like_the_speed():
         safety.transfer_energy("chest", force=[100.0, -1.0])
     with pytest.raises(InputError, match="force"):
         safety.transfer_energy("chest", force="abc")
+
+
+def test_direction_of_any_scale():
+    """A direction is normalised without overflow or underflow: (0, 0, 1e300),
+    (0, 0, 1e-300) and (1e200, 1e200, 0) are (0, 0, 1) and (1, 1, 0) (they were refused as
+    "must be finite and non-zero")."""
+    model, q = _panda(), safety.READY_POSES["panda"]
+    ref = safety.point_effective_mass(model, q, "panda_link7", [[0, 0, 1], [1, 1, 0]])
+    got = safety.point_effective_mass(model, q, "panda_link7",
+                                      [[0, 0, 1e300], [0, 0, 1e-300], [1e200, 1e200, 0]])
+    np.testing.assert_allclose(got, ref[[0, 0, 1]], rtol=1e-14)
+    for bad in ([0, 0, 0], [np.nan, 0, 1], [np.inf, 0, 0]):
+        with pytest.raises(InputError, match="finite and non-zero"):
+            safety.point_effective_mass(model, q, "panda_link7", bad)

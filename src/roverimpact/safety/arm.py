@@ -250,10 +250,13 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
     u = np.atleast_2d(u)
     if u.shape[-1] != 3 or u.ndim != 2:
         raise InputError(f"direction must have shape (3,) or (k, 3), got {u.shape}")
-    nrm = np.linalg.norm(u, axis=1)
-    if not np.all(np.isfinite(nrm)) or np.any(nrm == 0):
+    if not np.all(np.isfinite(u)):
         raise InputError("direction must be finite and non-zero")
-    u = u / nrm[:, None]
+    big = np.max(np.abs(u), axis=1, initial=0.0)  # scaled first: |(0, 0, 1e300)| overflows
+    if np.any(big == 0):
+        raise InputError("direction must be finite and non-zero")
+    u = u / big[:, None]
+    u = u / np.linalg.norm(u, axis=1)[:, None]
     fid, p = _resolve_point(model, link, point)
     data, M, B = _kinematics(cs, q)
     Jp = _jacobian(model, data, fid, p)
