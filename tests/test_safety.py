@@ -559,3 +559,15 @@ def test_direction_of_any_scale():
     for bad in ([0, 0, 0], [np.nan, 0, 1], [np.inf, 0, 0]):
         with pytest.raises(InputError, match="finite and non-zero"):
             safety.point_effective_mass(model, q, "panda_link7", bad)
+
+
+def test_head_areas_have_no_transient_pressure():
+    """Table A.2 gives no transient value for the head (areas 1-3: middle of forehead,
+    temple, masticatory muscle), as for its regions; p_transient gave 2 x p_qs there.
+    Elsewhere 2 x p_qs (sternum: 120 N/cm^2 -> 240 N/cm^2)."""
+    head = [a for a in safety.BODY_AREAS if a.number <= 3]
+    assert [a.label for a in head] == ["Middle of forehead", "Temple", "Masticatory muscle"]
+    assert all(a.p_transient is None for a in head)
+    sternum = next(a for a in safety.BODY_AREAS if a.label == "Sternum")
+    assert sternum.p_transient == 240e4
+    assert all(a.p_transient == 2 * a.p_qs for a in safety.BODY_AREAS if a.number > 3)

@@ -110,9 +110,13 @@ class BodyArea:
     p_qs: float
 
     @property
-    def p_transient(self) -> float:
-        """Maximum permissible transient pressure [Pa] (2 x quasi-static)."""
-        return 2.0 * self.p_qs
+    def p_transient(self) -> float | None:
+        """Maximum permissible transient pressure [Pa]: the region's
+        :attr:`~BodyRegion.transient_factor` (2) x quasi-static, or ``None`` where the
+        standard gives no transient value (the areas of the head: forehead, temple,
+        masticatory muscle)."""
+        factor = BODY_REGIONS[self.region].transient_factor
+        return None if factor is None else factor * self.p_qs
 
 
 _NPMM = 1e3  # N/mm -> N/m
