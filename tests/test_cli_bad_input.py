@@ -390,6 +390,8 @@ CASES = [
      ["{rodir}/loop.png"],
      "not writable", None),
     # safety
+    ("safety-regions-payload", ["safety", "regions", "--payload", "1"], [], "--robot-mass",
+     None),
     ("safety-arm-missing", ["safety", "arm", "/nonexistent.urdf"], [], "no such URDF", None),
     ("safety-arm-malformed", ["safety", "arm", "{d}/malformed.urdf"], [], "malformed XML",
      None),

@@ -38,12 +38,14 @@ def _fmt_v(region, m_R) -> str:
 def regions_cmd(
     robot_mass: float = typer.Option(None, "--robot-mass", help="Total moving mass M [kg]: "
                                      "adds the speed limit with m_R = M/2 + payload."),
-    payload: float = typer.Option(0.0, "--payload", help="Payload m_L [kg]."),
+    payload: float = typer.Option(0.0, "--payload", help="Payload m_L [kg] (with "
+                                  "--robot-mass)."),
     as_json: bool = typer.Option(False, "--json", help="Print the table as JSON (SI: K in "
                                  "N/m; null where a transient contact is not permitted)."),
     as_csv: bool = typer.Option(False, "--csv", help="Print the table as CSV (SI units)."),
 ) -> None:
     """The standard's body regions (m_H, K, force limits) and optional speed limits."""
+    from ..exceptions import InputError
     from ..safety import (
         BODY_REGIONS,
         ISO_TS_15066_SOURCE,
@@ -54,6 +56,9 @@ def regions_cmd(
 
     _check_mass(robot_mass, "--robot-mass", "total moving mass M", allow_zero=False)
     _check_mass(payload, "--payload", "payload m_L", allow_zero=True)
+    if payload and robot_mass is None:
+        raise InputError("--payload enters the speed limits through m_R = M/2 + payload: "
+                         "give --robot-mass (the total moving mass M) too")
     m_R = None if robot_mass is None else float(iso_robot_mass(robot_mass, payload))
     recs = []
     for r in BODY_REGIONS.values():
