@@ -352,6 +352,19 @@ def test_mimic_arm_holds_the_coupling(tmp_path):
             assert df.at[link, "m_max"] == np.inf
 
 
+def test_mimic_arm_refuses_a_q_that_breaks_the_coupling(tmp_path):
+    """q with j2 not at j1's value (theta_2 = theta_1) is not a configuration of the
+    coupled arm: one error naming the coupling, from the API and the CLI (exit 2), as
+    the scenario path refuses joint values that open a loop."""
+    from roverimpact.cli import main
+
+    urdf = tmp_path / "mimic_arm.urdf"
+    urdf.write_text(MIMIC_ARM_URDF)
+    with pytest.raises(ri.RoverImpactError, match=r"open the loop 'mimic:j2' by 0\.1 .*its leader's times"):
+        safety.point_effective_mass(safety.load_arm(urdf), [0.3, 0.4], "link2", [0, 1, 0])
+    assert main(["safety", "arm", str(urdf), "--q", "0.3,0.4"]) == 2
+
+
 def test_mimic_arm_cli(tmp_path, capsys):
     """`safety arm` on the mimic arm prints the coupled masses (reduced reference)."""
     import json

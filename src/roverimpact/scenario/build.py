@@ -479,11 +479,14 @@ def _check_loop_closed(mbm, phi, J, atol: float = 1e-9) -> None:
     bad = np.flatnonzero(np.abs(phi) > atol)
     if bad.size:
         i = int(bad[0])
+        name = mbm.loop_names[i]
+        hint = ("a mimic joint's value is its leader's times the multiplier, plus the offset"
+                if name.startswith("mimic:") else
+                "the rocker-bogie's differential turns its rockers by opposite angles")
         raise ConfigError(
-            f"configuration: the joint values open the loop {mbm.loop_names[i]!r} by "
+            f"configuration: the joint values open the loop {name!r} by "
             f"{abs(float(phi[i])):.3g} (rad or m); its joints {_loop_joints(mbm, J[i])} move "
-            "together: set them all, to values that close it (the rocker-bogie's "
-            "differential turns its rockers by opposite angles)")
+            f"together: set them all, to values that close it ({hint})")
 
 
 def _check_loop_rates(mbm, J, v, rtol: float = 1e-6) -> None:
