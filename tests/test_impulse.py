@@ -202,3 +202,32 @@ def test_a_row_of_zeros_is_refused(kw, message):
     with pytest.raises(ri.InputError) as exc:
         ri.impulsive_impact(np.eye(2), args["A"], [1.0, -1.0], 0.5, args["persistent"])
     assert message in str(exc.value)
+
+
+@pytest.mark.parametrize("scale, angle", [(1e-5, 1e-5), (1e-3, 1e-7), (1.0, 1.5e-9)])
+def test_impulses_follow_partitions_rank_decision(scale, angle):
+    """Rows x and (cos a, sin a, 0) scaled by s, independent for partition (pivot
+    sin a > rtol on the normalised rows): both are held with e = 0, so by hand
+    v+ = (0, 0, 0.5) and the energy lost is T_c^- = 1/2 (2 * 1 + 3 * 4) = 7 J. The SVD of
+    the rows as given dropped the second one (its singular value below rtol times the
+    largest) while T_c_minus and rank kept it: energy_lost 1 J."""
+    M, v = np.diag([2.0, 3.0, 5.0]), np.array([-1.0, -2.0, 0.5])
+    A = np.array([[1.0, 0.0, 0.0], [scale * np.cos(angle), scale * np.sin(angle), 0.0]])
+    r = ri.impulsive_impact(M, A, v, restitution=0.0)
+    assert int(r.rank) == 2 and float(r.T_c_minus) == pytest.approx(7.0, rel=1e-12)
+    assert float(r.energy_lost) == pytest.approx(7.0, rel=1e-9)
+    np.testing.assert_allclose(r.v_plus, [0.0, 0.0, 0.5], atol=1e-6)
+
+
+def test_a_row_partition_counts_as_zero_is_named():
+    """A row below rtol times the largest in whitened norm counts as zero in partition
+    (rank 1 here); the impact map says so for that row instead of calling the rows
+    dependent with contradicting targets."""
+    M, A = np.diag([2.0, 3.0]), np.array([[1.0, 0.0], [0.0, 1e-10]])
+    assert int(ri.partition(M, A, [-1.0, -1.0]).rank) == 1
+    with pytest.raises(ri.InputError, match=r"row 1 of A is below rtol = 1e-09 times the "
+                                            r"largest row in whitened norm \(unbatched\)"):
+        ri.impulsive_impact(M, A, [-1.0, -1.0])
+    r = ri.impulsive_impact(M, A, [-1.0, -1.0], rtol=1e-12)  # a smaller rtol keeps it
+    np.testing.assert_allclose(r.v_plus, [0.0, 0.0], atol=1e-12)
+    assert float(r.energy_lost) == pytest.approx(2.5, rel=1e-12)

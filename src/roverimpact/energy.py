@@ -380,8 +380,10 @@ _object_new = object.__new__
 def whitened(M, A, rtol):
     """Cholesky factor L, whitened rows W = L^{-1} A^T and an orthonormal basis of range(W).
 
-    Returns ``L (..., n, n)``, ``U (..., n, m)`` (left singular vectors of W), ``s``
-    (singular values of W with dependent directions set to 0) and the rank.
+    Returns ``L (..., n, n)``, ``W (..., n, m)``, ``U (..., n, m)`` (left singular vectors
+    of W with its columns scaled to unit length; a column below ``rtol`` times the largest
+    counts as zero) and ``mask (..., m)``, the singular values above ``rtol`` times the
+    largest.
     """
     _validation.check_mass_matrix(M)
     _validation.check_finite(A, "A", 2)

@@ -159,25 +159,48 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     Jv = np.einsum("...ij,...j->...i", J, vb)
     d = -(1.0 + E) * Jv
     d[..., m:] = -Jv[..., m:]  # persistent rows: B v+ = 0
-    U, s, Vt = np.linalg.svd(W, full_matrices=False)
-    smax = s[..., :1]
-    keep = (s > rtol * np.maximum(smax, 1e-300)) & (s > 0)
-    Vtd = np.einsum("...ij,...j->...i", Vt, d)
-    # consistency: the achievable part of d is V_r V_r^T d
-    resid = d - np.einsum("...ji,...j->...i", Vt, np.where(keep, Vtd, 0.0))
-    scale = np.maximum(np.linalg.norm(d, axis=-1), 1e-300)
+    # The rank decision is partition's, on the same normalised rows, so that the impulses
+    # agree with T_c_minus and rank: rows scaled to unit whitened norm (a row below rtol
+    # times the largest counts as zero), the r = rank largest singular values kept. With
+    # G = D G_n D (D = the row norms), G p = d is G_n (D p) = D^-1 d: p = D^-1 G_n^+ D^-1 d.
+    # (An SVD of the rows as given dropped a small row, or one at a small angle to
+    # another, that partition kept: energy_lost 1 J where T_c_minus was 7 J.)
+    cn = np.linalg.norm(W, axis=-2)
+    cmax = cn.max(axis=-1, keepdims=True, initial=0.0)
+    zero = ~((cn > rtol * cmax) & (cmax > 0))
+    c = np.where(cn > 0, cn, 1.0)  # a row counted as zero keeps its norm: D^-1 d checks it
+    Wn = np.where(zero[..., None, :], 0.0, W / c[..., None, :])
+    dn = d / c
+    U, s, Vt = np.linalg.svd(Wn, full_matrices=False)
+    rank = np.asarray(part.rank)[..., None]
+    keep = (np.arange(s.shape[-1]) < rank) & (s > 0)
+    Vtd = np.einsum("...ij,...j->...i", Vt, dn)
+    # consistency: the achievable part of D^-1 d is V_r V_r^T D^-1 d
+    resid = dn - np.einsum("...ji,...j->...i", Vt, np.where(keep, Vtd, 0.0))
+    scale = np.maximum(np.linalg.norm(dn, axis=-1), 1e-300)
     bad = np.linalg.norm(resid, axis=-1) > 1e-8 * scale
     if np.any(bad):
-        idx = tuple(int(i) for i in np.argwhere(np.atleast_1d(bad))[0]) if batch else ()
+        first = np.argwhere(np.atleast_1d(bad))[0]
+        idx = tuple(int(i) for i in first) if batch else ()
+        item = tuple(first) if batch else ()
+        small = np.flatnonzero(zero[item] & (np.abs(dn[item]) > 1e-8 * scale[item]))
+        if small.size:
+            i = int(small[0])
+            row = f"row {i} of A" if i < m else f"persistent row {i - m}"
+            raise InputError(
+                f"{row} is below rtol = {rtol:g} times the largest row in whitened norm "
+                f"({fmt_index(idx)}) and counts as zero, as in partition, so it cannot "
+                "take its restitution target: give the rows comparable scales, or a "
+                "smaller rtol")
         raise InputError(
             f"the constraint rows are dependent and their restitution targets contradict "
             f"each other ({fmt_index(idx)}): give dependent rows the same restitution, "
             "or remove the redundant rows"
         )
     inv_s = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
-    # p = V S^-2 V^T d ; delta u = W p = U S^-1 V^T d ; delta v = L^-T delta u
+    # p_n = V S^-2 V^T D^-1 d, p = D^-1 p_n ; delta u = W p = W_n p_n = U S^-1 V^T D^-1 d
     coef = Vtd * inv_s
-    imp = np.einsum("...ji,...j->...i", Vt, coef * inv_s)
+    imp = np.einsum("...ji,...j->...i", Vt, coef * inv_s) / c
     du = np.einsum("...ij,...j->...i", U, coef)
     LT = np.swapaxes(L, -1, -2)
     dv = np.linalg.solve(LT, du[..., None])[..., 0]

@@ -6,7 +6,8 @@ One pass per configuration, no Python in the loop:
    consecutive items share the same ``M``),
 2. ``u = L^T v`` so that ``T = 1/2 |u|^2``,
 3. ``W = L^{-1} A^T`` (forward substitution), columns normalised to unit length
-   (the subspace, hence ``T_c``, does not depend on the scale of the rows of ``A``),
+   (the subspace, hence ``T_c``, does not depend on the scale of the rows of ``A``,
+   except that a column below ``rtol`` times the largest counts as zero),
 4. Householder QR of ``W`` with column pivoting (rank revealing, as LAPACK ``xGEQP3``);
    the rank ``r`` is the number of pivots above ``rtol``,
 5. ``y = Q^T u``: ``T_c = 1/2 sum_{k<r} y_k^2``, ``T_a = 1/2 sum_{k>=r} y_k^2``,
