@@ -40,7 +40,8 @@ def process_recording(path, cfg: TrialsFile):
         F, thr, _ = normal_force(t, raw, cfg.sensors.gains, fs, cfg.filter, cfg.detection)
     except InputError as exc:
         raise TrialDataError(f"{name}: {exc}") from None
-    imp = detect_impacts(t, F, thr, min_separation_s=cfg.detection.min_separation_s)
+    imp = detect_impacts(t, F, thr, min_separation_s=cfg.detection.min_separation_s,
+                         split_fraction=cfg.detection.split_fraction)
     if imp.empty:
         raise TrialDataError(
             f"{name}: no impact found (force never exceeds the threshold {thr:.3g} N; "

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 import pandas as pd
 
@@ -112,20 +114,71 @@ def _crossing(t, F, i, j, level: float = 0.0) -> float:
     return float(t[i] + (t[j] - t[i]) * (F[i] - level) / (F[i] - F[j]))
 
 
-def detect_impacts(t, F, threshold: float, *, min_separation_s: float = 0.005) -> pd.DataFrame:
+def _split_points(F: np.ndarray, s: int, e: int, threshold: float, split_fraction: float,
+                  min_rise: int) -> list[int]:
+    """Indices in (s, e) where an excursion above the threshold holds two distinct impacts.
+
+    A peak of F[s:e] is distinct when both its bases (the lowest force between it and the
+    next higher peak on each side, or the excursion's edge) are below ``split_fraction``
+    times its height and at least ``min_rise`` samples away from it; the highest peak
+    always is. The excursion is split at the minimum F_min between consecutive distinct
+    peaks, which is then below ``split_fraction`` times the smaller of the two
+    (scale-free: a light contact of a few newtons between two bounces of hundreds splits,
+    a noise wiggle on a peak does not), unless ``F_min < -threshold``: a sensor under load
+    does not read negative, so such a dip is the filter's undershoot. The distance rule
+    keeps the filter's ringing (a lobe about 1/(2 cutoff) from the undershoot before it)
+    with the impact that caused it.
+    """
+    from scipy.signal import find_peaks, peak_prominences
+
+    a, b = max(s - 1, 0), min(e + 1, len(F))
+    seg = F[a:b]
+    peaks, _ = find_peaks(seg)
+    if len(peaks) < 2:
+        return []
+    _, lb, rb = peak_prominences(seg, peaks)
+    h = split_fraction * seg[peaks]
+    keep = ((seg[lb] < h) & (seg[rb] < h) & (peaks - lb >= min_rise) & (rb - peaks >= min_rise)
+            | (peaks == peaks[np.argmax(seg[peaks])]))
+    kept = peaks[keep]
+    cuts = [a + p + int(np.argmin(seg[p:q + 1])) for p, q in pairwise(kept)]
+    return [m for m in cuts if F[m] >= -threshold]
+
+
+def _pieces(F: np.ndarray, threshold: float, gap: int, split_fraction: float
+            ) -> list[tuple[int, int]]:
+    """[start, end) index ranges of the impacts: the excursions above the threshold
+    (closer than ``gap`` samples merged) split at deep minima (:func:`_split_points`,
+    with ``min_rise = gap``). Consecutive pieces with ``end == start`` meet at a split."""
+    pieces: list[tuple[int, int]] = []
+    for s, e in _regions(F > threshold, gap):
+        bounds = [s, *_split_points(F, s, e, threshold, split_fraction, max(gap, 1)), e]
+        pieces += list(pairwise(bounds))
+    return pieces
+
+
+def detect_impacts(t, F, threshold: float, *, min_separation_s: float = 0.005,
+                   split_fraction: float = 0.5) -> pd.DataFrame:
     """Impacts in a force trace: peak, impulse and duration of each excursion above threshold.
 
     Each region where ``F > threshold`` (regions closer than ``min_separation_s`` merged,
-    e.g. filter ringing next to a large peak) gives one impact, measured on the lobe that
-    holds its peak:
+    e.g. filter ringing next to a large peak, or a light contact that noise takes under
+    the threshold) gives one impact, except that a region holding distinct peaks is split
+    at the deep minimum between them (below ``split_fraction`` times the smaller peak,
+    above ``-threshold``, and at least ``min_separation_s`` from either peak, see
+    :func:`_split_points`): two bounces joined by a light contact are two impacts. Each
+    impact is measured on the lobe that holds its peak:
 
     - ``F_peak`` = max F [N] at ``t_peak`` [s],
     - ``t_start``, ``t_end``, ``duration``: where F crosses the threshold (interpolated)
       and the time between [s] (the low tails under the threshold are left out: with a
       threshold of a few noise sigmas they are short, and the zero crossings themselves
-      wander with the noise),
+      wander with the noise); on the side of a split, where F crosses the threshold above
+      the minimum at the split (``F_min + threshold``),
     - ``impulse`` = :math:`\\int F\\,dt` [N s] (trapezoidal) over the region widened to the
-      zero crossings of F on either side, so that the tails are counted.
+      zero crossings of F on either side, so that the tails are counted; on the side of a
+      split, to the split, so that the impulses of the impacts of a region add up to its
+      integral.
 
     Returns
     -------
@@ -136,27 +189,41 @@ def detect_impacts(t, F, threshold: float, *, min_separation_s: float = 0.005) -
     F = np.asarray(F, float)
     dt = float(np.median(np.diff(t)))
     gap = round(min_separation_s / dt)
+    pieces = _pieces(F, threshold, gap, split_fraction)
+    n = len(F)
     rows = []
-    for s, e in _regions(F > threshold, gap):
+    for i, (s, e) in enumerate(pieces):
+        # a split with a neighbour: the shared sample bounds both, the level is raised
+        split_lo = i > 0 and pieces[i - 1][1] == s
+        split_hi = i + 1 < len(pieces) and pieces[i + 1][0] == e
+        lo, lev_lo = (s, F[s] + threshold) if split_lo else (0, threshold)
+        hi, lev_hi = (e, F[e] + threshold) if split_hi else (n - 1, threshold)
         k = s + int(np.argmax(F[s:e]))
         # main lobe: walk from the peak to the threshold crossings, then to the zero crossings
         s1 = k
-        while s1 > 0 and F[s1 - 1] > threshold:
+        while s1 > lo and F[s1 - 1] > lev_lo:
             s1 -= 1
         e1 = k
-        while e1 < len(F) - 1 and F[e1 + 1] > threshold:
+        while e1 < hi and F[e1 + 1] > lev_hi:
             e1 += 1
+        # impulse: to the zero crossings, or to the split (the contact between two
+        # bounces belongs to them: the impulses of a split add up to its integral)
         a, b = s1, e1
-        while a > 0 and F[a - 1] > 0:
+        while a > lo and F[a - 1] > 0:
             a -= 1
-        while b < len(F) - 1 and F[b + 1] > 0:
+        while b < hi and F[b + 1] > 0:
             b += 1
-        z0 = _crossing(t, F, a - 1, a) if a > 0 else float(t[0])
-        z1 = _crossing(t, F, b, b + 1) if b < len(F) - 1 else float(t[-1])
-        tt = np.concatenate([[z0], t[a:b + 1], [z1]])
-        ff = np.concatenate([[0.0], F[a:b + 1], [0.0]])
-        t0 = _crossing(t, F, s1 - 1, s1, threshold) if s1 > 0 else float(t[0])
-        t1 = _crossing(t, F, e1, e1 + 1, threshold) if e1 < len(F) - 1 else float(t[-1])
+        a = lo if split_lo else a
+        b = hi if split_hi else b
+        tt, ff = t[a:b + 1], F[a:b + 1]
+        if not split_lo:
+            z0 = _crossing(t, F, a - 1, a) if a > 0 else float(t[0])
+            tt, ff = np.concatenate([[z0], tt]), np.concatenate([[0.0], ff])
+        if not split_hi:
+            z1 = _crossing(t, F, b, b + 1) if b < n - 1 else float(t[-1])
+            tt, ff = np.concatenate([tt, [z1]]), np.concatenate([ff, [0.0]])
+        t0 = _crossing(t, F, s1 - 1, s1, lev_lo) if s1 > lo else float(t[s1])
+        t1 = _crossing(t, F, e1, e1 + 1, lev_hi) if e1 < hi else float(t[e1])
         rows.append({
             "t_start": t0, "t_peak": float(t[k]), "t_end": t1, "F_peak": float(F[k]),
             "impulse": float(np.trapezoid(ff, tt)), "duration": t1 - t0,

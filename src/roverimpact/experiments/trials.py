@@ -81,7 +81,9 @@ class DetectionConfig(StrictModel):
     ``max(threshold_n, noise_sigmas * noise, 0.001 * max|F|)``, ``noise`` being the robust
     standard deviation (1.4826 MAD) of the first ``baseline_s`` seconds (then of all the
     samples away from impacts); the last term only matters for noise-free data. Impacts closer than
-    ``min_separation_s`` are merged. NaN runs of up to ``max_nan_run`` samples are
+    ``min_separation_s`` are merged; an excursion holding distinct peaks is split at the
+    minimum between them when it is below ``split_fraction`` times the smaller peak (two
+    bounces joined by a light contact). NaN runs of up to ``max_nan_run`` samples are
     interpolated; longer ones make the file fail.
     """
 
@@ -89,6 +91,7 @@ class DetectionConfig(StrictModel):
     noise_sigmas: float = Field(10.0, gt=0, allow_inf_nan=False)
     baseline_s: float = Field(0.05, gt=0, allow_inf_nan=False)
     min_separation_s: float = Field(0.005, ge=0, allow_inf_nan=False)
+    split_fraction: float = Field(0.5, gt=0, lt=1, allow_inf_nan=False)
     max_nan_run: int = Field(3, ge=0)
 
 

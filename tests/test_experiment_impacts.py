@@ -1,0 +1,52 @@
+"""Impact detection on force traces with known answers (half-sine pulses: peak A, impulse
+2 A T / pi, duration T), through the low-pass filter of the pipeline."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from roverimpact import experiments as ex
+
+FS = 5000.0
+
+
+def _half_sine(t, t0, T, A):
+    """A half-sine pulse of height A [N] and length T [s] from t0; its impulse is 2 A T / pi."""
+    x = (t - t0) / T
+    return np.where((x > 0) & (x < 1), A * np.sin(np.pi * np.clip(x, 0, 1)), 0.0)
+
+
+def _filtered(f, cutoff_hz=300.0):
+    return ex.lowpass(f, FS, cutoff_hz)
+
+
+def test_bounces_joined_by_light_contact_are_two_impacts():
+    """800 N then 500 N (30 ms each, 100 ms apart) with a 3 N light contact between them,
+    above the threshold: two impacts, each with its own peak and impulse; the light
+    contact's 0.21 N s goes to one of them, so the impulses add up to the integral."""
+    t = np.arange(int(FS)) / FS
+    f = _half_sine(t, 0.40, 0.03, 800.0) + _half_sine(t, 0.50, 0.03, 500.0)
+    f[(t > 0.43) & (t < 0.50)] += 3.0
+    f += np.random.default_rng(22).normal(0, 0.5, len(t))
+    F = _filtered(f)
+    imp = ex.detect_impacts(t, F, 1.67)
+    assert len(imp) == 2
+    np.testing.assert_allclose(imp["F_peak"], [800.0, 500.0], rtol=0.01)
+    ref = 2 * np.array([800.0, 500.0]) * 0.03 / np.pi  # 15.28, 9.55
+    np.testing.assert_allclose(imp["impulse"], ref, atol=0.21 + 0.05)
+    np.testing.assert_allclose(imp["impulse"].sum(), ref.sum() + 3.0 * 0.07, atol=0.05)
+    np.testing.assert_allclose(imp["duration"], 0.03, atol=0.002)
+
+
+def test_noise_and_ringing_do_not_split():
+    """A single pulse with noise on it, and the ringing of a short pulse: one impact each."""
+    t = np.arange(int(0.5 * FS)) / FS
+    rng = np.random.default_rng(3)
+    for T, A in [(0.03, 800.0), (0.002, 1000.0), (0.0005, 1000.0)]:
+        F = _filtered(_half_sine(t, 0.2, T, A) + rng.normal(0, 0.5, len(t)))
+        assert len(ex.detect_impacts(t, F, 1.7)) == 1, T
+    # a plateau held by a light contact with noise: still one impact
+    f = _half_sine(t, 0.2, 0.03, 300.0)
+    f[(t > 0.215) & (t < 0.3)] = np.maximum(f[(t > 0.215) & (t < 0.3)], 20.0)
+    F = _filtered(f + rng.normal(0, 2.0, len(t)))
+    assert len(ex.detect_impacts(t, F, 7.0)) == 1
