@@ -50,3 +50,21 @@ def test_noise_and_ringing_do_not_split():
     f[(t > 0.215) & (t < 0.3)] = np.maximum(f[(t > 0.215) & (t < 0.3)], 20.0)
     F = _filtered(f + rng.normal(0, 2.0, len(t)))
     assert len(ex.detect_impacts(t, F, 7.0)) == 1
+
+
+def test_impacts_sharing_a_lobe_do_not_share_its_impulse():
+    """1000 N and 400 N (20 ms each, 80 ms apart) with a 40 N resting load between them,
+    under the threshold of 80 N: two impacts, whose impulses (half-sines 12.73 and
+    5.09 N s, plus a share of the 3.2 N s of the resting load) add up to the integral
+    of the lobe (21.0 N s), not twice it."""
+    t = np.arange(int(FS)) / FS
+    f = _half_sine(t, 0.40, 0.02, 1000.0) + _half_sine(t, 0.48, 0.02, 400.0)
+    f[(t > 0.41) & (t < 0.49)] += 40.0
+    F = _filtered(f + np.random.default_rng(2).normal(0, 0.5, len(t)))
+    imp = ex.detect_impacts(t, F, 80.0)
+    assert len(imp) == 2
+    ref = 2 * np.array([1000.0, 400.0]) * 0.02 / np.pi
+    assert np.all(imp["impulse"] > ref - 0.05)
+    assert np.all(imp["impulse"] < ref + 40.0 * 0.08 + 0.05)
+    lobe = (t > 0.39) & (t < 0.51)
+    np.testing.assert_allclose(imp["impulse"].sum(), np.trapezoid(f[lobe], t[lobe]), rtol=0.01)

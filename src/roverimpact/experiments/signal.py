@@ -176,9 +176,10 @@ def detect_impacts(t, F, threshold: float, *, min_separation_s: float = 0.005,
       wander with the noise); on the side of a split, where F crosses the threshold above
       the minimum at the split (``F_min + threshold``),
     - ``impulse`` = :math:`\\int F\\,dt` [N s] (trapezoidal) over the region widened to the
-      zero crossings of F on either side, so that the tails are counted; on the side of a
-      split, to the split, so that the impulses of the impacts of a region add up to its
-      integral.
+      zero crossings of F on either side, so that the tails are counted, but never past
+      the cut with a neighbouring impact (the lowest force between them), and on the side
+      of a split up to it: the impulses of a record never add up to more than its
+      integral, and those of a split region add up to the region's.
 
     Returns
     -------
@@ -191,13 +192,18 @@ def detect_impacts(t, F, threshold: float, *, min_separation_s: float = 0.005,
     gap = round(min_separation_s / dt)
     pieces = _pieces(F, threshold, gap, split_fraction)
     n = len(F)
+    # the cut between two neighbours: the split, or the lowest force of the gap between
+    cuts = [e if e == s2 else e + int(np.argmin(F[e:s2]))
+            for (_, e), (s2, _) in pairwise(pieces)]
     rows = []
     for i, (s, e) in enumerate(pieces):
         # a split with a neighbour: the shared sample bounds both, the level is raised
         split_lo = i > 0 and pieces[i - 1][1] == s
         split_hi = i + 1 < len(pieces) and pieces[i + 1][0] == e
-        lo, lev_lo = (s, F[s] + threshold) if split_lo else (0, threshold)
-        hi, lev_hi = (e, F[e] + threshold) if split_hi else (n - 1, threshold)
+        lo = cuts[i - 1] if i > 0 else 0
+        hi = cuts[i] if i + 1 < len(pieces) else n - 1
+        lev_lo = F[s] + threshold if split_lo else threshold
+        lev_hi = F[e] + threshold if split_hi else threshold
         k = s + int(np.argmax(F[s:e]))
         # main lobe: walk from the peak to the threshold crossings, then to the zero crossings
         s1 = k
@@ -216,10 +222,10 @@ def detect_impacts(t, F, threshold: float, *, min_separation_s: float = 0.005,
         a = lo if split_lo else a
         b = hi if split_hi else b
         tt, ff = t[a:b + 1], F[a:b + 1]
-        if not split_lo:
+        if a > lo or i == 0:  # stopped at a zero crossing, not at the cut
             z0 = _crossing(t, F, a - 1, a) if a > 0 else float(t[0])
             tt, ff = np.concatenate([[z0], tt]), np.concatenate([[0.0], ff])
-        if not split_hi:
+        if b < hi or i + 1 == len(pieces):
             z1 = _crossing(t, F, b, b + 1) if b < n - 1 else float(t[-1])
             tt, ff = np.concatenate([tt, [z1]]), np.concatenate([ff, [0.0]])
         t0 = _crossing(t, F, s1 - 1, s1, lev_lo) if s1 > lo else float(t[s1])
