@@ -50,7 +50,7 @@ def test_synthetic_set_recovers_true_peaks():
 
     truth.csv holds MuJoCo's peak, impulse and contact duration of each simulated impact;
     the recordings add offsets, drift, noise and quantisation and go through the known
-    gains (250, 240 N/V). Measured: peaks within 0.09 %, impulses 0.19 %, durations 3.9 %
+    gains (250, 240 N/V). Measured: peaks within 0.09 %, impulses 0.11 %, durations 3.9 %
     (the threshold crossings leave out the low tails)."""
     res = ex.run_experiment(EXAMPLE / "trials.toml")
     assert res.failures == []

@@ -3,7 +3,11 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
+import pandas as pd
 
 from roverimpact import experiments as ex
 
@@ -68,3 +72,49 @@ def test_impacts_sharing_a_lobe_do_not_share_its_impulse():
     assert np.all(imp["impulse"] < ref + 40.0 * 0.08 + 0.05)
     lobe = (t > 0.39) & (t < 0.51)
     np.testing.assert_allclose(imp["impulse"].sum(), np.trapezoid(f[lobe], t[lobe]), rtol=0.01)
+
+
+def test_short_impacts_keep_their_impulse_and_are_flagged():
+    """Half-sines of 1000 N through the 300 Hz low-pass at 20 kHz: the impulse over the
+    whole event is the pulse's 2 A T / pi (the filter keeps the integral; the zero
+    crossings alone gave +9 % at T = 2 ms); an impact shorter than SHORT_PERIODS periods
+    of the cut-off is flagged, and the peak errors quoted for SHORT_PERIODS hold."""
+    fs, fc = 20000.0, 300.0
+    t = np.arange(int(0.5 * fs)) / fs
+    peak_err = {}
+    for T in [0.02, 0.01, 0.008, 0.005, 0.004, 0.003, 0.002, 0.001]:
+        F = ex.lowpass(_half_sine(t, 0.25, T, 1000.0), fs, fc)
+        imp = ex.detect_impacts(t, F, 1.0, cutoff_hz=fc)
+        assert len(imp) == 1
+        r = imp.iloc[0]
+        np.testing.assert_allclose(r.impulse, 2 * 1000.0 * T / np.pi, rtol=2e-3)
+        periods = r.duration * fc
+        assert r.short == (periods < ex.signal.SHORT_PERIODS)
+        peak_err[T] = (periods, r.F_peak / 1000.0 - 1)
+    # the figures of SHORT_PERIODS' docstring and docs/experiments.md
+    assert all(abs(e) < 0.0025 for p, e in peak_err.values() if p >= ex.signal.SHORT_PERIODS)
+    assert peak_err[0.002][1] < -0.30 and peak_err[0.001][1] < -0.6
+    assert abs(peak_err[0.003][0] - 1.25) < 0.01 and -0.12 < peak_err[0.003][1] < -0.10
+    assert abs(peak_err[0.002][0] / fc - 0.0037) < 1e-4
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "experiments.md").read_text()
+    assert f"{ex.signal.SHORT_PERIODS:g} periods of the cut-off (`SHORT_PERIODS`" in docs
+    assert f"by {ex.signal.RING_PERIODS:g} periods of the\n   cut-off (`RING_PERIODS`)" in docs
+    assert peak_err[0.02][0] > ex.signal.SHORT_PERIODS > peak_err[0.005][0]
+
+
+def test_short_impact_warned_in_the_outputs(tmp_path):
+    """A 2 ms impact in a recording: the trial runs, and its warning names the trial,
+    the duration and the remedy (a higher cutoff_hz)."""
+    fs = 20000.0
+    t = np.arange(int(0.5 * fs)) / fs
+    f = _half_sine(t, 0.25, 0.002, 1000.0) + np.random.default_rng(16).normal(0, 0.5, len(t))
+    pd.DataFrame({"time_s": t, "ch1_N": f}).to_csv(tmp_path / "a.csv", index=False)
+    (tmp_path / "trials.toml").write_text(
+        '[sensors]\nchannels = ["ch1"]\nunits = "N"\ngains = [1.0]\n\n'
+        '[[trial]]\nfile = "a.csv"\nbeta_deg = 30.0\nspeed = 0.3\n')
+    res = ex.run_experiment(tmp_path / "trials.toml")
+    assert bool(res.trials["short"].iloc[0])
+    (w,) = res.warnings
+    assert "trial 0 (a.csv)" in w and "cutoff_hz" in w and "300 Hz" in w
+    files = ex.write_outputs(res, tmp_path / "out")
+    assert json.loads(files["summary"].read_text())["warnings"] == [w]

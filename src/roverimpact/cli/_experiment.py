@@ -123,6 +123,8 @@ def experiment_cmd(
             for t in comparison.indicators.statements:
                 if t.startswith("In short: "):
                     console.print(t, highlight=False)
+    for w in result.warnings:
+        err_console.print(f"warning: {w}", highlight=False)
     if result.failures:
         ft = new_table(f"{len(result.failures)} trial(s) failed", "trial", "file", "problem",
                        left=("file", "problem"), right=("trial",))

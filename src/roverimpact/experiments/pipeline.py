@@ -12,7 +12,7 @@ import pandas as pd
 from ..exceptions import InputError
 from .compare import ModelComparison
 from .recording import TrialDataError, TrialFailure, read_recording
-from .signal import detect_impacts, normal_force
+from .signal import SHORT_PERIODS, detect_impacts, normal_force
 from .trials import TrialsFile, load_trials
 
 __all__ = ["ExperimentResult", "process_recording", "run_experiment", "write_outputs"]
@@ -41,7 +41,8 @@ def process_recording(path, cfg: TrialsFile):
     except InputError as exc:
         raise TrialDataError(f"{name}: {exc}") from None
     imp = detect_impacts(t, F, thr, min_separation_s=cfg.detection.min_separation_s,
-                         split_fraction=cfg.detection.split_fraction)
+                         split_fraction=cfg.detection.split_fraction,
+                         cutoff_hz=cfg.filter.cutoff_hz)
     if imp.empty:
         raise TrialDataError(
             f"{name}: no impact found (force never exceeds the threshold {thr:.3g} N; "
@@ -91,6 +92,23 @@ class ExperimentResult:
         more = f" (and {n - 1} more trial(s) failed)" if n > 1 else ""
         raise InputError(f"no trial could be processed: trial {first.trial}: "
                          f"{first.message}{more}")
+
+    @property
+    def warnings(self) -> list[str]:
+        """One line per impact flagged ``short``: shorter than
+        :data:`~roverimpact.experiments.signal.SHORT_PERIODS` periods of the low-pass
+        cut-off, so its peak is distorted (attenuated) by the filter."""
+        if self.impacts.empty or "short" not in self.impacts:
+            return []
+        fc = self.config.filter.cutoff_hz
+        return [
+            f"trial {r.trial} ({r.file}), impact {r.impact}: duration {1e3 * r.duration:.3g} ms "
+            f"is under {SHORT_PERIODS:g} periods of the {fc:g} Hz low-pass "
+            f"({1e3 * SHORT_PERIODS / fc:.3g} ms): its peak {r.F_peak:.4g} N is attenuated "
+            f"by the filter; raise [filter] cutoff_hz (below {0.5 * r.fs:g} Hz, the Nyquist "
+            "frequency) to measure it"
+            for r in self.impacts[self.impacts["short"]].itertuples()
+        ]
 
     @property
     def failures_table(self) -> pd.DataFrame:
@@ -169,7 +187,8 @@ def write_outputs(result: ExperimentResult, outdir, *, comparison: ModelComparis
     summary = {"n_trials": len(result.config.trial), "n_ok": len(result.trials),
                "n_failed": len(result.failures),
                "filter": result.config.filter.model_dump(),
-               "detection": result.config.detection.model_dump()}
+               "detection": result.config.detection.model_dump(),
+               "warnings": result.warnings}
     if comparison is not None:
         files["comparison"] = out / "comparison.csv"
         comparison.table.to_csv(files["comparison"], index=False)
