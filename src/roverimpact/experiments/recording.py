@@ -13,7 +13,11 @@ from .._io import no_file
 from ..exceptions import InputError
 from .trials import SensorsConfig
 
-__all__ = ["TrialDataError", "TrialFailure", "read_recording", "true_runs"]
+__all__ = ["CLIP_SAMPLES", "TrialDataError", "TrialFailure", "read_recording", "true_runs"]
+
+#: A channel whose maximum is held for this many consecutive samples or more (equal within
+#: 1e-6 of its range) is clipped: the sensor or the ADC saturated, and the peak is lost.
+CLIP_SAMPLES = 4
 
 
 class TrialDataError(InputError):
@@ -48,6 +52,34 @@ def _header(columns, limit: int = 200) -> str:
     return text if len(text) <= limit else f"{text[:limit]}... ({len(columns)} columns)"
 
 
+def _check_not_clipped(name: str, t, x, col: str, full_scale: float | None) -> None:
+    """Raise :class:`TrialDataError` for an infinite reading, one at ``full_scale`` or a
+    flat top at the maximum (:data:`CLIP_SAMPLES`)."""
+    inf = np.isinf(x)
+    if inf.any():
+        i = int(np.flatnonzero(inf)[0])
+        raise TrialDataError(
+            f"{name}: column {col!r} is infinite at row {i + 1} (t = {t[i]:.6g} s), an "
+            "overflow or saturation marker; a missing sample must be empty or NaN")
+    if np.isnan(x).all():
+        return
+    top = float(np.nanmax(x))
+    if full_scale is not None and top >= full_scale:
+        i = int(np.flatnonzero(x >= full_scale)[0])
+        raise TrialDataError(
+            f"{name}: column {col!r} reaches the sensor's full_scale {full_scale:g} at row "
+            f"{i + 1} (t = {t[i]:.6g} s): saturated, the peak is lost; re-record with a "
+            "larger range")
+    tol = 1e-6 * float(np.nanmax(x) - np.nanmin(x))
+    runs = [r for r in true_runs(x >= top - tol) if r[1] >= CLIP_SAMPLES]
+    if runs and tol > 0:
+        i, n = runs[0]
+        raise TrialDataError(
+            f"{name}: column {col!r} is clipped: its maximum {top:g} is held for {n} "
+            f"samples from row {i + 1} (t = {t[i]:.6g} s), a flat top: the sensor or the ADC "
+            "saturated and the peak is lost; re-record with a larger range")
+
+
 def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int = 3):
     """Read one CSV recording and check it.
 
@@ -66,7 +98,8 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
     ------
     TrialDataError
         Missing file, empty file, missing columns, a unit in the header that differs from
-        the trials file, non-numeric values, non-monotone or irregular time, long NaN runs.
+        the trials file, non-numeric values, non-monotone or irregular time, long NaN runs,
+        an infinite value, a clipped channel (see :func:`_check_not_clipped`).
     """
     path = Path(path)
     if not path.is_file():
@@ -138,6 +171,8 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
             f"{path.name}: time column gives {fs:.6g} Hz but the trials file says "
             f"sample_rate_hz = {sensors.sample_rate_hz:g}"
         )
+    for j, col in enumerate(cols):
+        _check_not_clipped(path.name, t, raw[:, j], col, sensors.full_scale_list[j])
     n_filled = 0
     for j, col in enumerate(cols):
         bad = ~np.isfinite(raw[:, j])

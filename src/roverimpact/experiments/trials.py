@@ -29,13 +29,17 @@ class SensorsConfig(StrictModel):
     so that a compressive load reads positive; the CSV
     column of channel i must be named ``<channels[i]>_<units[i]>``. ``units`` may be one
     string for all channels. ``sample_rate_hz``, if given, is checked against the time
-    column (1 % tolerance).
+    column (1 % tolerance). ``full_scale``, if given (one value or one per channel, in the
+    raw unit), is the reading at which a channel saturates: a recording reaching it fails,
+    as does one whose maximum is held for :data:`~roverimpact.experiments.recording.CLIP_SAMPLES`
+    or more consecutive samples (a flat top: clipped by the sensor or the ADC).
     """
 
     channels: list[str] = Field(min_length=1)
     gains: list[float]
     units: list[str] | str = "V"
     sample_rate_hz: float | None = Field(None, gt=0, allow_inf_nan=False)
+    full_scale: list[float] | float | None = None
 
     @model_validator(mode="after")
     def _lengths(self):
@@ -52,6 +56,13 @@ class SensorsConfig(StrictModel):
             raise ValueError(
                 f"units has {len(self.units)} entries for {len(self.channels)} channels"
             )
+        fsl = self.full_scale
+        if isinstance(fsl, list) and len(fsl) != len(self.channels):
+            raise ValueError(
+                f"full_scale has {len(fsl)} values for {len(self.channels)} channels")
+        if fsl is not None and not all(map(math.isfinite, fsl if isinstance(fsl, list)
+                                           else [fsl])):
+            raise ValueError("full_scale must be finite")
         if len(set(self.channels)) != len(self.channels):
             raise ValueError(f"channel names must be unique, got {self.channels}")
         return self
@@ -59,6 +70,12 @@ class SensorsConfig(StrictModel):
     @property
     def unit_list(self) -> list[str]:
         return [self.units] * len(self.channels) if isinstance(self.units, str) else self.units
+
+    @property
+    def full_scale_list(self) -> list[float | None]:
+        """Saturation reading of each channel [raw unit] (None: not given)."""
+        fsl = self.full_scale
+        return list(fsl) if isinstance(fsl, list) else [fsl] * len(self.channels)
 
     @property
     def columns(self) -> list[str]:

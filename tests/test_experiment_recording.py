@@ -1,0 +1,72 @@
+"""Recordings the pipeline must refuse rather than measure: a clipped (saturated) channel,
+an infinite reading."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from roverimpact import experiments as ex
+
+FS = 5000.0
+
+
+def _half_sine(t, t0, T, A):
+    x = (t - t0) / T
+    return np.where((x > 0) & (x < 1), A * np.sin(np.pi * np.clip(x, 0, 1)), 0.0)
+
+
+def _set(tmp_path, peaks, *, clip_v=10.0, extra=""):
+    """One recording per peak [N], a 250 N/V cell read by an ADC of +-clip_v volts."""
+    t = np.arange(int(FS)) / FS
+    rng = np.random.default_rng(3)
+    lines = ['[sensors]', 'channels = ["ch1"]', 'units = "V"', 'gains = [250.0]', extra, '']
+    for i, P in enumerate(peaks):
+        v = _half_sine(t, 0.5, 0.02, P) / 250.0 + 0.1 + rng.normal(0, 0.002, len(t))
+        v = np.round(np.clip(v, -clip_v, clip_v), 6)
+        pd.DataFrame({"time_s": t, "ch1_V": v}).to_csv(tmp_path / f"p{i}.csv", index=False)
+        lines += ["[[trial]]", f'file = "p{i}.csv"', f"beta_deg = {30 + 10 * i}",
+                  "speed = 0.3", ""]
+    (tmp_path / "trials.toml").write_text("\n".join(lines))
+    return ex.run_experiment(tmp_path / "trials.toml")
+
+
+def test_clipped_channel_fails_the_trial(tmp_path):
+    """True peaks 3000/6000/12000 N through a +-10 V ADC (2500 N): they read 2490-2600 N
+    as if real; now those trials fail, naming the column and the flat top, and the
+    1500 N trial (not clipped) is measured."""
+    res = _set(tmp_path, [1500.0, 3000.0, 6000.0, 12000.0])
+    assert list(res.trials["file"]) == ["p0.csv"]
+    np.testing.assert_allclose(res.trials["F_peak"], 1500.0, rtol=0.01)
+    assert [f.trial for f in res.failures] == [1, 2, 3]
+    for f in res.failures:
+        assert "'ch1_V' is clipped" in f.message and "maximum 10" in f.message
+
+
+def test_full_scale_of_the_sensor(tmp_path):
+    """With full_scale stated, a reading reaching it fails even without a flat top."""
+    res = _set(tmp_path, [1500.0], extra="full_scale = 8.0")
+    assert res.failures == [] and len(res.trials) == 1
+    res = _set(tmp_path, [1500.0], extra="full_scale = 6.0")
+    (f,) = res.failures
+    assert "full_scale 6" in f.message and "saturated" in f.message
+
+
+def test_infinite_sample_is_an_error_naming_the_row(tmp_path):
+    t = np.arange(2500) / FS
+    f = _half_sine(t, 0.2, 0.02, 1000.0) + np.random.default_rng(6).normal(0, 0.5, len(t))
+    lines = ["time_s,ch1_N"] + [f"{a:.6f},{b:.6f}" for a, b in zip(t, f, strict=True)]
+    lines[1500] = f"{t[1499]:.6f},inf"
+    (tmp_path / "a.csv").write_text("\n".join(lines) + "\n")
+    sensors = ex.SensorsConfig(channels=["ch1"], units="N", gains=[1.0])
+    with pytest.raises(ex.TrialDataError, match=r"a.csv: column 'ch1_N' is infinite at row "
+                       r"1500 \(t = 0.2998 s\)"):
+        ex.read_recording(tmp_path / "a.csv", sensors)
+
+
+def test_docs_quote_clip_samples():
+    from pathlib import Path
+
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "experiments.md").read_text()
+    assert f"held for {ex.recording.CLIP_SAMPLES} or more consecutive" in docs
