@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 import pytest
 from scipy import stats as sps
 
-from roverimpact.studies.stats import rank_correlation
+from roverimpact.studies.stats import SPEARMAN_EXACT_MAX_N, rank_correlation
 
 
 def test_four_points_by_hand():
@@ -17,17 +18,16 @@ def test_four_points_by_hand():
     tau = (C - D) / 6 = (5 - 1) / 6 = 2/3; rho = 1 - 6 sum d^2 / (n (n^2 - 1)) = 1 - 12/60
     = 0.8. Exact two-sided Kendall p: the inversion counts of the 24 permutations of 4 are
     1, 3, 5, 6, 5, 3, 1 for 0..6 inversions; one inversion or its mirror five or more:
-    p = (1 + 3 + 3 + 1) / 24 = 1/3. Spearman's p from t = rho sqrt((n - 2) / (1 - rho^2))
-    with n - 2 = 2 degrees of freedom: p = 2 (1 - F_t(t)) = 1 - t / sqrt(2 + t^2)
-    (closed form of the t CDF with 2 degrees of freedom).
+    p = (1 + 3 + 3 + 1) / 24 = 1/3. Spearman's exact p: rho >= 0.8 means sum d^2 <= 2,
+    i.e. the identity or one of the 3 adjacent swaps, and as many mirrored orderings have
+    rho <= -0.8: p = 8 / 24 = 1/3 (scipy's t approximation gave 0.2).
     """
     rc = rank_correlation([1, 2, 3, 4], [10, 20, 40, 30])
     assert rc.n == 4
     assert rc.kendall_tau == pytest.approx(2 / 3, rel=1e-12)
     assert rc.spearman_rho == pytest.approx(0.8, rel=1e-12)
     assert rc.kendall_p == pytest.approx(1 / 3, rel=1e-12)
-    t = 0.8 * math.sqrt(2 / (1 - 0.64))
-    assert rc.spearman_p == pytest.approx(1 - t / math.sqrt(2 + t * t), rel=1e-12)
+    assert rc.spearman_p == pytest.approx(1 / 3, rel=1e-12)
 
 
 def test_ties_and_dropped_pairs():
@@ -50,3 +50,40 @@ def test_too_few_or_constant_is_nan(x, y):
     rc = rank_correlation(x, y)
     assert all(math.isnan(v) for v in (rc.kendall_tau, rc.kendall_p, rc.spearman_rho,
                                        rc.spearman_p))
+
+
+def _enumerated_spearman_p(x, y):
+    """Two-sided permutation p by brute force: every ordering of y through scipy."""
+    rho = sps.spearmanr(x, y).statistic
+    rhos = [sps.spearmanr(x, [y[i] for i in p]).statistic
+            for p in itertools.permutations(range(len(y)))]
+    return np.mean([abs(r) >= abs(rho) - 1e-12 for r in rhos])
+
+
+@pytest.mark.parametrize("n", [3, 4, 5])
+def test_spearman_p_of_a_perfect_ranking_is_exact(n):
+    """A perfect ranking of n pairs: 2 of the n! orderings have |rho| = 1, p = 2 / n!
+    (1/3, 1/12, 1/60); scipy's t approximation gave 0 for n = 3, 4."""
+    rc = rank_correlation(np.arange(n), np.arange(n) ** 2)
+    assert rc.spearman_p == pytest.approx(2 / math.factorial(n), rel=1e-12)
+    assert rc.kendall_p == pytest.approx(sps.kendalltau(np.arange(n), np.arange(n)).pvalue)
+
+
+def test_spearman_p_matches_the_enumeration():
+    """Random samples of 3..7 pairs, with and without ties: the exact p equals the brute
+    force enumeration; Kendall's p stays scipy's; above SPEARMAN_EXACT_MAX_N pairs the
+    p is scipy's."""
+    rng = np.random.default_rng(18)
+    for n in range(3, 8):
+        for ties in (False, True):
+            x = rng.integers(0, 3 if ties else 1000, n).astype(float)
+            y = x + rng.normal(0, 1.0 if ties else 300.0, n)
+            if np.ptp(x) == 0:
+                continue
+            rc = rank_correlation(x, y)
+            assert rc.spearman_p == pytest.approx(_enumerated_spearman_p(x, y), abs=1e-12)
+            assert rc.kendall_p == pytest.approx(sps.kendalltau(x, y).pvalue, rel=1e-12)
+    x = np.arange(12.0)
+    y = x + rng.normal(0, 3.0, 12)
+    assert rank_correlation(x, y).spearman_p == pytest.approx(sps.spearmanr(x, y).pvalue)
+    assert SPEARMAN_EXACT_MAX_N < 12

@@ -11,14 +11,18 @@ the main statistics are rank statistics:
 
 Each comes with a seeded percentile bootstrap confidence interval (cases resampled with
 replacement, pairs kept together). :func:`rank_correlation` gives Kendall's and
-Spearman's coefficients with scipy's p-values instead (no bootstrap), for a few
-conditions such as the experiment comparison.
+Spearman's coefficients with p-values instead (no bootstrap), for a few conditions such
+as the experiment comparison: scipy's Kendall p (exact for small samples without ties),
+and for Spearman the exact permutation p up to :data:`SPEARMAN_EXACT_MAX_N` pairs
+(scipy's t approximation gives p = 0 for a perfect ranking of 3 or 4 pairs, where the
+exact p is 1/3 or 1/12), scipy's above.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from itertools import permutations
 
 import numpy as np
 from scipy import stats as sps
@@ -27,6 +31,7 @@ from ..exceptions import InputError
 
 __all__ = [
     "RATIO_TOLERANCE",
+    "SPEARMAN_EXACT_MAX_N",
     "Agreement",
     "Estimate",
     "ForceRatios",
@@ -132,7 +137,9 @@ def concordant_pair_fraction(x, y) -> tuple[float, int, int, int]:
 @dataclass(frozen=True)
 class RankCorrelation:
     """Kendall's tau-b and Spearman's rho of two paired samples, with two-sided p-values
-    (``scipy.stats.kendalltau``, ``scipy.stats.spearmanr``) and the number of pairs used."""
+    (``scipy.stats.kendalltau``; Spearman's exact by permutation up to
+    :data:`SPEARMAN_EXACT_MAX_N` pairs, else ``scipy.stats.spearmanr``) and the number of
+    pairs used."""
 
     kendall_tau: float
     kendall_p: float
@@ -141,11 +148,30 @@ class RankCorrelation:
     n: int
 
 
+#: Up to this many pairs, the Spearman p-value is exact: the share of all n! orderings of
+#: y whose rank correlation with x is at least as large in absolute value (two-sided;
+#: 40320 orderings at 8).
+SPEARMAN_EXACT_MAX_N = 8
+
+
+def _spearman_exact_p(x: np.ndarray, y: np.ndarray) -> float:
+    """Two-sided exact permutation p-value of Spearman's rho (ties: average ranks)."""
+    a = sps.rankdata(x)
+    b = sps.rankdata(y)
+    a, b = a - a.mean(), b - b.mean()
+    perms = np.array(list(permutations(range(len(a)))))
+    num = b[perms] @ a  # rho of each ordering times |a| |b|: compare the numerators
+    obs = float(b @ a)
+    return float(np.mean(np.abs(num) >= abs(obs) * (1 - 1e-12) - 1e-12))
+
+
 def rank_correlation(x, y) -> RankCorrelation:
     """Kendall tau-b and Spearman rho of ``x`` and ``y`` with their p-values.
 
     Pairs with NaN or inf are dropped (``n`` counts the rest). All four figures are NaN
-    with fewer than 3 pairs or a constant sample.
+    with fewer than 3 pairs or a constant sample. The Spearman p-value is exact
+    (permutations) up to :data:`SPEARMAN_EXACT_MAX_N` pairs, scipy's t approximation
+    above.
 
     Examples
     --------
@@ -159,8 +185,9 @@ def rank_correlation(x, y) -> RankCorrelation:
         return RankCorrelation(nan, nan, nan, nan, int(x.size))
     kt = sps.kendalltau(x, y, variant="b")
     sr = sps.spearmanr(x, y)
+    p = _spearman_exact_p(x, y) if x.size <= SPEARMAN_EXACT_MAX_N else float(sr.pvalue)
     return RankCorrelation(float(kt.statistic), float(kt.pvalue), float(sr.statistic),
-                           float(sr.pvalue), int(x.size))
+                           p, int(x.size))
 
 
 def _corrs(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
