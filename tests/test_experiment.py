@@ -292,7 +292,7 @@ def test_cli_exit_codes(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["experiment", str(EXAMPLE / "trials.toml"), "-o", str(out)]) == 0
     for name in ("impacts.csv", "trials.csv", "comparison.csv", "summary.json", "overlay.png",
-                 "inputs_trials.toml", "inputs_rover.toml"):
+                 "inputs_trials.toml", "inputs_scenario.toml"):
         assert (out / name).is_file()
     printed = capsys.readouterr().out
     assert "Kendall tau = 0.956" in printed and "Spearman rho = 0.996" in printed

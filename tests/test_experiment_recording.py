@@ -70,3 +70,31 @@ def test_docs_quote_clip_samples():
 
     docs = (Path(__file__).resolve().parents[1] / "docs" / "experiments.md").read_text()
     assert f"held for {ex.recording.CLIP_SAMPLES} or more consecutive" in docs
+
+
+def test_input_copies_of_the_same_name_do_not_overwrite(tmp_path):
+    """A trials file and a scenario both named config.toml: both copies are kept, under
+    fixed names, and summary.json names the originals (the scenario's copy overwrote the
+    trials file's before)."""
+    import json
+    import shutil
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "experiment"
+    (tmp_path / "model").mkdir()
+    shutil.copy(example / "rover.toml", tmp_path / "model" / "config.toml")
+    t = np.arange(2500) / FS
+    f = _half_sine(t, 0.2, 0.02, 1000.0) + np.random.default_rng(8).normal(0, 0.5, len(t))
+    pd.DataFrame({"time_s": t, "ch1_N": f}).to_csv(tmp_path / "a.csv", index=False)
+    trials = tmp_path / "config.toml"
+    trials.write_text('[sensors]\nchannels = ["ch1"]\nunits = "N"\ngains = [1.0]\n\n'
+                      '[[trial]]\nfile = "a.csv"\nbeta_deg = 30.0\nspeed = 0.3\n\n'
+                      '[model]\nkind = "scenario"\nscenario = "model/config.toml"\n')
+    res = ex.run_experiment(trials)
+    files = ex.write_outputs(res, tmp_path / "out", trials_path=trials)
+    assert files["inputs"].read_text() == trials.read_text()
+    assert files["inputs_model"].read_text() == (tmp_path / "model" / "config.toml").read_text()
+    assert files["inputs"] != files["inputs_model"]
+    inputs = json.loads(files["summary"].read_text())["inputs"]
+    assert inputs == {files["inputs"].name: str(trials),
+                      files["inputs_model"].name: str(tmp_path / "model" / "config.toml")}

@@ -65,7 +65,7 @@ def test_experiment_rerun_replaces_its_outputs(tmp_path, capsys):
     out = tmp_path / "eo"
     assert main(["experiment", str(EX / "experiment" / "trials.toml"), "-o", str(out)]) == 0
     first = {p.name for p in out.iterdir()}
-    assert {"comparison.csv", "overlay.png", "inputs_rover.toml"} <= first
+    assert {"comparison.csv", "overlay.png", "inputs_scenario.toml"} <= first
     text = (EX / "experiment" / "trials.toml").read_text()
     i = text.index("[model]")
     j = text.find("\n[", i + 1)
@@ -76,5 +76,5 @@ def test_experiment_rerun_replaces_its_outputs(tmp_path, capsys):
     assert main(["experiment", str(bare), "-o", str(out), "--no-plot"]) == 0
     second = {p.name for p in out.iterdir()}
     assert "comparison.csv" not in second and "overlay.png" not in second
-    assert "inputs_rover.toml" not in second and "trials.csv" in second
+    assert "inputs_scenario.toml" not in second and "trials.csv" in second
     capsys.readouterr()

@@ -15,7 +15,13 @@ from .recording import TrialDataError, TrialFailure, read_recording
 from .signal import SHORT_PERIODS, detect_impacts, normal_force
 from .trials import TrialsFile, load_trials
 
-__all__ = ["ExperimentResult", "process_recording", "run_experiment", "write_outputs"]
+__all__ = ["INPUT_COPIES", "ExperimentResult", "process_recording", "run_experiment",
+           "write_outputs"]
+
+#: The names of the copies of the inputs in the output folder: fixed, so that a trials
+#: file and a scenario of the same name do not overwrite each other (their own names are
+#: in summary.json, ``inputs``)
+INPUT_COPIES = {"trials": "inputs_trials.toml", "scenario": "inputs_scenario.toml"}
 
 
 def process_recording(path, cfg: TrialsFile):
@@ -171,7 +177,8 @@ def _finite(obj):
 def write_outputs(result: ExperimentResult, outdir, *, comparison: ModelComparison | None = None,
                   trials_path: str | Path | None = None) -> dict[str, Path]:
     """Write ``impacts.csv``, ``trials.csv``, ``failures.csv``, ``comparison.csv``,
-    ``summary.json`` and a copy of the trials file (the inputs next to the outputs) into
+    ``summary.json`` and copies of the trials file and of the model's scenario
+    (``inputs_trials.toml``, ``inputs_scenario.toml``: the inputs next to the outputs) into
     ``outdir``; the figure is :func:`roverimpact.report.experiment.plot_overlay`."""
     import json
 
@@ -196,15 +203,19 @@ def write_outputs(result: ExperimentResult, outdir, *, comparison: ModelComparis
         ind = getattr(comparison, "indicators", None)
         summary["baselines"] = _finite(ind.as_dict()) if ind is not None else None
         summary["model"] = (result.config.model.model_dump() if result.config.model else None)
+    if trials_path is not None:
+        summary["inputs"] = {INPUT_COPIES["trials"]: str(trials_path)}
+        if result.config.model is not None:
+            summary["inputs"][INPUT_COPIES["scenario"]] = str(
+                result.base_dir / result.config.model.scenario)
     files["summary"] = out / "summary.json"
     files["summary"].write_text(json.dumps(summary, indent=2, default=str))
     if trials_path is not None:
-        dst = out / ("inputs_" + Path(trials_path).name)
-        shutil.copyfile(trials_path, dst)
-        files["inputs"] = dst
+        files["inputs"] = out / INPUT_COPIES["trials"]
+        shutil.copyfile(trials_path, files["inputs"])
         if result.config.model is not None:
             scn = result.base_dir / result.config.model.scenario
             if scn.is_file():
-                files["inputs_model"] = out / ("inputs_" + scn.name)
+                files["inputs_model"] = out / INPUT_COPIES["scenario"]
                 shutil.copyfile(scn, files["inputs_model"])
     return files
