@@ -78,3 +78,47 @@ def test_experiment_rerun_replaces_its_outputs(tmp_path, capsys):
     assert "comparison.csv" not in second and "overlay.png" not in second
     assert "inputs_scenario.toml" not in second and "trials.csv" in second
     capsys.readouterr()
+
+
+def test_a_users_folder_or_file_beside_the_outputs_is_never_deleted(tmp_path, capsys):
+    """A file matching an owned pattern is replaced, but a folder never is: an 'inputs_raw/'
+    folder holding a recording made the experiment's 'inputs_*' pattern rmtree it, and
+    'inputs_notes.txt' was deleted too. Now the experiment names its files exactly, and
+    the second run refuses the folder (exit 2) leaving both in place."""
+    out = tmp_path / "o"
+    with staged_folder(out, OWNED, SIGNATURE, "test") as work:
+        (work / "summary.json").write_text("{}")
+    (out / "x.toml").mkdir()
+    (out / "x.toml" / "keep.csv").write_text("1")
+    with pytest.raises(ConfigError, match=r"x\.toml"):
+        with staged_folder(out, OWNED, SIGNATURE, "test") as work:
+            (work / "summary.json").write_text("{}")
+    assert (out / "x.toml" / "keep.csv").read_text() == "1"
+
+    exp = tmp_path / "eo"
+    trials = EX / "experiment" / "trials.toml"
+    text = trials.read_text()
+    i = text.index("[model]")
+    j = text.find("\n[", i + 1)
+    bare = tmp_path / "trials.toml"
+    bare.write_text(text[:i] + (text[j + 1:] if j > 0 else ""))
+    for f in (EX / "experiment").glob("trial_0*.csv"):
+        (tmp_path / f.name).write_bytes(f.read_bytes())
+    bare.write_text(bare.read_text().split("[[trial]]")[0] + "[[trial]]"
+                    + bare.read_text().split("[[trial]]")[1])
+    assert main(["experiment", str(bare), "-o", str(exp), "--no-plot"]) == 0
+    (exp / "inputs_notes.txt").write_text("my notes")
+    (exp / "inputs_raw").mkdir()
+    (exp / "inputs_raw" / "a.csv").write_text("1")
+    assert main(["experiment", str(bare), "-o", str(exp), "--no-plot"]) == 2
+    assert "inputs_notes.txt" in capsys.readouterr().err
+    assert (exp / "inputs_notes.txt").read_text() == "my notes"
+    assert (exp / "inputs_raw" / "a.csv").read_text() == "1"
+
+
+def test_experiment_files_name_the_input_copies():
+    from roverimpact.cli._experiment import EXPERIMENT_FILES
+    from roverimpact.experiments.pipeline import INPUT_COPIES
+
+    assert set(INPUT_COPIES.values()) <= set(EXPERIMENT_FILES)
+    assert not any("*" in f or "?" in f for f in EXPERIMENT_FILES)

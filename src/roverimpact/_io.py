@@ -100,8 +100,10 @@ def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[
 
     ``out_dir`` may be missing, empty (dot files aside), or hold a previous output of the
     same command: its ``signature`` files, and nothing but files matching the glob
-    patterns ``owned``; those are replaced as a whole (no file of an earlier run is left
-    beside the new ones). A folder holding anything else is refused before any work, with
+    patterns ``owned`` (name the files exactly where a user's file could match a pattern);
+    those are replaced as a whole (no file of an earlier run is left beside the new ones).
+    A folder inside is never an output: it is never removed. A folder holding anything
+    else is refused before any work, with
     one ConfigError naming what it holds (``-o .`` next to the input files). An
     interrupted or failed run removes its staging folder and leaves ``out_dir`` as it
     was."""
@@ -113,7 +115,8 @@ def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[
         entries = [p.name for p in out_dir.iterdir() if not p.name.startswith(".")]
         ours = entries and all((out_dir / f).exists() for f in signature)
         foreign = [e for e in entries
-                   if not (ours and any(fnmatch.fnmatch(e, pat) for pat in owned))]
+                   if not (ours and (out_dir / e).is_file()
+                           and any(fnmatch.fnmatch(e, pat) for pat in owned))]
         if foreign:
             shown = ", ".join(sorted(foreign)[:4]) + (", ..." if len(foreign) > 4 else "")
             raise ConfigError(
@@ -127,9 +130,9 @@ def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[
         yield stage
         out_dir.mkdir(parents=True, exist_ok=True)
         for old in out_dir.iterdir():
-            if not old.name.startswith(".") and any(fnmatch.fnmatch(old.name, pat)
-                                                    for pat in owned):
-                shutil.rmtree(old) if old.is_dir() else old.unlink()
+            if (not old.name.startswith(".") and old.is_file()
+                    and any(fnmatch.fnmatch(old.name, pat) for pat in owned)):
+                old.unlink()
         for new in stage.iterdir():
             os.replace(new, out_dir / new.name)
     finally:

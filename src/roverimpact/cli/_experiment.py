@@ -18,10 +18,13 @@ from ._app import (
     print_json,
 )
 
-#: What an experiment run writes: a folder holding these and trials.csv + summary.json is
-#: a previous run, replaced by the next one
+#: What an experiment run writes, by exact name: a folder holding these and trials.csv +
+#: summary.json is a previous run, replaced by the next one (a user's file beside them,
+#: such as inputs_notes.txt, makes the run refuse the folder rather than delete it); the
+#: copies of the inputs are ``roverimpact.experiments.pipeline.INPUT_COPIES``
 EXPERIMENT_FILES = ("impacts.csv", "trials.csv", "failures.csv", "comparison.csv",
-                    "summary.json", "inputs_*", "overlay.png")
+                    "summary.json", "inputs_trials.toml", "inputs_scenario.toml",
+                    "overlay.png")
 
 #: The per-trial table: header (with unit) and column of ``ExperimentResult.trials`` (SI:
 #: the CSV gives the duration in s, the table in ms).
