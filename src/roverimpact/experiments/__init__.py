@@ -5,7 +5,8 @@ Pipeline for each trial (one CSV file), see ``docs/experiments.md``:
 1. read ``time_s, <channel>_<unit>, ...`` and check it (units in the header must match the
    trials file, time strictly increasing and uniformly sampled, short NaN gaps only);
 2. scale every channel by its calibration gain [N per raw unit];
-3. remove each channel's offset and linear drift, fitted on the samples outside impacts;
+3. remove each channel's offset and linear drift, fitted on the samples outside impacts
+   (found from a first robust line, then iterated);
 4. low-pass filter with a zero-phase Butterworth filter (``scipy.signal.sosfiltfilt``);
 5. sum the channels into the normal force F(t) [N];
 6. detect each impact (F above a threshold set from the noise), its peak force, impulse

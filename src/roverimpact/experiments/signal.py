@@ -79,13 +79,32 @@ def _regions(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
     return merged
 
 
+def _robust_line(t: np.ndarray, x: np.ndarray, max_points: int = 800) -> np.ndarray:
+    """(2, n_channels) offset at t[0] and slope of a straight line through each column of
+    ``x``, by Siegel's repeated medians (``scipy.stats.siegelslopes``) on at most
+    ``max_points`` evenly spread samples: impacts (a minority of the samples, however
+    large) do not pull it, and neither does a drift."""
+    from scipy.stats import siegelslopes
+
+    idx = np.unique(np.linspace(0, len(t) - 1, min(max_points, len(t))).astype(int))
+    tt = t[idx] - t[0]
+    coef = np.empty((2, x.shape[1]))
+    for j in range(x.shape[1]):
+        r = siegelslopes(x[idx, j], tt)
+        coef[:, j] = r.intercept, r.slope
+    return coef
+
+
 def normal_force(t, raw, gains, fs: float, filt: FilterConfig = FilterConfig(),
                  det: DetectionConfig = DetectionConfig()):
     """Calibrated, offset- and drift-free, filtered normal force from the raw channels.
 
     Each channel is multiplied by its gain, then a straight line (offset + drift) fitted
     to the samples away from impacts is subtracted, the result is low-pass filtered and
-    the channels are summed.
+    the channels are summed. The samples away from impacts are found iteratively: a first
+    robust line (repeated medians, which neither the impacts nor the drift pull), the
+    samples above the threshold (and a guard band around them) left out, a least-squares
+    line on the rest, again until the set of samples no longer changes (at most 5 times).
 
     Returns
     -------
@@ -102,21 +121,26 @@ def normal_force(t, raw, gains, fs: float, filt: FilterConfig = FilterConfig(),
     if nb >= len(t) // 2:
         raise InputError(f"recording of {t[-1] - t[0]:.3g} s is too short for a baseline of "
                          f"{det.baseline_s:g} s")
-    # pass 1: constant offset from the baseline window, find the impact regions
-    f0 = lowpass(forces - np.median(forces[:nb], axis=0), fs, filt.cutoff_hz, filt.order)
-    s0 = f0.sum(axis=1)
-    active = np.abs(s0) > _threshold(det, s0, s0[:nb])
-    quiet = np.ones(len(t), bool)
-    for s, e in _regions(active, 0):
-        guard = max(e - s, int(0.01 * fs))
-        quiet[max(s - guard, 0): e + guard] = False
-    if quiet.sum() < nb:
-        raise InputError("too few samples away from impacts to fit the sensor offset")
-    # pass 2: offset + linear drift per channel, least squares on the quiet samples
-    X = np.stack([np.ones(quiet.sum()), t[quiet] - t[0]], axis=1)
-    coef, *_ = np.linalg.lstsq(X, forces[quiet], rcond=None)
-    base = coef[0][None, :] + (t - t[0])[:, None] * coef[1][None, :]
-    F = lowpass(forces - base, fs, filt.cutoff_hz, filt.order).sum(axis=1)
+    tr = (t - t[0])[:, None]
+    coef = _robust_line(t, forces)
+    quiet = None
+    for _ in range(5):
+        s0 = lowpass(forces - coef[0] - tr * coef[1], fs, filt.cutoff_hz, filt.order).sum(axis=1)
+        noise = s0[:nb] if quiet is None else s0[quiet]
+        active = np.abs(s0) > _threshold(det, s0, noise)
+        new = np.ones(len(t), bool)
+        for s, e in _regions(active, 0):
+            guard = max(e - s, int(0.01 * fs))
+            new[max(s - guard, 0): e + guard] = False
+        if new.sum() < nb:
+            raise InputError("too few samples away from impacts to fit the sensor offset")
+        if quiet is not None and np.array_equal(new, quiet):
+            break
+        quiet = new
+        # offset + linear drift per channel, least squares on the quiet samples
+        X = np.stack([np.ones(quiet.sum()), t[quiet] - t[0]], axis=1)
+        coef, *_ = np.linalg.lstsq(X, forces[quiet], rcond=None)
+    F = lowpass(forces - coef[0] - tr * coef[1], fs, filt.cutoff_hz, filt.order).sum(axis=1)
     return F, _threshold(det, F, F[quiet]), coef[0]
 
 
