@@ -114,6 +114,30 @@ def test_json_and_report_regeneration(short, tmp_path, capfd):
     assert "traverse.toml: malformed TOML" in err and "Traceback" not in err
 
 
+def test_report_refuses_an_edited_traverse_file(short, tmp_path, capfd):
+    """traverse-report after the folder's traverse.toml was edited (F_allow 100 -> 500)
+    wrote a report stating 500 N above tables computed for 100 N. The run stores the
+    copy's SHA-256 in manifest.json; an edited copy is refused (exit 2, one line), the
+    unedited one still reports."""
+    import hashlib
+    import shutil
+
+    _, out = short
+    d = tmp_path / "e"
+    shutil.copytree(out, d)
+    text = (d / "traverse.toml").read_text()
+    man = json.loads((d / "manifest.json").read_text())
+    assert man["config_sha256"] == hashlib.sha256(text.encode()).hexdigest()
+    (d / "traverse.toml").write_text(text.replace("F_allow = 100.0", "F_allow = 500.0"))
+    assert "F_allow = 500.0" in (d / "traverse.toml").read_text()
+    capfd.readouterr()
+    assert main(["traverse-report", str(d)]) == 2
+    err = capfd.readouterr().err
+    assert "traverse.toml was edited after the traverse ran" in err and "Traceback" not in err
+    (d / "traverse.toml").write_text(text)
+    assert main(["traverse-report", str(d)]) == 0
+
+
 def test_dask_equals_serial(short, monkeypatch):
     """Chunks of 40 stations on 2 forked workers (the cluster forced on: this traverse
     alone would not pay for one): the same tables as serially."""

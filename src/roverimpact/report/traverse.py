@@ -282,7 +282,9 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
     """Draw ``map.png/svg`` and ``speed.png/svg`` (per path: ``map-<path>``..., the path's
     name made a file name by :func:`~roverimpact.traverse.schema.file_tag`: "route 1/a"
     gives ``map-route_1_a.png``) and write ``report.html`` in a traverse output folder;
-    ``terrain`` and ``config`` default to those of the folder's ``traverse.toml``."""
+    ``terrain`` and ``config`` default to those of the folder's ``traverse.toml``, which
+    must be the copy the run wrote (``config_sha256`` of ``manifest.json``; folders
+    written before the fingerprint are not checked)."""
     from ..traverse.run import build_terrain
     from ..traverse.schema import file_tag, traverse_from_dict
 
@@ -300,6 +302,15 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
             raise ConfigError(f"{folder / 'traverse.toml'}: malformed TOML ({exc}); it is the "
                               "copy of the traverse file the run wrote: restore it, or run "
                               "the traverse again") from None
+        from ..traverse.run import config_fingerprint
+
+        stored = man.get("config_sha256")
+        if stored is not None and stored != config_fingerprint(text):
+            raise ConfigError(
+                f"{folder / 'traverse.toml'} was edited after the traverse ran (its SHA-256 "
+                "differs from config_sha256 in manifest.json): the tables were computed with "
+                "the original, so a report from the edited file would contradict them; "
+                "restore it, or run `roverimpact traverse` on the edited file")
         config = traverse_from_dict(raw, where=str(folder / "traverse.toml"))
     if terrain is None:
         terrain = build_terrain(config.terrain)

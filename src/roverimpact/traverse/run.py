@@ -591,6 +591,15 @@ def _run_dask(address, cfg_dict, chunks, parts, progress, total) -> int:
     return done
 
 
+def config_fingerprint(text: str) -> str:
+    """SHA-256 (hex) of the traverse file copy's text, stored in ``manifest.json`` as
+    ``config_sha256``: ``traverse-report`` refuses a copy edited since the run. Line
+    endings are normalised to ``\\n`` first (as reading the file back in text mode does)."""
+    import hashlib
+
+    return hashlib.sha256(text.replace("\r\n", "\n").encode()).hexdigest()
+
+
 def _write(res: TraverseResult, text: str | None, csv: bool) -> None:
     import tomllib
 
@@ -613,6 +622,7 @@ def _write(res: TraverseResult, text: str | None, csv: bool) -> None:
                 "failed_poses": int((res.poses["status"] != "ok").sum()),
                 "elapsed_s": res.elapsed, "timings": res.timings,
                 "executor": res.executor,
+                "config_sha256": config_fingerprint(text),
                 "versions": versions()}
     atomic_write_bytes(out / MANIFEST, json.dumps(manifest, indent=2).encode())
     files["config"], files["manifest"] = out / CONFIG_COPY, out / MANIFEST
