@@ -98,3 +98,29 @@ def test_input_copies_of_the_same_name_do_not_overwrite(tmp_path):
     inputs = json.loads(files["summary"].read_text())["inputs"]
     assert inputs == {files["inputs"].name: str(trials),
                       files["inputs_model"].name: str(tmp_path / "model" / "config.toml")}
+
+
+@pytest.mark.parametrize("sep, said", [(";", "semicolons"), ("\t", "tabs")])
+def test_other_delimiters_are_named(tmp_path, sep, said):
+    """A ';' or tab separated file (e.g. a spreadsheet's decimal-comma export) said "no
+    'time_s' column (header is ['time_s;ch1_N'])"; now the message names the delimiter."""
+    rows = ["time_s" + sep + "ch1_N"] + [f"{i / FS:.4f}{sep}{i % 7}" for i in range(100)]
+    (tmp_path / "a.csv").write_text("\n".join(rows) + "\n")
+    sensors = ex.SensorsConfig(channels=["ch1"], units="N", gains=[1.0])
+    with pytest.raises(ex.TrialDataError, match=f"a.csv: the columns are separated by {said}"):
+        ex.read_recording(tmp_path / "a.csv", sensors)
+
+
+def test_metadata_line_without_hash_is_one_line(tmp_path):
+    """Metadata lines above the header without '#' gave pandas' raw 'Error tokenizing
+    data. C error: Expected 1 fields in line 3, saw 2' (over two lines)."""
+    rows = ["Sample rate: 5000", "Operator: X", "time_s,ch1_N"]
+    rows += [f"{i / FS:.4f},{i % 7}" for i in range(100)]
+    (tmp_path / "a.csv").write_text("\n".join(rows) + "\n")
+    sensors = ex.SensorsConfig(channels=["ch1"], units="N", gains=[1.0])
+    with pytest.raises(ex.TrialDataError) as err:
+        ex.read_recording(tmp_path / "a.csv", sensors)
+    msg = str(err.value)
+    assert "\n" not in msg and "Error tokenizing" not in msg
+    assert ("line 3 has 2 fields but the header (line 1: 'Sample rate: 5000') has 1: "
+            "metadata lines above the header must start with '#'") in msg

@@ -52,6 +52,24 @@ def _header(columns, limit: int = 200) -> str:
     return text if len(text) <= limit else f"{text[:limit]}... ({len(columns)} columns)"
 
 
+def _parser_problem(path: Path, exc: Exception) -> str:
+    """One line for a pandas tokenizer error: which line has more fields than the header,
+    and the header line itself (often a metadata line without '#')."""
+    m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", str(exc))
+    if not m:
+        return f"not a readable CSV file ({str(exc).strip()})"
+    want, line, got = map(int, m.groups())
+    header_no, header = 0, ""
+    with path.open(encoding="utf-8", errors="replace") as fh:
+        for k, text in enumerate(fh, 1):
+            if text.strip() and not text.lstrip("\ufeff").startswith("#"):
+                header_no, header = k, text.strip()
+                break
+    return (f"line {line} has {got} fields but the header (line {header_no}: "
+            f"{header[:80]!r}) has {want}: metadata lines above the header must start "
+            "with '#'")
+
+
 def _check_not_clipped(name: str, t, x, col: str, full_scale: float | None) -> None:
     """Raise :class:`TrialDataError` for an infinite reading, one at ``full_scale`` or a
     flat top at the maximum (:data:`CLIP_SAMPLES`)."""
@@ -112,10 +130,19 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
         df = pd.read_csv(path, comment="#", skipinitialspace=True)
     except pd.errors.EmptyDataError:
         raise TrialDataError(f"{path.name}: empty file (no header, no data)") from None
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+    except pd.errors.ParserError as exc:
+        raise TrialDataError(f"{path.name}: {_parser_problem(path, exc)}") from None
+    except UnicodeDecodeError as exc:
         raise TrialDataError(f"{path.name}: not a readable CSV file ({exc})") from None
     df.columns = [str(c).strip() for c in df.columns]
     if "time_s" not in df.columns:
+        for sep, said in ((";", "semicolons"), ("\t", "tabs")):
+            if any(sep in c for c in df.columns):
+                raise TrialDataError(
+                    f"{path.name}: the columns are separated by {said} (header "
+                    f"{_header(df.columns)}), not commas: save it as comma-separated CSV "
+                    "with '.' as the decimal point (a spreadsheet with a decimal comma "
+                    "writes ';' and '0,5')")
         raise TrialDataError(
             f"{path.name}: no 'time_s' column (header is {_header(df.columns)}); the first "
             "column must be the time in seconds"
