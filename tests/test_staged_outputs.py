@@ -122,3 +122,18 @@ def test_experiment_files_name_the_input_copies():
 
     assert set(INPUT_COPIES.values()) <= set(EXPERIMENT_FILES)
     assert not any("*" in f or "?" in f for f in EXPERIMENT_FILES)
+
+
+def test_outputs_without_their_summary_are_not_called_foreign(tmp_path):
+    """After summary.json of a run was deleted, the refusal said the run's own files
+    'are not the outputs of a previous run'; it now says what is missing."""
+    out = tmp_path / "o"
+    with staged_folder(out, OWNED, SIGNATURE, "test") as work:
+        (work / "summary.json").write_text("{}")
+        (work / "table.csv").write_text("1")
+    (out / "summary.json").unlink()
+    with pytest.raises(ConfigError, match=r"has no summary\.json, so its files \(table\.csv\) "
+                                          r"are not taken for the outputs of a previous test"), \
+            staged_folder(out, OWNED, SIGNATURE, "test"):
+        pass
+    assert (out / "table.csv").read_text() == "1"

@@ -117,6 +117,17 @@ def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[
         foreign = [e for e in entries
                    if not (ours and (out_dir / e).is_file()
                            and any(fnmatch.fnmatch(e, pat) for pat in owned))]
+        missing = [f for f in signature if not (out_dir / f).exists()]
+        named = [e for e in entries if (out_dir / e).is_file()
+                 and any(fnmatch.fnmatch(e, pat) for pat in owned)]
+        if entries and missing and len(named) == len(entries):
+            # names of our outputs, but without the signature: say that, not "foreign"
+            shown = ", ".join(sorted(named)[:4]) + (", ..." if len(named) > 4 else "")
+            raise ConfigError(
+                f"{out_dir} has no {' or '.join(missing)}, so its files ({shown}) are not "
+                f"taken for the outputs of a previous {what} run and would not be replaced; "
+                "if they are (its summary deleted), delete the folder, or choose a new or "
+                "empty one (nothing was written)")
         if foreign:
             shown = ", ".join(sorted(foreign)[:4]) + (", ..." if len(foreign) > 4 else "")
             raise ConfigError(
