@@ -180,6 +180,11 @@ def validation_message(exc: ValidationError, where: str, what: str = "") -> str:
             msg += (f" (got {val!r}: write a plain number in the unit of the key: "
                     "*_deg in degrees, everything else SI)")
         text = f"{loc}: {msg}"
+        head = re.match(r"[A-Za-z_][\w]*", msg)
+        if head and msg[head.end():head.end() + 1] in (":", ".") and (
+                loc == head.group() or loc.endswith("." + head.group())):
+            # the validator named its own table ("obstacle: give ..."): not twice
+            text = loc + msg[head.end():]
         if text not in parts:
             parts.append(text)
     return f"{where}: {what}" + "; ".join(parts)
