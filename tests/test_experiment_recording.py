@@ -124,3 +124,24 @@ def test_metadata_line_without_hash_is_one_line(tmp_path):
     assert "\n" not in msg and "Error tokenizing" not in msg
     assert ("line 3 has 2 fields but the header (line 1: 'Sample rate: 5000') has 1: "
             "metadata lines above the header must start with '#'") in msg
+
+
+def test_missing_scenario_is_told_before_the_recordings(tmp_path, capsys, monkeypatch):
+    """A trials file whose [model] scenario does not exist: the command says so first,
+    without processing a recording (it ran every trial before, and with no usable
+    recording only said 'no trial could be processed')."""
+    from roverimpact.cli import main
+
+    (tmp_path / "trials.toml").write_text(
+        '[sensors]\nchannels = ["ch1"]\nunits = "N"\ngains = [1.0]\n\n'
+        '[[trial]]\nfile = "absent.csv"\nbeta_deg = 30.0\nspeed = 0.3\n\n'
+        '[model]\nkind = "scenario"\nscenario = "nope.toml"\n')
+
+    def no_run(*a, **k):
+        raise AssertionError("recordings processed before the scenario was checked")
+
+    monkeypatch.setattr(ex, "run_experiment", no_run)
+    assert main(["experiment", str(tmp_path / "trials.toml"), "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "nope.toml: no such scenario file" in err
+    assert not (tmp_path / "o").exists()

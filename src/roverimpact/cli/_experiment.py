@@ -60,13 +60,15 @@ def experiment_cmd(
 
     check_output(outdir, folder=True)
     cfg, base = load_trials(trials)
+    # a missing or invalid scenario is told before the recordings are processed
+    model = scenario_model(cfg.model, base) if cfg.model is not None else None
     with staged_folder(outdir, EXPERIMENT_FILES, ("trials.csv", "summary.json"),
                        "experiment") as work:
         result = run_experiment(cfg, base)
         result.require_trials()
         comparison = None
-        if cfg.model is not None:
-            comparison = compare_with_model(result.trials, scenario_model(cfg.model, base))
+        if model is not None:
+            comparison = compare_with_model(result.trials, model)
         files = write_outputs(result, work, comparison=comparison, trials_path=trials)
         if not no_plot:
             from ..report.experiment import plot_overlay
