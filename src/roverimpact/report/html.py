@@ -24,6 +24,7 @@ from ..exceptions import ConfigError
 from ..studies.indicators import IndicatorComparison, compare_indicators, with_baselines
 from ..studies.stats import Agreement, ForceRatios, agreement, force_ratios
 from ..studies.store import (
+    CHUNKS,
     RESULTS,
     STUDY_COPY,
     WHOLE_WINDOW,
@@ -134,6 +135,12 @@ def find_study_folders(root: str | Path) -> list[Path]:
     if (root / RESULTS).is_file():
         return [root]
     found = sorted(p.parent for p in root.glob(f"*/{RESULTS}"))
+    if not found and any((root / CHUNKS).glob("*.parquet")):
+        study = root / STUDY_COPY
+        raise ConfigError(
+            f"{root}: no {RESULTS} here, but {CHUNKS}/ holds the finished chunks of a study: "
+            f"rebuild the table (nothing is recomputed) with `roverimpact sweep {study} -o "
+            f"{root} --resume`, then report again")
     if not found:
         raise ConfigError(
             f"{root}: no study results here ({RESULTS} in it or in its subfolders); "
