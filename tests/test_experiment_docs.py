@@ -24,3 +24,12 @@ def test_documented_defaults_are_the_defaults():
     doc = _trials_example()
     for table, cls in (("detection", ex.DetectionConfig), ("filter", ex.FilterConfig)):
         assert doc[table] == cls().model_dump(), table
+
+
+def test_package_docstring_says_where_the_duration_is_measured():
+    """It said 'duration (between the zero crossings around the peak)'; detect_impacts
+    and the docs measure it between the threshold crossings."""
+    doc = " ".join(ex.__doc__.split())
+    assert "duration (between the threshold crossings around the peak)" in doc
+    assert "duration (between the zero crossings" not in doc
+    assert "where F crosses the threshold" in " ".join(ex.detect_impacts.__doc__.split())

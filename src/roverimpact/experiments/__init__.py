@@ -9,8 +9,11 @@ Pipeline for each trial (one CSV file), see ``docs/experiments.md``:
    (found from a first robust line, then iterated);
 4. low-pass filter with a zero-phase Butterworth filter (``scipy.signal.sosfiltfilt``);
 5. sum the channels into the normal force F(t) [N];
-6. detect each impact (F above a threshold set from the noise), its peak force, impulse
-   :math:`\int F\,dt` and duration (between the zero crossings around the peak).
+6. detect each impact (F above a threshold set from the noise; two bounces joined by a
+   light contact are split at the minimum between them), its peak force, duration
+   (between the threshold crossings around the peak) and impulse :math:`\int F\,dt`
+   (over the whole event, zero crossings and the filter's ringing included); an impact
+   shorter than a few periods of the cut-off is flagged ``short``.
 
 Trials are independent: a corrupted file is reported (:class:`TrialFailure`) and the
 others still run. :func:`compare_with_model` puts the measured peaks next to a model's
