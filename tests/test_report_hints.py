@@ -30,3 +30,30 @@ def test_results_table_deleted_but_chunks_kept_hints_at_resume(tmp_path, capsys)
     assert main([*hint.split()[1:], "--no-report"]) == 0
     assert "0 computed, 5 reused" in capsys.readouterr().out
     assert main(["report", str(out)]) == 0
+
+
+def test_reproduce_folder_missing_a_study_says_so(tmp_path, capsys):
+    """A reproduction folder whose study subfolders were partly deleted: report.html
+    dropped them without a word; now a note (stderr and the report) names them."""
+    from roverimpact.studies.reproduce import BUILTIN_STUDIES
+
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY)
+    root = tmp_path / "rq"
+    kept = list(BUILTIN_STUDIES)[:2]
+    for stem in kept:
+        assert main(["sweep", str(f), "-o", str(root / stem), "--no-report"]) == 0
+    capsys.readouterr()
+    assert main(["report", str(root)]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    gone = list(BUILTIN_STUDIES)[2:]
+    assert "note: Not in this report:" in err
+    for stem in gone:
+        assert f"{stem} ({BUILTIN_STUDIES[stem]})" in err
+    for stem in kept:
+        assert f"{stem} (" not in err
+    page = (root / "report.html").read_text()
+    assert "Not in this report" in page and gone[0] in page
+    # a complete one, or a folder of other studies: no note
+    assert main(["report", str(root / kept[0])]) == 0
+    assert "Not in this report" not in capsys.readouterr().err

@@ -205,9 +205,12 @@ def report_cmd(
     as_json: bool = typer.Option(False, "--json", help="Print the statistics as JSON."),
 ) -> None:
     """Regenerate the figures and the HTML report from saved results (no recomputation)."""
-    from ..report.html import build_report
+    from ..report.html import build_report, missing_studies_note
 
     path, sections = build_report(results, n_boot=n_boot, seed=seed)
+    note = missing_studies_note(results)
+    if note:
+        err_console.print(f"note: {note}", highlight=False)
     if as_json:
         print_json({"report": path, "studies": _stats_json(sections)})
         return

@@ -506,11 +506,37 @@ def write_report(path: str | Path, sections: list[StudySection], *, title: str,
     return path
 
 
+def missing_studies_note(root: str | Path) -> str:
+    """A sentence naming the built-in studies missing from a reproduction folder (one whose
+    subfolders include a built-in study: the others' results deleted or never run), or
+    ``""``."""
+    from ..studies.reproduce import BUILTIN_STUDIES
+
+    root = Path(root)
+    if (root / RESULTS).is_file():
+        return ""
+    have = {p.parent.name for p in root.glob(f"*/{RESULTS}")}
+    if not have & set(BUILTIN_STUDIES):
+        return ""
+    missing = [f"{s} ({BUILTIN_STUDIES[s]})" for s in BUILTIN_STUDIES if s not in have]
+    if not missing:
+        return ""
+    return (f"Not in this report: {', '.join(missing)}: no {RESULTS} in its subfolder of "
+            f"{root} (deleted, or the reproduction did not finish); run `roverimpact "
+            f"reproduce -o {root}` again to recompute it.")
+
+
 def build_report(root: str | Path, *, title: str | None = None, intro: str = "",
                  n_boot: int = 1000, seed: int = 0) -> tuple[Path, list[StudySection]]:
-    """Regenerate the figures and ``report.html`` of a results folder from saved tables."""
+    """Regenerate the figures and ``report.html`` of a results folder from saved tables.
+
+    A reproduction folder missing some of the built-in studies says so at the top of the
+    report (:func:`missing_studies_note`)."""
     root = Path(root)
     folders = find_study_folders(root)
+    note = missing_studies_note(root)
+    if note:
+        intro = (intro + " " if intro else "") + f"<b>{html.escape(note)}</b>"
     for f in folders:  # every table readable, every folder writable: before any figure
         load_results(f, read_table=results_rows(f / RESULTS) <= LARGE_TABLE)
         check_writable(f, folder=True, option=None)
