@@ -33,7 +33,16 @@ def test_cli_writes_table_summary_and_plot(tmp_path, capsys):
     assert summary["F_max_total"] >= table["obstacle_front_fn"].max() * (1 - 1e-12)
     assert summary["F_max_total"] <= table["obstacle_front_fn"].max() * 1.01
     assert (tmp_path / "force_vs_time.png").stat().st_size > 1000
-    assert (tmp_path / EXAMPLE.name).is_file()          # inputs next to outputs
+    # the input next to the outputs, by a fixed name, its path in the summary
+    assert (tmp_path / "scenario.toml").read_text() == EXAMPLE.read_text()
+    assert summary["scenario"] == str(EXAMPLE)
+    # a user's own .toml in the folder is not an output: the next run refuses the folder
+    # and keeps it (a "*.toml" pattern took it for the previous run's copy and deleted it)
+    (tmp_path / "notes.toml").write_text("mine = 1\n")
+    assert main(["simulate", str(EXAMPLE), "-o", str(tmp_path), "--format", "csv"]) == 2
+    assert "notes.toml" in capsys.readouterr().err
+    assert (tmp_path / "notes.toml").read_text() == "mine = 1\n"
+    assert (tmp_path / "history.csv").is_file()
 
 
 def test_cli_bad_value_is_one_line_exit_2(tmp_path, capsys):

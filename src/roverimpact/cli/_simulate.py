@@ -10,10 +10,12 @@ import typer
 from .._io import staged_folder
 from ._app import app, check_output, compile_ahead, console, json_text, new_table, print_json
 
-#: What a simulate run writes (the scenario copied under its own name): a folder holding
-#: these and summary.json + config.json is a previous run, replaced by the next one
+#: What a simulate run writes, by exact name (the scenario copied as scenario.toml, its
+#: path in summary.json): a folder holding these and summary.json + config.json is a
+#: previous run, replaced by the next one. By name, not "*.toml": a user's own .toml
+#: file in that folder was deleted by the next run
 SIMULATE_FILES = ("history.parquet", "history.csv", "summary.json", "config.json",
-                  "force_vs_time.png", "*.toml")
+                  "force_vs_time.png", "scenario.toml")
 
 
 def _compile_ahead() -> None:
@@ -62,11 +64,12 @@ def simulate_cmd(
         summary = dict(result.summary())
         summary |= {"engine": engine, "contact_whole_window": not result.separated,
                     "t_after": cfg.t_after, "A_rows": result.A_rows, "stats": result.stats,
-                    "q_minus": result.q_minus, "v_minus": result.v_minus}
+                    "q_minus": result.q_minus, "v_minus": result.v_minus,
+                    "scenario": str(Path(file).resolve())}
         (work / "summary.json").write_text(json_text(summary))
         (work / "config.json").write_text(json_text(cfg.model_dump(mode="json")
                                                     | {"engine": engine}))
-        shutil.copyfile(file, work / Path(file).name)
+        shutil.copyfile(file, work / "scenario.toml")
         if plot:
             from ..report.simulation import plot_force_history
 
