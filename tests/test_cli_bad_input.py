@@ -172,6 +172,9 @@ def _write_inputs(d: Path) -> None:
     garbage = d / "garbage_trials"
     garbage.mkdir()
     (garbage / "trials.toml").write_text(TRIALS)
+    # the trials' scenario beside them: experiment reads it before any recording
+    for where in (d, garbage):
+        (where / "rover.toml").write_text((EX / "experiment" / "rover.toml").read_text())
     for f in (EX / "experiment").glob("trial_*.csv"):
         (garbage / f.name).write_text("garbage\n")
     (d / "a_file").write_text("x")

@@ -119,9 +119,9 @@ def _arm(model, q):
                          f", got {q.shape}")
     check_configuration(model.model, q)  # NaN, a (cos, sin) pair or quaternion not unit
     if model.loop_closure is not None:  # a mimic joint at its leader's value, loops closed
-        from ..scenario.build import _check_loop_closed
+        from ..scenario.build import check_loop_closed
 
-        _check_loop_closed(model, *model.loop_closure(q))
+        check_loop_closed(model, *model.loop_closure(q))
     return cs, q
 
 

@@ -463,15 +463,15 @@ def _warn_ground_gaps(mbm, q, scenario: Scenario, data) -> None:
 
 
 def _check_loops(mbm, q, v, *, positions: bool) -> None:
-    """:func:`_check_loop_closed` (if ``positions``) and :func:`_check_loop_rates` on one
+    """:func:`check_loop_closed` (if ``positions``) and :func:`_check_loop_rates` on one
     evaluation of the loop-closure residual and rows."""
     phi, J = mbm.loop_closure(q)
     if positions:
-        _check_loop_closed(mbm, phi, J)
+        check_loop_closed(mbm, phi, J)
     _check_loop_rates(mbm, J, v)
 
 
-def _check_loop_closed(mbm, phi, J, atol: float = 1e-9) -> None:
+def check_loop_closed(mbm, phi, J, atol: float = 1e-9) -> None:
     """Refuse a configuration whose joint values open a built-in closed loop (the
     rocker-bogie's differential: one rocker turned, the other not), named by loop row;
     the loop-closure rows would otherwise hold a mechanism that cannot be assembled.
