@@ -473,6 +473,11 @@ CASES = [
      "not_a_table"),
     ("report-n-boot", ["report", "{o}/res", "--n-boot", "-1"], ["{o}/res"], "--n-boot",
      "results"),
+    # one resample gave an "interval" of one number: 0 (none) or at least 100
+    ("report-n-boot-one", ["report", "{o}/res", "--n-boot", "1"], ["{o}/res"],
+     "at least 100", "results"),
+    ("reproduce-n-boot-one", ["reproduce", "--quick", "--n-boot", "1", "-o", "{o}/rq"],
+     ["{o}/rq"], "at least 100", None),
     # reproduce
     ("reproduce-quick-over-full", ["reproduce", "--quick", "-o", "{o}/full"], ["{o}/full"],
      "full reproduction", "full"),

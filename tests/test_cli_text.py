@@ -177,7 +177,7 @@ TABLES = {
     "simulate": (["simulate", str(EX / "simulate_rover2d.toml"), "-o", "{tmp}/sim",
                   "--no-plot"], [], ["F_max (sum of obstacle contacts)",
                                      "T_c^- (effective kinetic energy)"]),
-    "report": (["report", "{studies}/repro", "--n-boot", "50"], [],
+    "report": (["report", "{studies}/repro", "--n-boot", "100"], [],
                ["DETC2014 Fig. 2", "DETC2014 Fig. 3", "DETC2015 Fig. 2", "concordant"]),
     "report (no F_max)": (["report", "{studies}/rb", "--n-boot", "0"], [],
                           ["rb", "F_max n/a"]),
@@ -210,7 +210,7 @@ def test_tables_read_at_80_columns(capsys, tmp_path, studies, name):
 
 
 def test_agreement_table_says_whole_window_cases_are_excluded(capsys, studies):
-    assert main(["report", str(studies / "repro"), "--n-boot", "20"]) == 0
+    assert main(["report", str(studies / "repro"), "--n-boot", "100"]) == 0
     out = capsys.readouterr().out
     rows = [ln.split() for ln in out.splitlines() if "Spearman" in ln]
     # study label, cases, n, excl.: 5 cases, 4 used, 1 whole-window case excluded
@@ -250,7 +250,7 @@ JSON = {
                    "--no-plot", "--json"],
     "simulate": ["simulate", str(EX / "simulate_rover2d.toml"), "-o", "{tmp}/s",
                  "--no-plot", "--json"],
-    "report": ["report", "{studies}/repro", "--n-boot", "20", "--json"],
+    "report": ["report", "{studies}/repro", "--n-boot", "100", "--json"],
     "sweep": ["sweep", str(EX / "study_rigid_body.toml"), "-o", "{tmp}/sw", "--json"],
     "optimize": ["optimize", "{tmp}/opt.toml", "--no-simulate", "--json"],
 }

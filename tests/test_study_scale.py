@@ -243,12 +243,12 @@ def test_large_report_streams_and_matches_the_full_path(tmp_path, monkeypatch):
         "obstacle.beta_deg": {"low": 5.0, "high": 85.0},
         "model.params.com_height": {"low": 0.1, "high": 0.6}}}}
     res = run_study(study, tmp_path / "b", evaluator=EV, chunk_size=64)
-    full = report_html.analyse_folder(tmp_path / "b", n_boot=50)
+    full = report_html.analyse_folder(tmp_path / "b", n_boot=100)
     monkeypatch.setattr(report_html, "LARGE_TABLE", 100)
     monkeypatch.setattr(report_summary, "SAMPLE_ROWS", 1000)
     monkeypatch.setattr(report_summary, "BATCH", 37)
     monkeypatch.setattr(pd, "read_parquet", lambda *a, **k: pytest.fail("table read whole"))
-    big = report_html.analyse_folder(tmp_path / "b", n_boot=50)
+    big = report_html.analyse_folder(tmp_path / "b", n_boot=100)
     monkeypatch.undo()
     assert big.n_rows == 300 and big.n_cases == 300 and len(big.head) == 200
     assert big.agreement.spearman.value == pytest.approx(full.agreement.spearman.value,

@@ -44,8 +44,8 @@ def test_report_excludes_them_and_says_how_many(tmp_path):
     (tmp_path / "manifest.json").write_text(json.dumps(
         {"name": "s", "parameters": ["obstacle.beta_deg"], "x": "obstacle.beta_deg",
          "simulate": True}))
-    s = analyse_folder(tmp_path, n_boot=50, seed=1)
-    ref = agreement(T[1:], F[1:], n_boot=50, seed=1)  # the statistics of the other five
+    s = analyse_folder(tmp_path, n_boot=100, seed=1)
+    ref = agreement(T[1:], F[1:], n_boot=100, seed=1)  # the statistics of the other five
     assert s.agreement.n == 5 and s.n_whole_window == 1
     assert s.agreement.spearman.value == pytest.approx(ref.spearman.value)
     assert s.n_text == "n = 5 (1 whole-window case excluded)"

@@ -200,7 +200,8 @@ def _failed_simulations(failures, n_cases: int, allowed: bool) -> int:
 @app.command("report")
 def report_cmd(
     results: Path = typer.Argument(..., help="A results folder (of sweep or reproduce)."),
-    n_boot: int = typer.Option(1000, "--n-boot", min=0, help="Bootstrap resamples."),
+    n_boot: int = typer.Option(1000, "--n-boot", min=0, help="Bootstrap resamples of the "
+                               "intervals: 0 for none, else at least 100."),
     seed: int = typer.Option(0, "--seed", help="Bootstrap seed."),
     as_json: bool = typer.Option(False, "--json", help="Print the statistics as JSON."),
 ) -> None:
@@ -229,7 +230,8 @@ def reproduce_cmd(
                                    "reproduction in the folder."),
     workers: int = typer.Option(None, "--workers", help="Local Dask cluster of N processes."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler tcp://HOST:PORT."),
-    n_boot: int = typer.Option(1000, "--n-boot", min=0, help="Bootstrap resamples."),
+    n_boot: int = typer.Option(1000, "--n-boot", min=0, help="Bootstrap resamples of the "
+                               "intervals: 0 for none, else at least 100."),
     as_json: bool = typer.Option(False, "--json", help="Print the statistics as JSON (the "
                                  "progress bar goes to stderr)."),
     allow_failures: bool = typer.Option(False, "--allow-failures",

@@ -22,7 +22,7 @@ import pandas as pd
 from .._io import check_writable
 from ..exceptions import ConfigError
 from ..studies.indicators import IndicatorComparison, compare_indicators, with_baselines
-from ..studies.stats import Agreement, ForceRatios, agreement, force_ratios
+from ..studies.stats import Agreement, ForceRatios, agreement, check_n_boot, force_ratios
 from ..studies.store import (
     CHUNKS,
     RESULTS,
@@ -170,6 +170,7 @@ def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> 
     whole (:func:`_analyse_large`): the figure shows exact per-bin summaries of every case
     and the statistics come from a seeded random sample, as the report says.
     """
+    check_n_boot(n_boot)
     folder = Path(folder)
     if (folder / RESULTS).is_file() and results_rows(folder / RESULTS) > LARGE_TABLE:
         return _analyse_large(folder, n_boot=n_boot, seed=seed)
@@ -532,6 +533,7 @@ def build_report(root: str | Path, *, title: str | None = None, intro: str = "",
 
     A reproduction folder missing some of the built-in studies says so at the top of the
     report (:func:`missing_studies_note`)."""
+    check_n_boot(n_boot)  # before any work
     root = Path(root)
     folders = find_study_folders(root)
     note = missing_studies_note(root)

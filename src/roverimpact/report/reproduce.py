@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..studies.reproduce import run_builtin_studies
+from ..studies.stats import check_n_boot
 from .html import build_report
 
 __all__ = ["INTRO", "ReproduceResult", "reproduce"]
@@ -82,6 +83,7 @@ def reproduce(
     -------
     ReproduceResult
     """
+    check_n_boot(n_boot)  # before the studies run, not after
     out_dir = Path(out_dir)
     run_builtin_studies(out_dir, quick=quick, workers=workers, scheduler=scheduler,
                         progress=progress, overwrite=overwrite, note=note)

@@ -240,6 +240,18 @@ def _boot_stats(x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return out
 
 
+#: Fewest bootstrap resamples of an interval: fewer give tail percentiles of a handful of
+#: resamples (one resample gave an "interval" of one number); ``n_boot = 0``: no interval.
+MIN_BOOT = 100
+
+
+def check_n_boot(n_boot) -> None:
+    if isinstance(n_boot, bool) or not isinstance(n_boot, (int, np.integer)) or not (
+            n_boot == 0 or n_boot >= MIN_BOOT):
+        raise InputError(f"n_boot must be 0 (no intervals) or a whole number of at least "
+                         f"{MIN_BOOT} resamples, got {n_boot!r}")
+
+
 def agreement(x, y, *, n_boot: int = 1000, confidence: float = 0.95, seed: int = 0) -> Agreement:
     """Rank and linear agreement of ``x`` (e.g. T_c^-) with ``y`` (e.g. F_max).
 
@@ -260,8 +272,7 @@ def agreement(x, y, *, n_boot: int = 1000, confidence: float = 0.95, seed: int =
     """
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be in (0, 1), got {confidence}")
-    if n_boot < 0:
-        raise InputError(f"n_boot must be >= 0, got {n_boot}")
+    check_n_boot(n_boot)
     x, y = _clean(x, y)
     n = x.size
     point = _corrs(x, y)
@@ -303,8 +314,7 @@ def spearman_difference(x1, x2, y, *, n_boot: int = 1000, confidence: float = 0.
     """
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be in (0, 1), got {confidence}")
-    if n_boot < 0:
-        raise InputError(f"n_boot must be >= 0, got {n_boot}")
+    check_n_boot(n_boot)
     a = np.asarray(x1, dtype=float).ravel()
     b = np.asarray(x2, dtype=float).ravel()
     c = np.asarray(y, dtype=float).ravel()
