@@ -129,7 +129,7 @@ def test_report_regenerates_without_recomputing(quick, tmp_path, capsys):
         (copy / stem / "figure.png").unlink()
     (copy / "report.html").unlink()
     before = {p: p.stat().st_mtime_ns for p in copy.glob("*/results.parquet")}
-    assert main(["report", str(copy), "--n-boot", "50"]) == 0
+    assert main(["report", str(copy), "--n-boot", "100"]) == 0
     assert (copy / "report.html").is_file()
     for stem in BUILTIN_STUDIES:
         assert (copy / stem / "figure.png").is_file()
