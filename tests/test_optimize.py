@@ -145,6 +145,11 @@ def _bad(section, **kw):
     (_bad("optimize", objective="best"), "objective"),
     (_bad("scenario", model={"name": "rigid_body"}), "rover2d"),
     ({**PROBLEM, "simulation": {"mu": 0.1}}, r"write \[scenario.simulation\]"),
+    # no speed anywhere: named as optimize.speed or scenario.velocity.u (it said
+    # "simulate needs velocity.u", also with --no-simulate)
+    ({**PROBLEM, "scenario": {k: v for k, v in PROBLEM["scenario"].items()
+                              if k != "velocity"}},
+     r"give the driving speed, optimize.speed or scenario.velocity.u > 0"),
 ])
 def test_bad_files(data, match):
     from roverimpact.studies.optimize import load_optimization
@@ -209,3 +214,30 @@ def test_rocker_bogie_reconfiguration_end_to_end():
     assert nominal.objective == pytest.approx(worst(nominal.values), rel=1e-9)
     assert best.objective < 0.8 * nominal.objective
     assert res.F_sim_best < res.F_sim_nominal
+
+
+def test_a_nominal_outside_the_bounds_is_not_the_optimum():
+    """Bounds h in [0.25, 0.3] that exclude the nominal h = 0.35: the optimum is the best
+    setting inside them (against a grid of worst-case T_c^- computed one scenario at a
+    time), not the nominal, which was reported with 'reduced by 0.0 %'."""
+    from roverimpact.scenario import energy_of, scenario_from_dict
+    from roverimpact.studies.optimize import optimize_setting
+
+    spec = {**PROBLEM["optimize"], "variables": {"h": [0.25, 0.3]}, "n_starts": 2,
+            "n_beta": 4}
+    res = optimize_setting({"scenario": PROBLEM["scenario"], "optimize": spec},
+                           simulate=False)
+    assert not res.nominal_in_bounds
+    assert 0.25 - 1e-12 <= res.best.values["h"] <= 0.3 + 1e-12
+    betas = np.linspace(*spec["beta_deg"], spec["n_beta"])
+
+    def worst(h):
+        return max(float(energy_of(scenario_from_dict(
+            {**PROBLEM["scenario"], "model": {"name": "rover2d", "params": {"h": h}},
+             "obstacle": {"wheel": "front", "beta_deg": float(b)}})).T_c_minus)
+            for b in betas)
+
+    grid = [worst(h) for h in np.linspace(0.25, 0.3, 6)]
+    assert res.best.objective <= min(grid) * (1 + 1e-9)
+    assert res.best.objective == pytest.approx(worst(res.best.values["h"]), rel=1e-9)
+    assert res.reduction < 0  # worse than the nominal, which the bounds exclude

@@ -40,7 +40,8 @@ def optimize_cmd(
         print_json({"objective": spec.objective, "beta_deg": spec.beta_deg,
                     "nominal": point(n, res.F_sim_nominal if simulate else None),
                     "optimum": point(b, res.F_sim_best if simulate else None),
-                    "reduction": res.reduction, "figures": figures})
+                    "reduction": res.reduction, "nominal_in_bounds": res.nominal_in_bounds,
+                    "figures": figures})
         return
     tab = new_table(f"Suspension setting ({spec.objective}-case T_c^-, beta "
                     f"{spec.beta_deg[0]:g}-{spec.beta_deg[1]:g} deg)", "", "nominal", "optimum")
@@ -55,6 +56,10 @@ def optimize_cmd(
     tab.add_row("clearance [m]", f"{n.clearance:.4g}", f"{b.clearance:.4g}")
     console.print(tab)
     console.print(f"T_c^- reduced by {100 * res.reduction:.1f} %")
+    if not res.nominal_in_bounds:
+        console.print("note: the nominal setting lies outside the bounds of [optimize] "
+                      "variables, so it was not a candidate: the optimum is the best setting "
+                      "inside them, compared with the nominal", highlight=False)
     if simulate:
         console.print(f"simulated peak force at beta = {res.sim_betas_deg} deg: "
                       f"{res.F_sim_nominal:.4g} N -> {res.F_sim_best:.4g} N", highlight=False)

@@ -1,4 +1,5 @@
-r"""Write a built-in rover (any Pinocchio tree of 1-DoF joints) as a MuJoCo MJCF file.
+r"""Write a built-in rover (a Pinocchio tree of 1-DoF revolute and prismatic joints;
+continuous joints are refused) as a MuJoCo MJCF file.
 
 :func:`export_mjcf` is the MJCF sibling of :func:`~roverimpact.models.robot.export_urdf`:
 the same bodies, inertias and joints, plus what MuJoCo needs to simulate the rover:

@@ -37,7 +37,7 @@ def draw_setup(setup, path: str | Path | None = None, *, title: str | None = Non
     title : str, optional
         Figure title (default: model name, beta/normal, T_c^-).
     normal_length : float, optional
-        Length of the drawn normal arrow [m] (default: a fifth of the model's size).
+        Length of the drawn normal arrow [m] (default: a quarter of the model's size).
 
     Returns
     -------

@@ -27,7 +27,9 @@ with
   suspension joints (rocker and bogie pivots) (:func:`roverimpact.models.geometry.clearance`).
 
 ``scipy.optimize.minimize`` (SLSQP) runs from ``n_starts`` starts in the unit-scaled box:
-the nominal setting and seeded uniform draws; the best feasible end point wins. The
+the nominal setting (its nearest point in the bounds if it lies outside them) and
+seeded uniform draws; the best feasible end point wins, and the nominal itself if it lies
+inside the bounds and is better. The
 result is then checked with the compliant-contact simulator at the worst-case betas of
 the nominal and of the optimum (:func:`roverimpact.simulate.simulate_impact`).
 
@@ -37,7 +39,7 @@ Optimisation file (TOML, every table validated, unknown keys rejected)::
     model = { name = "rover2d" }
     velocity = { u = 0.3 }
     obstacle = { wheel = "front", beta_deg = 45 }
-    [simulation]                  # optional: SimulationConfig options for the check
+    [scenario.simulation]         # optional: SimulationConfig options for the check
     [optimize]
     variables = { h = [0.25, 0.45], wheelbase = [0.5, 0.8] }   # model parameters, SI
     objective = "worst"           # or "mean"
@@ -196,6 +198,10 @@ def load_optimization(source: str | Path | Mapping[str, Any]) -> OptimizeProblem
         raise ConfigError(f"{where}: scenario: {exc}") from None
     if setup.scenario.obstacle.wheel is None:
         raise ConfigError(f"{where}: scenario.obstacle must name a wheel")
+    if not (setup.scenario.velocity.u or 0.0) > 0.0:  # the approach speed of the prediction
+        raise ConfigError(f"{where}: give the driving speed, optimize.speed or "
+                          "scenario.velocity.u > 0 [m/s]: the predicted peak force (and the "
+                          "simulator's check) need it")
     nominal = {v: float(setup.model.params[v]) for v in f.optimize.variables}
     problem = OptimizeProblem(scenario=scn, spec=f.optimize, nominal=nominal)
     _check_bounds(problem, where)
@@ -327,6 +333,10 @@ class OptimizeResult:
         Betas simulated.
     starts : list of dict
         Per start: start point, end point, objective, feasible, success.
+    nominal_in_bounds : bool
+        Whether the nominal setting lies inside the bounds of ``[optimize] variables``.
+        If not, it is not a candidate: ``best`` is the best setting inside the bounds and
+        ``reduction`` may be negative.
     """
 
     problem: OptimizeProblem
@@ -338,6 +348,7 @@ class OptimizeResult:
     F_sim_best: float = math.nan
     sim_betas_deg: list = field(default_factory=list)
     starts: list = field(default_factory=list)
+    nominal_in_bounds: bool = True
 
 
 def _feasible(r: SettingReport, spec: OptimizeSpec, tol: float = 1e-6) -> bool:
@@ -391,7 +402,11 @@ def optimize_setting(problem: OptimizeProblem | str | Path | Mapping[str, Any], 
     cons = [{"type": "ineq", "fun": lambda u: report(u).margin - spec.stability_margin},
             {"type": "ineq", "fun": lambda u: report(u).clearance - spec.min_clearance}]
     rng = np.random.default_rng(spec.seed)
-    u_nom = np.clip((np.array([problem.nominal[n] for n in names]) - lo) / (hi - lo), 0, 1)
+    u_raw = (np.array([problem.nominal[n] for n in names]) - lo) / (hi - lo)
+    # the nominal setting is a candidate only inside the bounds (else the search's first
+    # start is its nearest point in them): one outside was reported as the optimum
+    inside = bool(np.all((u_raw >= -1e-12) & (u_raw <= 1.0 + 1e-12)))
+    u_nom = np.clip(u_raw, 0, 1)
     starts = [u_nom] + [rng.uniform(0.0, 1.0, len(names)) for _ in range(spec.n_starts - 1)]
     best, log = None, []
     for u0 in starts:
@@ -405,7 +420,8 @@ def optimize_setting(problem: OptimizeProblem | str | Path | Mapping[str, Any], 
                     "success": bool(res.success)})
         if ok and (best is None or r.objective < best.objective):
             best = r
-    if _feasible(nominal, spec) and (best is None or nominal.objective < best.objective):
+    if inside and _feasible(nominal, spec) and (best is None
+                                                or nominal.objective < best.objective):
         best = nominal
     if best is None:
         raise SolverError(
@@ -414,7 +430,8 @@ def optimize_setting(problem: OptimizeProblem | str | Path | Mapping[str, Any], 
             f"{spec.n_starts} starts: widen the bounds or relax the constraints")
     out = OptimizeResult(problem=problem, nominal=nominal, best=best,
                          betas_deg=problem.betas_deg,
-                         reduction=1.0 - best.objective / scale, starts=log)
+                         reduction=1.0 - best.objective / scale, starts=log,
+                         nominal_in_bounds=inside)
     if simulate:
         out.sim_betas_deg = sorted({nominal.beta_worst_deg, best.beta_worst_deg})
         out.F_sim_nominal = _simulated_peak(problem, problem.nominal, out.sim_betas_deg)
