@@ -44,6 +44,40 @@ def test_clipped_channel_fails_the_trial(tmp_path):
         assert "'ch1_V' is clipped" in f.message and "maximum 10" in f.message
 
 
+def _quantized(tmp_path, peaks, fs=20000.0, bits=12):
+    """Recordings of half-sines of 20 ms through a 250 N/V cell and a ``bits``-bit ADC of
+    +-10 V with 0.2 codes rms of noise (readings on its codes; above 10 V it saturates)."""
+    t = np.arange(int(fs)) / fs
+    q = 20.0 / 2**bits
+    rng = np.random.default_rng(3)
+    lines = ['[sensors]', 'channels = ["ch1"]', 'units = "V"', 'gains = [250.0]', '']
+    for i, P in enumerate(peaks):
+        v = _half_sine(t, 0.5, 0.02, P) / 250.0 + 0.1 + rng.normal(0.0, 0.2 * q, len(t))
+        v = np.clip(np.round(v / q) * q, -10, 10)
+        pd.DataFrame({"time_s": t, "ch1_V": v}).to_csv(tmp_path / f"q{i}.csv", index=False)
+        lines += ["[[trial]]", f'file = "q{i}.csv"', f"beta_deg = {30 + 10 * i}",
+                  "speed = 0.3", ""]
+    (tmp_path / "trials.toml").write_text("\n".join(lines))
+    return ex.run_experiment(tmp_path / "trials.toml"), t, q
+
+
+def test_a_quantized_smooth_peak_is_not_clipped(tmp_path):
+    """A 1000 N peak read by a 12-bit ADC at 20 kHz stays on its top code for 4 samples,
+    reached and left by one code: measured (within a code), not failed as clipped, which
+    the flat-top rule alone did. The same ADC saturating on a 3000 N pulse (entered by 6
+    codes) still fails."""
+    from roverimpact.experiments.recording import CLIP_SAMPLES, true_runs
+
+    res, _, q = _quantized(tmp_path, [1000.0, 3000.0])
+    v = pd.read_csv(tmp_path / "q0.csv")["ch1_V"].to_numpy()
+    top_run = max(n for _, n in true_runs(v >= v.max() - 1e-6 * np.ptp(v)))
+    assert top_run == 4 >= CLIP_SAMPLES  # the rule's length alone would call it clipped
+    assert list(res.trials["file"]) == ["q0.csv"]
+    assert res.trials["F_peak"].iloc[0] == pytest.approx(1000.0, abs=250.0 * q)
+    (f,) = res.failures
+    assert f.trial == 1 and "'ch1_V' is clipped" in f.message
+
+
 def test_full_scale_of_the_sensor(tmp_path):
     """With full_scale stated, a reading reaching it fails even without a flat top."""
     res = _set(tmp_path, [1500.0], extra="full_scale = 8.0")

@@ -16,8 +16,18 @@ from .trials import SensorsConfig
 __all__ = ["CLIP_SAMPLES", "TrialDataError", "TrialFailure", "read_recording", "true_runs"]
 
 #: A channel whose maximum is held for this many consecutive samples or more (equal within
-#: 1e-6 of its range) is clipped: the sensor or the ADC saturated, and the peak is lost.
+#: 1e-6 of its range), entered and left by steps larger than :data:`CLIP_STEP_QUANTA` of
+#: its quantum, is clipped: the sensor or the ADC saturated, and the peak is lost.
 CLIP_SAMPLES = 4
+
+#: The steps into and out of a flat top of a clipped channel exceed this many quanta of
+#: the channel (its smallest step between two distinct readings). A smooth peak read by
+#: an ADC also stays on its top code for several samples (a 1000 N half-sine of 20 ms
+#: through a 12-bit +-10 V ADC at 250 N/V with 0.2 codes rms of noise, sampled at 20 kHz:
+#: 4 samples, ``tests/test_experiment_recording.py``), but reaches and leaves it by one
+#: quantum; a saturated one arrives at the slope of the pulse. The quantum is estimated
+#: from the readings, so a noise-free recording (whose steep parts skip codes) may hide it.
+CLIP_STEP_QUANTA = 2.0
 
 
 class TrialDataError(InputError):
@@ -89,7 +99,16 @@ def _check_not_clipped(name: str, t, x, col: str, full_scale: float | None) -> N
             f"{i + 1} (t = {t[i]:.6g} s): saturated, the peak is lost; re-record with a "
             "larger range")
     tol = 1e-6 * float(np.nanmax(x) - np.nanmin(x))
-    runs = [r for r in true_runs(x >= top - tol) if r[1] >= CLIP_SAMPLES]
+    values = np.unique(x[np.isfinite(x)])
+    quantum = float(np.diff(values).min()) if values.size > 1 else 0.0
+    step = max(CLIP_STEP_QUANTA * quantum, tol)
+
+    def steep(i: int, n: int) -> bool:  # entered and left by more than a few quanta
+        into = top - x[i - 1] if i > 0 else np.inf
+        out = top - x[i + n] if i + n < len(x) else np.inf
+        return bool(min(into, out) > step)  # NaN neighbours: not steep
+
+    runs = [r for r in true_runs(x >= top - tol) if r[1] >= CLIP_SAMPLES and steep(*r)]
     if runs and tol > 0:
         i, n = runs[0]
         raise TrialDataError(
