@@ -427,13 +427,19 @@ class JointCoupling:
 
 
 def mimic_rows(mbm) -> tuple[list[str], list[str], list[list[float]], list[float]]:
-    """``(labels, joints, C, c0)`` of the mimic couplings in ``params["mimic"]``."""
-    mimic = (getattr(mbm, "params", None) or {}).get("mimic", [])
+    """``(labels, joints, C, c0)`` of the couplings in ``params["mimic"]`` (a row
+    ``"mimic:<joint>"`` each) and ``params["couplings"]`` (``[label, joints, coefficients,
+    offset]``: MJCF tendon equalities over fixed tendons, a row ``label`` each)."""
+    params = getattr(mbm, "params", None) or {}
+    mimic = params.get("mimic", [])
+    general = params.get("couplings", [])
     joints: list[str] = []
     for f, lead, _a, _b in mimic:
         for nm in (f, lead):
             if nm is not None and nm not in joints:
                 joints.append(nm)
+    for _lab, names, _coefs, _off in general:
+        joints.extend(nm for nm in names if nm not in joints)
     C, c0, labels = [], [], []
     for f, lead, a, b in mimic:
         row = [0.0] * len(joints)
@@ -443,6 +449,13 @@ def mimic_rows(mbm) -> tuple[list[str], list[str], list[list[float]], list[float
         C.append(row)
         c0.append(-float(b))
         labels.append(f"mimic:{f}")
+    for lab, names, coefs, off in general:
+        row = [0.0] * len(joints)
+        for nm, x in zip(names, coefs, strict=True):
+            row[joints.index(nm)] += float(x)
+        C.append(row)
+        c0.append(float(off))
+        labels.append(str(lab))
     return labels, joints, C, c0
 
 
@@ -463,9 +476,12 @@ def apply_couplings(mbm, q) -> np.ndarray:
 
 
 def attach_couplings(mbm) -> None:
-    """Add the mimic couplings of ``mbm.params["mimic"]`` to ``mbm.loop_closure`` (one
-    :class:`JointCoupling` holding the model's linear loop rows, if any, and one row
-    ``"mimic:<joint>"`` per mimic joint) and make ``params["q_nominal"]`` satisfy them.
+    """Add the couplings of ``mbm.params["mimic"]`` and ``mbm.params["couplings"]`` to
+    ``mbm.loop_closure`` (one :class:`JointCoupling` holding the model's linear loop rows,
+    if any, one row ``"mimic:<joint>"`` per mimic joint and one per general coupling) and
+    make ``params["q_nominal"]`` satisfy them: mimic joints are set from their leaders,
+    then, if a row still does not hold, the coupled joint values move by the least-squares
+    (minimum-norm) correction onto all rows.
 
     Raises
     ------
@@ -505,4 +521,22 @@ def attach_couplings(mbm) -> None:
 
     q0 = mbm.params.get("q_nominal")
     q0 = pin.neutral(mbm.model) if q0 is None else np.asarray(q0, dtype=float)
-    mbm.params["q_nominal"] = [float(x) for x in apply_couplings(mbm, q0)]
+    q0 = apply_couplings(mbm, q0)
+    q0 = _project_rows(mbm.loop_closure, q0)
+    mbm.params["q_nominal"] = [float(x) for x in q0]
+
+
+def _project_rows(lc: JointCoupling, q: np.ndarray, atol: float = 1e-12) -> np.ndarray:
+    """``q`` moved onto ``phi(q) = 0`` by ``theta -= C^+ phi`` over the coupled joints that
+    are not continuous (rows linear in them: one step is exact); ``q`` itself when the rows
+    hold already."""
+    phi, _ = lc(q)
+    if not np.any(np.abs(phi) > atol):
+        return q
+    C = np.asarray(lc.coefficients, dtype=float).reshape(-1, len(lc.joints))
+    free = [i for i, cont in enumerate(lc.continuous) if not cont]
+    dtheta = -np.linalg.pinv(C[:, free]) @ phi
+    q = np.array(q, dtype=float)
+    for i, d in zip(free, dtheta, strict=True):
+        q[lc.idx_q[i]] += d
+    return q

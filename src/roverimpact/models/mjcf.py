@@ -284,7 +284,7 @@ def pinocchio_from_mujoco(m, *, name: str | None = None) -> tuple[pin.Model, dic
             "contype": int(m.geom_contype[g]),
             "conaffinity": int(m.geom_conaffinity[g]),
         })
-    mimic, ignored = _joint_equalities(mujoco, m, joint_names)
+    mimic, couplings, ignored = _joint_equalities(mujoco, m, joint_names)
     info = {
         "mujoco": {"nq": int(m.nq), "nv": int(m.nv), "joints": jmap,
                    "qpos0": [float(x) for x in m.qpos0]},
@@ -294,38 +294,98 @@ def pinocchio_from_mujoco(m, *, name: str | None = None) -> tuple[pin.Model, dic
     }
     if mimic:
         info["mimic"] = mimic
+    if couplings:
+        info["couplings"] = couplings
     if ignored:
-        info["mujoco_equalities_ignored"] = ignored
+        info["mujoco_equalities_ignored"] = [nm for nm, _why in ignored]
+        info["mujoco_equalities_ignored_why"] = [f"{nm!r} ({why})" for nm, why in ignored]
     q0, _ = state_to_pinocchio(model, info["mujoco"], np.asarray(m.qpos0, dtype=float), None)
     info["q_nominal"] = [float(x) for x in q0]
     return model, info
 
 
-def _joint_equalities(mujoco, m, joint_names):
-    """Linear joint equalities as mimic couplings ``[joint, leader or None, a, b]``
-    (``theta_1 = a theta_2 + b``); the other equalities, by name, as ignored.
+def _fixed_tendon(mujoco, m, t: int, joint_names) -> list[tuple[str, float]] | None:
+    """``[(joint, coef), ...]`` of fixed tendon ``t`` (its length is ``sum coef qpos``), or
+    ``None`` if it is spatial or runs over a joint that is not a hinge or a slide."""
+    terms = []
+    for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t])):
+        if int(m.wrap_type[w]) != int(mujoco.mjtWrap.mjWRAP_JOINT):
+            return None
+        j = int(m.wrap_objid[w])
+        if _MJ_JOINT.get(int(m.jnt_type[j])) not in ("hinge", "slide"):
+            return None
+        terms.append((joint_names[j], float(m.wrap_prm[w])))
+    return terms
 
-    MuJoCo: ``theta_1 - ref_1 = c0 + c1 (theta_2 - ref_2)`` (refs: ``qpos0``), so
-    ``a = c1``, ``b = ref_1 + c0 - c1 ref_2``; without ``joint2``, ``theta_1 = ref_1 + c0``.
+
+def _joint_equalities(mujoco, m, joint_names):
+    r"""MuJoCo's linear equalities as constraint rows; the others, by name, as ignored.
+
+    Returns ``(mimic, couplings, ignored)``:
+
+    * ``mimic``: joint equalities as couplings ``[joint, leader or None, a, b]``
+      (``theta_1 = a theta_2 + b``). MuJoCo: ``theta_1 - ref_1 = c0 + c1 (theta_2 -
+      ref_2)`` (refs: ``qpos0``), so ``a = c1``, ``b = ref_1 + c0 - c1 ref_2``; without
+      ``joint2``, ``theta_1 = ref_1 + c0`` (MuJoCo then uses ``c0`` only).
+    * ``couplings``: tendon equalities over fixed tendons as rows ``[label, joints,
+      coefficients, offset]``, ``phi = sum_i C_i theta_i + offset = 0``, label
+      ``"tendon:<equality>"``. A fixed tendon's length is ``L = sum_i coef_i qpos_i``, and
+      MuJoCo holds ``L_1 - L_1^0 = c0 + c1 (L_2 - L_2^0)`` (``L^0``: the length at
+      ``qpos0``, ``tendon_length0``); without ``tendon2``, ``L_1 - L_1^0 = c0``. So ``C =
+      coef_1 - c1 coef_2`` and ``offset = -(L_1^0 + c0) + c1 L_2^0``: ``phi`` is MuJoCo's
+      residual ``efc_pos`` and ``C`` its row of ``efc_J``.
+    * ``ignored``: ``(name, reason)`` of the others: connect and weld equalities, a
+      nonzero quadratic or higher ``polycoef`` term between two joints or tendons
+      (nonlinear), spatial tendons.
     """
-    mimic, ignored = [], []
+    mimic, couplings, ignored = [], [], []
+    kinds = {int(mujoco.mjtEq.mjEQ_CONNECT): "connect", int(mujoco.mjtEq.mjEQ_WELD): "weld"}
     for e in range(m.neq):
         nm = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, e) or f"equality{e}"
         if not m.eq_active0[e]:
             continue
         poly = np.asarray(m.eq_data[e, :5], dtype=float)
-        if int(m.eq_type[e]) != int(mujoco.mjtEq.mjEQ_JOINT) or np.any(poly[2:] != 0.0):
-            ignored.append(nm)
+        kind = int(m.eq_type[e])
+        o1, o2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
+        c0, c1 = float(poly[0]), float(poly[1])
+        if kind not in (int(mujoco.mjtEq.mjEQ_JOINT), int(mujoco.mjtEq.mjEQ_TENDON)):
+            ignored.append((nm, kinds.get(kind, f"type {kind}")))
             continue
-        j1, j2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
-        ref1 = float(m.qpos0[m.jnt_qposadr[j1]])
-        if j2 < 0:
-            mimic.append([joint_names[j1], None, 0.0, ref1 + float(poly[0])])
-        else:
-            ref2 = float(m.qpos0[m.jnt_qposadr[j2]])
-            c0, c1 = float(poly[0]), float(poly[1])
-            mimic.append([joint_names[j1], joint_names[j2], c1, ref1 + c0 - c1 * ref2])
-    return mimic, ignored
+        what = "joint" if kind == int(mujoco.mjtEq.mjEQ_JOINT) else "tendon"
+        if o2 >= 0 and np.any(poly[2:] != 0.0):
+            ignored.append((nm, f"{what} equality, nonlinear polycoef {poly.tolist()}"))
+            continue
+        if what == "joint":
+            ref1 = float(m.qpos0[m.jnt_qposadr[o1]])
+            if o2 < 0:
+                mimic.append([joint_names[o1], None, 0.0, ref1 + c0])
+            else:
+                ref2 = float(m.qpos0[m.jnt_qposadr[o2]])
+                mimic.append([joint_names[o1], joint_names[o2], c1, ref1 + c0 - c1 * ref2])
+            continue
+        row: dict[str, float] = {}
+        offset = -(float(m.tendon_length0[o1]) + c0)
+        spatial = None
+        for t, scale in ((o1, 1.0), (o2, -c1)):
+            if t < 0:
+                continue
+            terms = _fixed_tendon(mujoco, m, t, joint_names)
+            if terms is None:
+                spatial = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t) or f"tendon{t}"
+                break
+            for jn, coef in terms:
+                row[jn] = row.get(jn, 0.0) + scale * coef
+        if spatial is not None:
+            ignored.append((nm, f"tendon equality over the spatial tendon {spatial!r}"))
+            continue
+        if o2 >= 0:
+            offset += c1 * float(m.tendon_length0[o2])
+        row = {jn: x for jn, x in row.items() if x != 0.0}
+        if not row:
+            ignored.append((nm, "tendon equality with no joint left in it"))
+            continue
+        couplings.append([f"tendon:{nm}", list(row), list(row.values()), offset])
+    return mimic, couplings, ignored
 
 
 # ----------------------------------------------------------------------------- states
@@ -650,10 +710,12 @@ def load_mjcf(path: str | Path, *, floating_base: bool | None = None):
     mbm = MultibodyModel(model=model, name=model.name, params={"source": str(path)} | info)
     mbm.params["total_mass"] = float(sum(Y.mass for Y in model.inertias))
     if info.get("mujoco_equalities_ignored"):
-        warnings.warn(f"{path}: equality constraints {info['mujoco_equalities_ignored']} "
-                      "are not linear joint couplings; roverimpact ignores them (model them "
-                      "as loop closures or contacts)", UserWarning, stacklevel=2)
-    if info.get("mimic"):
+        warnings.warn(f"{path}: MuJoCo equality constraints "
+                      f"{', '.join(info['mujoco_equalities_ignored_why'])} are not linear "
+                      "couplings of joints (joint equalities, or tendon equalities over fixed "
+                      "tendons, with polycoef c0 c1 0 0 0); roverimpact ignores them (model "
+                      "them as loop closures or contacts)", UserWarning, stacklevel=2)
+    if info.get("mimic") or info.get("couplings"):
         from .joints import attach_couplings
 
         attach_couplings(mbm)

@@ -557,7 +557,7 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
     mbm = MultibodyModel(model=model, name=model.name or path.stem, wheels=meta["wheels"],
                          loop_closure=loop, loop_names=names, lockable_joints=meta["lockable"],
                          params=params)
-    if params.get("mimic"):
+    if params.get("mimic") or params.get("couplings"):
         from .joints import attach_couplings
 
         attach_couplings(mbm)

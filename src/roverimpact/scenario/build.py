@@ -482,6 +482,9 @@ def check_loop_closed(mbm, phi, J, atol: float = 1e-9) -> None:
         name = mbm.loop_names[i]
         hint = ("a mimic joint's value is its leader's times the multiplier, plus the offset"
                 if name.startswith("mimic:") else
+                "a MuJoCo tendon equality holds sum(coef * joint value) of its fixed tendon "
+                "at its value at qpos0 plus polycoef c0 (c1 times the change of tendon2's)"
+                if name.startswith("tendon:") else
                 "the rocker-bogie's differential turns its rockers by opposite angles")
         raise ConfigError(
             f"configuration: the joint values open the loop {name!r} by "
