@@ -329,3 +329,30 @@ def test_trust_json_and_csv(capsys, tmp_path):
     rows = list(csv.reader(io.StringIO(capsys.readouterr().out)))
     assert rows[0][:7] == ["law", "k", "e", "tau", "spearman", "n", "n_failed"]
     assert len(rows) == 2
+
+
+def test_cli_prints_a_repeated_warning_once():
+    """A command that loads the same file twice (a study checks its scenarios, then runs
+    them) printed its warning twice."""
+    import warnings
+
+    from typer.testing import CliRunner
+
+    from roverimpact.cli._app import _Typer
+
+    app = _Typer()
+
+    @app.command()
+    def twice() -> None:
+        for _ in range(2):
+            warnings.warn("x.xml: equality constraints ['e'] are ignored", UserWarning,
+                          stacklevel=1)
+            warnings.resetwarnings()  # what a filter change does to Python's registry
+
+    @app.command()
+    def other() -> None:  # a second command, so that typer keeps the command names
+        pass
+
+    res = CliRunner().invoke(app, ["twice"])
+    assert res.exit_code == 0, res.output
+    assert res.output.count("equality constraints") == 1, res.output  # stdout + stderr

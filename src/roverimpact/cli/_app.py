@@ -71,6 +71,21 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     err_console.print(f"warning: {message}")
 
 
+def _show_once():
+    """:func:`_show_warning` for one command: each message once. A command may load the
+    same model file several times (a study checks its scenarios, then runs them), and
+    Python's own once-per-location registry is reset whenever a warnings filter changes."""
+    shown: set[str] = set()
+
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        text = str(message)
+        if text not in shown:
+            shown.add(text)
+            _show_warning(message, category, filename, lineno, file, line)
+
+    return show
+
+
 class _Typer(typer.Typer):
     """A Typer whose help keeps bracketed units and whose commands turn
     ``KeyboardInterrupt`` into :class:`CommandInterrupted`."""
@@ -91,7 +106,7 @@ class _Typer(typer.Typer):
 
                 try:
                     with warnings.catch_warnings():
-                        warnings.showwarning = _show_warning
+                        warnings.showwarning = _show_once()
                         return fn(*a, **kw)
                 except KeyboardInterrupt as exc:
                     raise CommandInterrupted(str(exc)) from None
