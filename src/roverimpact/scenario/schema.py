@@ -277,7 +277,10 @@ class ContactsSpec(StrictModel):
     ``{"ground:<wheel>": mu, "default": mu}``); the simulator uses it too unless
     ``simulation.mu`` is given.
     ``locked``: joints held fixed. ``loop_closure``: include the model's closed-loop rows
-    (rocker-bogie differential). ``loops``: closed loops declared here
+    (rocker-bogie differential, mimic joints, MJCF joint and tendon equalities), if it has
+    any: the default ``true`` adds no row to a model without loops (an explicit ``true``
+    cannot be told from the default once a study has normalized its scenarios, so it is
+    not refused either). ``loops``: closed loops declared here
     (:class:`LoopSpec`); ``points``: further contacts (:class:`PointSpec`).
     """
 
