@@ -167,16 +167,18 @@ def _mj_full_M(mujoco, m, d):
     return M
 
 
-def test_exported_rover_urdf_in_mujoco_same_mass_matrix(tmp_path):
-    """Second engine on the built-in 3-D rover: its URDF export compiled by MuJoCo (fixed
+@pytest.mark.parametrize("builder", ["rocker_bogie", "rover2d"])
+def test_exported_rover_urdf_in_mujoco_same_mass_matrix(tmp_path, builder):
+    """Second engine on the built-in rovers: their URDF export compiled by MuJoCo (fixed
     base, MuJoCo's own URDF importer and CRBA) gives Pinocchio's joint-space M at random q.
-    (The planar rover's export has massless x/z slider links, which MuJoCo rejects.)"""
+    (The planar rover's massless x/z slider links, which MuJoCo's compiler refuses, get
+    the file's <mujoco><compiler boundmass boundinertia/>.)"""
     import pinocchio as pin
 
-    from roverimpact.models import export_urdf, rocker_bogie
+    from roverimpact.models import export_urdf, rocker_bogie, rover2d
 
     mujoco = pytest.importorskip("mujoco")
-    mbm = rocker_bogie()
+    mbm = {"rocker_bogie": rocker_bogie, "rover2d": rover2d}[builder]()
     f = export_urdf(mbm, tmp_path / "rover.urdf")
     robot = load_robot(f, floating_base=False)
     m = mujoco.MjModel.from_xml_path(str(f))

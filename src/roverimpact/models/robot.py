@@ -4,10 +4,12 @@
 optional free-flyer base; ``<mimic>`` couplings as constraint rows) or an MJCF file
 (compiled by MuJoCo, :mod:`roverimpact.models.mjcf`), checked against MuJoCo's ``M(q)``
 (:mod:`roverimpact.models.mujoco_check`). :func:`export_urdf`
-writes a built-in rover as URDF (plain ``xml.etree``) so it can be opened in other tools;
-roverimpact's extra description (wheels, linear loop closures, lockable joints, floating
-base) travels in ``<roverimpact_*>`` elements that URDF parsers ignore, so loading the
-file back gives the same M and A.
+writes a built-in rover or a loaded robot as URDF (plain ``xml.etree``) so it can be
+opened in other tools; roverimpact's extra description (wheels, linear loop closures,
+lockable joints, floating base) travels in ``<roverimpact_*>`` elements that URDF parsers
+ignore, so loading the file back gives the same M and A. A ``<mujoco><compiler
+boundmass boundinertia/>`` element (:data:`MUJOCO_BOUND`) lets MuJoCo compile the
+massless links of a planar base without changing any body that has mass.
 """
 
 from __future__ import annotations
@@ -59,6 +61,17 @@ def link_name(model, j: int) -> str:
     return f"{model.names[j]}_link"
 
 
+#: MuJoCo's compiler refuses a moving body whose mass or a principal inertia is below
+#: mjMINVAL (1e-15): the massless links between the joints of a planar base
+#: (``base_x_link``, ``base_z_link``). The exported URDF raises every body's mass and
+#: principal inertias, for MuJoCo only (``<mujoco><compiler boundmass boundinertia/>``, an
+#: element Pinocchio and other URDF readers ignore), to at least this fraction of the
+#: smallest positive body mass and principal inertia of the model (and at least 1e-14, ten
+#: times mjMINVAL). On rover2d the two slider links get 2.5e-13 kg each: M_xx changes by
+#: 2e-14 of itself; a body that has mass is unchanged.
+MUJOCO_BOUND = 1e-13
+
+
 def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
     """Write a tree of 1-DoF prismatic/revolute joints (plus a free-flyer root) as URDF.
 
@@ -85,6 +98,18 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
     model = mbm.model
     path = check_writable(path, folder=False, option=None)
     robot = ET.Element("robot", name=mbm.name)
+    masses = [model.inertias[j].mass for j in range(model.njoints)]
+    moments = np.concatenate([np.linalg.eigvalsh(model.inertias[j].inertia)
+                              for j in range(model.njoints)])
+
+    def bound(x):  # MUJOCO_BOUND of the smallest positive value, at least 1e-14
+        x = np.asarray(x, dtype=float)
+        x = x[x > 0]
+        return f"{max(MUJOCO_BOUND * float(x.min()) if x.size else 0.0, 1e-14):.3g}"
+
+    # for MuJoCo only (Pinocchio and other URDF readers ignore <mujoco>)
+    ET.SubElement(ET.SubElement(robot, "mujoco"), "compiler", boundmass=bound(masses),
+                  boundinertia=bound(moments))
     floating = False
     parent_link = {0: "ground"}
     start = 1
@@ -156,7 +181,10 @@ def export_plain_urdf(mbm: MultibodyModel, path: str | Path) -> dict:
     the scenario tables that declare what URDF cannot say.
 
     Unlike :func:`export_urdf` the file holds no ``roverimpact_*`` elements (MuJoCo and
-    other URDF readers take it as is): a linear loop between two joints
+    other URDF readers take it as is; MuJoCo compiles the massless links of a planar base
+    thanks to the file's ``<mujoco><compiler boundmass boundinertia/>``, which gives them
+    1e-13 of the lightest body's mass, :data:`MUJOCO_BOUND`, and leaves M(q) equal to the
+    model's to 2e-14 of ``sqrt(M_ii M_jj)`` on rover2d): a linear loop between two joints
     (``a q_1 + b q_2 = 0``, the rocker-bogie differential) becomes a ``<mimic>`` of the
     second joint (multiplier ``-a/b``); the floating base, the wheels (by link name)
     and the nominal base pose go into the returned ``[model]`` and ``[configuration]``
