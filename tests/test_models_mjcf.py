@@ -13,6 +13,8 @@ the textbook double-pendulum mass matrix:
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -199,6 +201,101 @@ def test_exported_rover_urdf_in_mujoco_same_mass_matrix(tmp_path, builder):
         M = _mass(robot, qp)[np.ix_(perm, perm)]
         np.testing.assert_allclose(M, _mj_full_M(mujoco, m, d), rtol=1e-10,
                                    atol=1e-12 * np.abs(M).max())
+
+
+def test_mjcf_rover_through_export_urdf_keeps_its_wheel_frames_and_M(tmp_path):
+    """The MJCF rover of examples/mjcf_rover_beta.toml (its front wheel is the cylinder
+    geom 'front_tire', a frame URDF has no element for) written by export_urdf loads back
+    ("wheel 'front' names unknown frame 'front_tire'" before): the geom frame is a link on
+    a fixed joint. References from MuJoCo's model of the original MJCF file: the wheel
+    frames where MuJoCo puts the geom and the body, M(q) = mj_fullM, at random q."""
+    import pinocchio as pin
+
+    import roverimpact as ri
+    from roverimpact.models import export_urdf
+
+    mujoco = pytest.importorskip("mujoco")
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    setup = ri.ImpactSetup.from_scenario(ri.load_scenario(examples / "mjcf_rover_beta.toml"))
+    back = load_robot(export_urdf(setup.model, tmp_path / "rover.urdf"))
+    assert back.params["mujoco_check"] == "passed"
+    assert [(w.name, w.frame) for w in back.wheels] == [("front", "front_tire"),
+                                                         ("rear", "rear_wheel")]
+    model, data = back.model, back.model.createData()
+    m = mujoco.MjModel.from_xml_path(str(examples / "mjcf_rover.xml"))
+    d = mujoco.MjData(m)
+    names = [m.joint(i).name for i in range(m.njnt)]
+    joints = [model.joints[model.getJointId(nm)] for nm in names]
+    assert m.nv == model.nv == len(names)
+    dofs = [j.idx_v for j in joints]
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        q = pin.neutral(model)
+        d.qpos[:] = rng.uniform(-0.6, 0.6, m.nq)
+        for i, j in enumerate(joints):
+            q[j.idx_q] = d.qpos[m.jnt_qposadr[i]]
+        mujoco.mj_forward(m, d)
+        M = _mass(back, q)[np.ix_(dofs, dofs)]
+        M_mj = _mj_full_M(mujoco, m, d)[np.ix_(m.jnt_dofadr, m.jnt_dofadr)]
+        np.testing.assert_allclose(M, M_mj, rtol=1e-10, atol=1e-12 * np.abs(M_mj).max())
+        pin.framesForwardKinematics(model, data, q)
+        for frame, pos, mat in (("front_tire", d.geom("front_tire").xpos,
+                                 d.geom("front_tire").xmat),
+                                ("rear_wheel", d.body("rear_wheel").xpos,
+                                 d.body("rear_wheel").xmat)):
+            oMf = data.oMf[model.getFrameId(frame)]
+            np.testing.assert_allclose(oMf.translation, pos, atol=1e-12)
+            np.testing.assert_allclose(oMf.rotation, mat.reshape(3, 3), atol=1e-12)
+
+
+@pytest.mark.parametrize("robot", ["ur5", "panda"])
+def test_example_robot_through_export_urdf_keeps_limits_mass_and_M(tmp_path, robot):
+    """An example-robot-data arm written by export_urdf and loaded back: each joint's
+    position, velocity and effort limits as in the original file (UR5: +-2 pi had become
+    +-1000, velocity and effort 1e6), the total mass of the file's links (the UR5's 4 kg
+    base link fixed to the world was dropped), the Panda's finger (a prismatic joint along
+    -y, refused before) with its <mimic>, and M(q) of plain Pinocchio on the original
+    file, at random q."""
+    import xml.etree.ElementTree as ET
+
+    import pinocchio as pin
+
+    from roverimpact.models import export_urdf
+    from roverimpact.models.robot_data import example_robot_file
+
+    src = example_robot_file(f"erd:{robot}")
+    back = load_robot(export_urdf(load_robot(f"erd:{robot}"), tmp_path / f"{robot}.urdf"))
+    model = back.model
+    root = ET.parse(src).getroot()
+    checked = 0
+    for el in root.iter("joint"):
+        if el.get("type") not in ("revolute", "prismatic"):
+            continue
+        lim = el.find("limit")
+        jm = model.joints[model.getJointId(el.get("name"))]
+        assert model.lowerPositionLimit[jm.idx_q] == float(lim.get("lower"))
+        assert model.upperPositionLimit[jm.idx_q] == float(lim.get("upper"))
+        assert model.velocityLimit[jm.idx_v] == float(lim.get("velocity"))
+        assert model.effortLimit[jm.idx_v] == float(lim.get("effort"))
+        checked += 1
+    assert checked == model.nv
+    total = sum(float(el.get("value")) for el in root.iter("mass"))
+    assert sum(model.inertias[j].mass for j in range(model.njoints)) == pytest.approx(
+        total, rel=1e-12)
+    if robot == "panda":
+        assert back.loop_names == ["mimic:panda_finger_joint2"]
+        jm = model.joints[model.getJointId("panda_finger_joint2")]
+        assert jm.shortname() == "JointModelPrismaticUnaligned"
+        np.testing.assert_array_equal(jm.extract().axis, [0.0, -1.0, 0.0])
+    ref = pin.buildModelFromUrdf(str(src))
+    assert list(ref.names) == list(model.names)
+    rng = np.random.default_rng(4)
+    for _ in range(3):
+        q = rng.uniform(ref.lowerPositionLimit, ref.upperPositionLimit)
+        M_ref = pin.crba(ref, ref.createData(), q)
+        M_ref = np.triu(M_ref) + np.triu(M_ref, 1).T
+        np.testing.assert_allclose(_mass(back, q), M_ref, rtol=1e-12,
+                                   atol=1e-14 * np.abs(M_ref).max())
 
 
 def test_mjcf_suffix_and_includes_with_roverimpact_elements(tmp_path):

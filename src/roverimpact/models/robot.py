@@ -71,14 +71,103 @@ def link_name(model, j: int) -> str:
 #: 2e-14 of itself; a body that has mass is unchanged.
 MUJOCO_BOUND = 1e-13
 
+#: Pinocchio's "no limit" (``model.upperPositionLimit`` of a joint added without limits).
+_NO_LIMIT = float(np.finfo(np.float64).max)
+
+
+def _urdf_joint(model, j: int) -> tuple[str, np.ndarray]:
+    """``(URDF type, axis)`` of Pinocchio joint ``j``, or a ModelError naming it."""
+    jm = model.joints[j]
+    short = jm.shortname()
+    kinds = {"R": "revolute", "P": "prismatic", "RUB": "continuous"}
+    for prefix, kind in kinds.items():
+        if short in (f"JointModel{prefix}X", f"JointModel{prefix}Y", f"JointModel{prefix}Z"):
+            return kind, np.eye(3)["XYZ".index(short[-1])]
+    unaligned = {"JointModelRevoluteUnaligned": "revolute",
+                 "JointModelPrismaticUnaligned": "prismatic",
+                 "JointModelRevoluteUnboundedUnaligned": "continuous"}
+    if short in unaligned:
+        return unaligned[short], np.asarray(jm.extract().axis, dtype=float)
+    raise ModelError(f"export_urdf: joint {model.names[j]!r} of type {short} is not "
+                     "supported (URDF has revolute, continuous and prismatic joints about "
+                     "any axis, and roverimpact writes a free-flyer root)")
+
+
+def _limit_value(x: float) -> float:
+    """A limit as written: Pinocchio's "no limit" (inf or the largest double) as the
+    largest double, which URDF readers (urdfdom, MuJoCo) take as a number."""
+    x = float(x)
+    return float(np.clip(x, -_NO_LIMIT, _NO_LIMIT)) if not np.isnan(x) else _NO_LIMIT
+
+
+def _frame_links(mbm: MultibodyModel) -> dict[str, int]:
+    """``{frame name: frame id}`` of the wheel frames that are neither a joint's link nor
+    a joint (an MJCF geom or site, a second body fused into a joint's body): URDF has
+    frames only as links and joints, so :func:`export_urdf` writes each as a link on a
+    fixed joint."""
+    model = mbm.model
+    out = {}
+    for w in mbm.wheels:
+        if not model.existFrame(w.frame):
+            raise ModelError(f"export_urdf: wheel {w.name!r} names unknown frame {w.frame!r}")
+        fid = model.getFrameId(w.frame)
+        f = model.frames[fid]
+        if w.frame == link_name(model, f.parentJoint) or (
+                f.type == pin.FrameType.JOINT and w.frame == model.names[f.parentJoint]):
+            continue
+        out[w.frame] = fid
+    return out
+
+
+def _loop_rows(mbm: MultibodyModel, who: str):
+    """The loop closure as URDF can carry it: ``(mimic, rows, joints)``, ``mimic`` the
+    ``[joint, leader, multiplier, offset]`` of the rows ``"mimic:<joint>"`` (a loaded
+    file's ``<mimic>``, ``params["mimic"]``), ``rows`` the other rows ``(name,
+    coefficients)``, linear in ``joints`` without offset (``roverimpact_loop``)."""
+    lc = mbm.loop_closure
+    if lc is None:
+        return [], [], ()
+    from .joints import JointCoupling
+
+    if not isinstance(lc, (LinearLoopClosure, JointCoupling)):
+        raise ModelError(f"{who}: only linear loop closures can be written "
+                         f"(got {type(lc).__name__})")
+    mimic = {r[0]: r for r in mbm.params.get("mimic", [])}
+    offsets = getattr(lc, "offsets", (0.0,) * len(lc.coefficients))
+    out_mimic, rows = [], []
+    for name, row, off in zip(mbm.loop_names, lc.coefficients, offsets, strict=True):
+        joint = name.removeprefix("mimic:")
+        if name.startswith("mimic:") and joint in mimic:
+            if mimic[joint][1] is None:
+                raise ModelError(f"{who}: joint {joint!r} is held at a value (a joint "
+                                 "equality without a second joint); a URDF <mimic> needs "
+                                 "a leader joint")
+            out_mimic.append(list(mimic[joint]))
+        elif off != 0.0:
+            raise ModelError(f"{who}: loop {name!r} has an offset ({off:g}); a "
+                             "roverimpact_loop row is sum c_i q_i = 0")
+        else:
+            rows.append((name, row))
+    return out_mimic, rows, tuple(lc.joints)
+
 
 def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
-    """Write a tree of 1-DoF prismatic/revolute joints (plus a free-flyer root) as URDF.
+    """Write a tree of 1-DoF joints (plus a free-flyer root) as URDF.
+
+    Joints: revolute and prismatic (Pinocchio's ``RX``... ``PZ`` and unaligned joints;
+    the axis as it is), continuous (``RUBX``... and unbounded unaligned: ``nq = 2``), with
+    the model's position, velocity and effort limits (Pinocchio's "no limit" is written as
+    the largest double). A wheel frame that is not a joint's link (an MJCF geom or site)
+    becomes a link on a fixed joint (``<frame>_joint``) at the frame's placement. The mass
+    fixed to the ground (Pinocchio's ``model.inertias[0]``: a fixed base link) is the
+    ``<inertial>`` of the ``ground`` link. A ``<mujoco><compiler boundmass boundinertia/>``
+    element (:data:`MUJOCO_BOUND`) lets MuJoCo compile massless links between joints.
 
     Parameters
     ----------
     mbm : MultibodyModel
-        A built-in rover (bodies attached at their joint frames, as the builders do).
+        A built-in rover or a loaded robot (bodies attached at their joint frames, as the
+        builders and :func:`load_robot` do).
     path : str or Path
         Output ``.urdf`` file.
 
@@ -90,8 +179,9 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
     Raises
     ------
     ModelError
-        If the model has a joint other than PX/PY/PZ/RX/RY/RZ or a free-flyer root, or
-        a loop closure that is not linear in the joint coordinates.
+        If the model has a joint other than revolute/prismatic/continuous or a free-flyer
+        root, a loop closure that is not linear in the joint coordinates, or a wheel frame
+        on the ground of a floating model.
     ConfigError
         If ``path`` cannot be written (a missing folder, a folder, no permission).
     """
@@ -110,17 +200,17 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
     # for MuJoCo only (Pinocchio and other URDF readers ignore <mujoco>)
     ET.SubElement(ET.SubElement(robot, "mujoco"), "compiler", boundmass=bound(masses),
                   boundinertia=bound(moments))
+    mimic, loop_rows, loop_joints = _loop_rows(mbm, "export_urdf")
     floating = False
     parent_link = {0: "ground"}
     start = 1
+    joint_el = {}
     if model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer":
         floating = True
-        parent_link[1] = link_name(model, 1)
+        parent_link = {1: link_name(model, 1)}
         start = 2
-    else:
-        ET.SubElement(robot, "link", name="ground")
-    for j in range(1 if floating else start, model.njoints):
-        link = link_name(model, j)
+    for j in range(0 if not floating else 1, model.njoints):
+        link = parent_link[0] if j == 0 else link_name(model, j)
         parent_link[j] = link
         el = ET.SubElement(robot, "link", name=link)
         I = model.inertias[j]
@@ -135,24 +225,40 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
                           izz=fmt_floats(Ic[2, 2]))
         if j < start:
             continue
-        short = model.joints[j].shortname()
-        if short[-2:-1] == "P" and short[-1] in "XYZ":
-            jtype = "prismatic"
-        elif short[-2:-1] == "R" and short[-1] in "XYZ":
-            jtype = "revolute"
-        else:
-            raise ModelError(f"export_urdf: joint {model.names[j]!r} of type {short} is not "
-                             "supported (only PX/PY/PZ/RX/RY/RZ and a free-flyer root)")
-        js = ET.SubElement(robot, "joint", name=model.names[j], type=jtype)
+        jtype, axis = _urdf_joint(model, j)
+        jm = model.joints[j]
+        js = joint_el[model.names[j]] = ET.SubElement(robot, "joint", name=model.names[j],
+                                                       type=jtype)
         plc = model.jointPlacements[j]
         rpy = pin.rpy.matrixToRpy(plc.rotation)
         ET.SubElement(js, "origin", xyz=fmt_floats(plc.translation), rpy=fmt_floats(rpy))
         ET.SubElement(js, "parent", link=parent_link[model.parents[j]])
         ET.SubElement(js, "child", link=link)
-        ET.SubElement(js, "axis", xyz=_URDF_AXES[short[-1]])
-        lim = 1e3  # [m] or [rad]: wide limits, Pinocchio keeps them as bounds only
-        ET.SubElement(js, "limit", lower=fmt_floats(-lim), upper=fmt_floats(lim), effort="1e6",
-                      velocity="1e6")
+        ET.SubElement(js, "axis", xyz=fmt_floats(axis))
+        limit = {"effort": fmt_floats(_limit_value(model.effortLimit[jm.idx_v])),
+                 "velocity": fmt_floats(_limit_value(model.velocityLimit[jm.idx_v]))}
+        if jtype != "continuous":
+            limit = {"lower": fmt_floats(_limit_value(model.lowerPositionLimit[jm.idx_q])),
+                     "upper": fmt_floats(_limit_value(model.upperPositionLimit[jm.idx_q]))
+                     } | limit
+        ET.SubElement(js, "limit", **limit)
+    for joint, leader, a, b in mimic:
+        ET.SubElement(joint_el[joint], "mimic", joint=leader, multiplier=fmt_floats(a),
+                      offset=fmt_floats(b))
+    for frame, fid in _frame_links(mbm).items():
+        f = model.frames[fid]
+        if f.parentJoint not in parent_link:
+            raise ModelError(f"export_urdf: wheel frame {frame!r} is fixed to the ground of "
+                             "a floating model; URDF has no link there")
+        joint = f"{frame}_joint"
+        while model.existJointName(joint) or model.existFrame(joint):
+            joint += "_"
+        ET.SubElement(robot, "link", name=frame)
+        js = ET.SubElement(robot, "joint", name=joint, type="fixed")
+        ET.SubElement(js, "origin", xyz=fmt_floats(f.placement.translation),
+                      rpy=fmt_floats(pin.rpy.matrixToRpy(f.placement.rotation)))
+        ET.SubElement(js, "parent", link=parent_link[f.parentJoint])
+        ET.SubElement(js, "child", link=frame)
     # roverimpact description (ignored by URDF parsers)
     if floating:
         ET.SubElement(robot, "roverimpact_base", type="floating")
@@ -160,13 +266,9 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
         ET.SubElement(robot, "roverimpact_wheel", name=w.name, frame=w.frame,
                       radius=fmt_floats(w.radius), width=fmt_floats(w.width),
                       axis=fmt_floats(w.axis))
-    if mbm.loop_closure is not None:
-        lc = mbm.loop_closure
-        if not isinstance(lc, LinearLoopClosure):
-            raise ModelError("export_urdf: only linear loop closures can be exported")
-        for name, row in zip(mbm.loop_names, lc.coefficients, strict=True):
-            ET.SubElement(robot, "roverimpact_loop", name=name, joints=" ".join(lc.joints),
-                          coefficients=fmt_floats(row))
+    for name, row in loop_rows:
+        ET.SubElement(robot, "roverimpact_loop", name=name, joints=" ".join(loop_joints),
+                      coefficients=fmt_floats(row))
     for jn in mbm.lockable_joints:
         ET.SubElement(robot, "roverimpact_lockable", joint=jn)
     params = {k: v for k, v in mbm.params.items() if isinstance(v, (int, float, str, bool, list))}
@@ -215,17 +317,18 @@ def export_plain_urdf(mbm: MultibodyModel, path: str | Path) -> dict:
     root = ET.parse(path).getroot()
     for el in [e for e in root if e.tag.startswith("roverimpact_")]:
         root.remove(el)
-    lc = mbm.loop_closure
-    if lc is not None:
-        if not isinstance(lc, LinearLoopClosure):
-            raise ModelError("export_plain_urdf: only linear loop closures can be written")
+    _, loop_rows, loop_joints = _loop_rows(mbm, "export_plain_urdf")
+    if loop_rows:
         joints = {j.get("name"): j for j in root.findall("joint")}
-        for name, row in zip(mbm.loop_names, lc.coefficients, strict=True):
-            nz = [(jn, c) for jn, c in zip(lc.joints, row, strict=True) if c != 0.0]
+        for name, row in loop_rows:
+            nz = [(jn, c) for jn, c in zip(loop_joints, row, strict=True) if c != 0.0]
             if len(nz) != 2:
                 raise ModelError(f"export_plain_urdf: loop {name!r} couples {len(nz)} joints; "
                                  "a URDF <mimic> couples two")
             (leader, a), (follower, b) = nz
+            if joints[follower].find("mimic") is not None:
+                raise ModelError(f"export_plain_urdf: loop {name!r}: joint {follower!r} "
+                                 "already mimics another joint")
             ET.SubElement(joints[follower], "mimic", joint=leader, multiplier=fmt_floats(-a / b),
                           offset="0")
     ET.indent(root)
@@ -238,9 +341,11 @@ def export_plain_urdf(mbm: MultibodyModel, path: str | Path) -> dict:
     base = {"kind": info.kind} | ({"joints": list(info.joints)} if info.kind == "planar"
                                   else {})
     wheels = {}
+    written = _frame_links(mbm)  # wheel frames written as links on fixed joints
     for w in mbm.wheels:
         j = model.frames[model.getFrameId(w.frame)].parentJoint
-        wheels[w.name] = {"frame": link_name(model, j), "radius": float(w.radius),
+        wheels[w.name] = {"frame": w.frame if w.frame in written else link_name(model, j),
+                          "radius": float(w.radius),
                           "width": float(w.width), "axis": [float(x) for x in w.axis]}
     tables = {"model": {"file": str(path), "base": base, "wheels": wheels}}
     q = mbm.params.get("q_nominal")
