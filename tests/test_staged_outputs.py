@@ -59,6 +59,19 @@ def test_replaced_whole_or_left_as_it_was(tmp_path):
     assert sorted(p.name for p in theirs.iterdir()) == [".hidden", "summary.json"]
 
 
+def _trials_without_model(folder, recordings):
+    """The example trials file without its [model] table, in ``folder`` with copies of the
+    example recordings matching ``recordings``: an experiment with no model comparison."""
+    text = (EX / "experiment" / "trials.toml").read_text()
+    i = text.index("[model]")
+    j = text.find("\n[", i + 1)
+    bare = folder / "trials.toml"
+    bare.write_text(text[:i] + (text[j + 1:] if j > 0 else ""))
+    for f in (EX / "experiment").glob(recordings):
+        (folder / f.name).write_bytes(f.read_bytes())
+    return bare
+
+
 def test_experiment_rerun_replaces_its_outputs(tmp_path, capsys):
     """The second run, without a model and without a plot, leaves no comparison.csv,
     overlay.png or inputs of the first beside its own files (they were left before)."""
@@ -66,13 +79,7 @@ def test_experiment_rerun_replaces_its_outputs(tmp_path, capsys):
     assert main(["experiment", str(EX / "experiment" / "trials.toml"), "-o", str(out)]) == 0
     first = {p.name for p in out.iterdir()}
     assert {"comparison.csv", "overlay.png", "inputs_scenario.toml"} <= first
-    text = (EX / "experiment" / "trials.toml").read_text()
-    i = text.index("[model]")
-    j = text.find("\n[", i + 1)
-    bare = tmp_path / "trials.toml"
-    bare.write_text(text[:i] + (text[j + 1:] if j > 0 else ""))
-    for f in (EX / "experiment").glob("*.csv"):
-        (tmp_path / f.name).write_bytes(f.read_bytes())
+    bare = _trials_without_model(tmp_path, "*.csv")
     assert main(["experiment", str(bare), "-o", str(out), "--no-plot"]) == 0
     second = {p.name for p in out.iterdir()}
     assert "comparison.csv" not in second and "overlay.png" not in second
@@ -96,14 +103,7 @@ def test_a_users_folder_or_file_beside_the_outputs_is_never_deleted(tmp_path, ca
     assert (out / "x.toml" / "keep.csv").read_text() == "1"
 
     exp = tmp_path / "eo"
-    trials = EX / "experiment" / "trials.toml"
-    text = trials.read_text()
-    i = text.index("[model]")
-    j = text.find("\n[", i + 1)
-    bare = tmp_path / "trials.toml"
-    bare.write_text(text[:i] + (text[j + 1:] if j > 0 else ""))
-    for f in (EX / "experiment").glob("trial_0*.csv"):
-        (tmp_path / f.name).write_bytes(f.read_bytes())
+    bare = _trials_without_model(tmp_path, "trial_0*.csv")
     bare.write_text(bare.read_text().split("[[trial]]")[0] + "[[trial]]"
                     + bare.read_text().split("[[trial]]")[1])
     assert main(["experiment", str(bare), "-o", str(exp), "--no-plot"]) == 0
