@@ -20,7 +20,7 @@ For contact rows that share one restitution coefficient and persistent rows alre
 rest, :math:`v^+ = v^- - (1 + e) P_c v^-` and the kinetic energy lost is
 :math:`(1 - e^2)\, T_c^-`. With a different ``e`` per row on rows that are coupled
 through :math:`M` (:math:`G` not diagonal), Newton's law applied to all of them at once
-can add energy: a known defect of the law (Stronge, *Impact Mechanics*, 2000, ch. 5;
+can add energy, a known defect of the law (as :mod:`roverimpact.unilateral` notes;
 ``tests/test_impulse.py`` has a case that gains 0.48 J of 0.52).
 
 Every row of ``A`` is a contact that holds through the impact: a row already separating
