@@ -336,3 +336,51 @@ def test_mjcf_suffix_and_includes_with_roverimpact_elements(tmp_path):
     mujoco.mj_forward(mj, d)
     M = pin.crba(mbm.model, mbm.model.createData(), np.zeros(1))
     np.testing.assert_allclose(M, full_mass_matrix(mujoco, mj, d), rtol=1e-12)
+
+
+#: Two links on continuous joints, the first about a tilted axis (Pinocchio builds a
+#: RevoluteUnboundedUnaligned joint, whose Python object has no .axis), the second about y.
+CONTINUOUS_URDF = """<?xml version="1.0"?>
+<robot name="spinner">
+  <link name="base"/>
+  <link name="a"><inertial><origin xyz="0.1 0 0"/><mass value="1.5"/>
+    <inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="b"><inertial><origin xyz="0 0 0.2"/><mass value="0.7"/>
+    <inertia ixx="0.004" iyy="0.005" izz="0.006" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="ja" type="continuous"><parent link="base"/><child link="a"/>
+    <axis xyz="0 0.6 0.8"/></joint>
+  <joint name="jb" type="continuous"><parent link="a"/><child link="b"/>
+    <origin xyz="0.3 0 0"/><axis xyz="0 1 0"/></joint>
+</robot>
+"""
+
+
+def test_continuous_joints_through_export_urdf(tmp_path):
+    """Continuous joints, one about a tilted axis, written by export_urdf (which read
+    that axis from a Python attribute Pinocchio does not have: AttributeError) and loaded
+    back: type continuous with the original axes, and M(q) of plain Pinocchio on the
+    original file at random (cos, sin) configurations."""
+    import xml.etree.ElementTree as ET
+
+    import pinocchio as pin
+
+    from roverimpact.models import export_urdf
+
+    src = tmp_path / "spinner.urdf"
+    src.write_text(CONTINUOUS_URDF)
+    out = export_urdf(load_robot(src), tmp_path / "out.urdf")
+    joints = {el.get("name"): el for el in ET.parse(out).getroot().iter("joint")}
+    for name, axis in (("ja", [0.0, 0.6, 0.8]), ("jb", [0.0, 1.0, 0.0])):
+        assert joints[name].get("type") == "continuous"
+        np.testing.assert_allclose([float(x) for x in joints[name].find("axis")
+                                    .get("xyz").split()], axis, atol=1e-15)
+    back = load_robot(out)
+    ref = pin.buildModelFromUrdf(str(src))
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        a, b = rng.uniform(-np.pi, np.pi, 2)
+        q = np.array([np.cos(a), np.sin(a), np.cos(b), np.sin(b)])
+        M_ref = pin.crba(ref, ref.createData(), q)
+        M_ref = np.triu(M_ref) + np.triu(M_ref, 1).T
+        np.testing.assert_allclose(_mass(back, q), M_ref, rtol=1e-12,
+                                   atol=1e-14 * np.abs(M_ref).max())

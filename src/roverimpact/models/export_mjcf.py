@@ -58,8 +58,6 @@ from .robot import fmt_floats, link_name
 __all__ = ["MjcfLayout", "export_mjcf", "mjcf_element", "mujoco_qpos", "mujoco_velocity",
            "pinocchio_state"]
 
-_AXES = {"X": np.array([1.0, 0.0, 0.0]), "Y": np.array([0.0, 1.0, 0.0]),
-         "Z": np.array([0.0, 0.0, 1.0])}
 #: MJCF geom name of a wheel.
 WHEEL_GEOM = "wheel_geom_{}"
 
@@ -91,20 +89,22 @@ class MjcfLayout:
 
 
 def _joint_kind(model, j: int) -> tuple[str, np.ndarray | None]:
-    """(MJCF joint type, axis in the joint frame) of Pinocchio joint ``j``."""
-    jm = model.joints[j]
-    short = jm.shortname()
-    if short == "JointModelFreeFlyer":
+    """(MJCF joint type, axis in the joint frame) of Pinocchio joint ``j``: its kind
+    (:func:`~roverimpact.models.joints.joint_coordinate`) and axis
+    (:func:`~roverimpact.models.declare.joint_axis`), as :func:`.robot.export_urdf` reads
+    them."""
+    from .declare import joint_axis
+    from .joints import joint_coordinate
+
+    if model.joints[j].shortname() == "JointModelFreeFlyer":
         return "free", None
-    if short in ("JointModelPX", "JointModelPY", "JointModelPZ"):
-        return "slide", _AXES[short[-1]]
-    if short in ("JointModelRX", "JointModelRY", "JointModelRZ"):
-        return "hinge", _AXES[short[-1]]
-    if short in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
-        axis = np.asarray(jm.extract().axis, dtype=float)
-        return ("hinge" if "Revolute" in short else "slide"), axis / np.linalg.norm(axis)
-    raise ModelError(f"export_mjcf: joint {model.names[j]!r} of type {short} is not supported "
-                     "(only prismatic/revolute 1-DoF joints and a free-flyer root)")
+    kind = joint_coordinate(model, model.names[j]).kind
+    axis = joint_axis(model, j)
+    if kind in ("revolute", "prismatic") and axis is not None:
+        return ("hinge" if kind == "revolute" else "slide"), axis / np.linalg.norm(axis)
+    raise ModelError(f"export_mjcf: joint {model.names[j]!r} of type "
+                     f"{model.joints[j].shortname()} is not supported (only prismatic/"
+                     "revolute 1-DoF joints and a free-flyer root)")
 
 
 def _massless(model, j: int) -> bool:

@@ -35,7 +35,6 @@ __all__ = ["ERD_SCHEME", "example_robot_file", "export_plain_urdf", "export_urdf
            "load_robot"]
 
 
-_URDF_AXES = {"X": "1 0 0", "Y": "0 1 0", "Z": "0 0 1"}
 
 
 def joint_slices(model) -> dict[str, tuple[slice, slice]]:
@@ -76,21 +75,20 @@ _NO_LIMIT = float(np.finfo(np.float64).max)
 
 
 def _urdf_joint(model, j: int) -> tuple[str, np.ndarray]:
-    """``(URDF type, axis)`` of Pinocchio joint ``j``, or a ModelError naming it."""
-    jm = model.joints[j]
-    short = jm.shortname()
-    kinds = {"R": "revolute", "P": "prismatic", "RUB": "continuous"}
-    for prefix, kind in kinds.items():
-        if short in (f"JointModel{prefix}X", f"JointModel{prefix}Y", f"JointModel{prefix}Z"):
-            return kind, np.eye(3)["XYZ".index(short[-1])]
-    unaligned = {"JointModelRevoluteUnaligned": "revolute",
-                 "JointModelPrismaticUnaligned": "prismatic",
-                 "JointModelRevoluteUnboundedUnaligned": "continuous"}
-    if short in unaligned:
-        return unaligned[short], np.asarray(jm.extract().axis, dtype=float)
-    raise ModelError(f"export_urdf: joint {model.names[j]!r} of type {short} is not "
-                     "supported (URDF has revolute, continuous and prismatic joints about "
-                     "any axis, and roverimpact writes a free-flyer root)")
+    """``(URDF type, axis)`` of Pinocchio joint ``j``: its kind
+    (:func:`~roverimpact.models.joints.joint_coordinate`) and axis in the joint frame
+    (:func:`~roverimpact.models.declare.joint_axis`), or a ModelError naming it."""
+    from .declare import joint_axis
+    from .joints import joint_coordinate
+
+    kind = joint_coordinate(model, model.names[j]).kind
+    axis = joint_axis(model, j)
+    if kind not in ("revolute", "prismatic", "continuous") or axis is None:
+        raise ModelError(f"export_urdf: joint {model.names[j]!r} of type "
+                         f"{model.joints[j].shortname()} is not supported (URDF has revolute, "
+                         "continuous and prismatic joints about any axis, and roverimpact "
+                         "writes a free-flyer root)")
+    return kind, axis
 
 
 def _limit_value(x: float) -> float:
