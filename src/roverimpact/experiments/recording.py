@@ -82,7 +82,8 @@ def _parser_problem(path: Path, exc: Exception) -> str:
 
 def _check_not_clipped(name: str, t, x, col: str, full_scale: float | None) -> None:
     """Raise :class:`TrialDataError` for an infinite reading, one at ``full_scale`` or a
-    flat top at the maximum (:data:`CLIP_SAMPLES`)."""
+    flat top at the maximum (:data:`CLIP_SAMPLES`) entered and left by steps of more than
+    :data:`CLIP_STEP_QUANTA` quanta."""
     inf = np.isinf(x)
     if inf.any():
         i = int(np.flatnonzero(inf)[0])
