@@ -22,6 +22,18 @@ def test_contact_prints_predictions(capsys):
     assert "max indentation [mm]" in out
 
 
+def test_contact_check_elastic_energy_difference(capsys):
+    """Hertz is elastic: the closed form dissipates 0 J, the integration ~4e-12 J of
+    T_c^- = 0.96 J. The rel. diff column showed 1.0e+00 (the difference relative to the
+    integrated 4e-12 J itself); it is now relative to T_c^-."""
+    assert main(["contact", "--law", "hertz", "--k", "1e7", "--mass", "3", "--speed",
+                 "0.8", "--check"]) == 0
+    out = capsys.readouterr().out
+    line = next(ln for ln in out.splitlines() if ln.strip().startswith("energy dissipated"))
+    assert float(line.split()[-1]) < 1e-8
+    assert "/ T_c^-" in out
+
+
 def test_contact_from_tc_and_plot(tmp_path, capsys):
     png = tmp_path / "loop.png"
     assert main(["contact", "--law", "kelvin-voigt", "--k", "1e5", "--e", "0.5",
