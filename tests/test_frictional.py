@@ -244,6 +244,38 @@ def test_energy_gain_with_restitution_and_slip():
     assert -r.energy_lost == pytest.approx(gain, rel=1e-12)
 
 
+def test_energy_gain_when_slip_stops_without_reversing():
+    r"""Newton's law with friction adds energy when slip merely stops (Stronge 2000, ch. 4-5).
+
+    Rod (m = 1, l = 1) at 45 degrees falling without spin, end B at 1 m/s down with a
+    forward slip of 0.6 m/s; e = 1, mu = 0.8. Routh's incremental analysis: in the
+    contact frame (t, n) the inverse inertia is K = [[2.5, -1.5], [-1.5, 2.5]]; B slides
+    with P_t = -mu P_n, its slip falling at K_tn - mu K_tt = -3.5 per unit P_n, until it
+    stops at P_n = 0.6/3.5 (during compression: v_n is still -1 + 3.7 * 0.6/3.5 < 0);
+    the sticking ratio -K_tn/K_tt = 0.6 <= mu, so B stays stuck (no reversal) and the
+    end state is Newton's: v_n^+ = +1, s^+ = 0, i.e. K P = (-0.6, 2): P_t = 0.375,
+    P_n = 1.025 (friction pushes *along* the initial slip). With e = 1 and s^+ = 0 the
+    energy change is 1/2 P_t s^- = +0.1125 J of T^- = 0.68 J.
+    """
+    m, mu = 1.0, 0.8
+    M = _rod(m, 1.0)
+    n, t = _rod_end_rows(np.radians(45.0))
+    v = np.array([0.6, -1.0, 0.0])
+    J = np.vstack([t, n])
+    K = J @ np.linalg.solve(M, J.T)
+    assert K == pytest.approx(np.array([[2.5, -1.5], [-1.5, 2.5]]), abs=1e-12)
+    # Routh: the slip stops during compression and sticking can hold it
+    p_stop = 0.6 / (mu * K[0, 0] - K[0, 1])
+    assert -1.0 + (K[1, 1] - mu * K[1, 0]) * p_stop < 0.0
+    assert abs(K[0, 1] / K[0, 0]) <= mu
+    r = frictional_impact(M, v, [n], [[t]], mu, 1.0)
+    assert r.state.tolist() == ["sticking"]
+    assert r.impulse[0] == pytest.approx(1.025, rel=1e-12)
+    assert r.impulse_tangent[0, 0] == pytest.approx(0.375, rel=1e-12)
+    assert float(r.T_minus) == pytest.approx(0.68, rel=1e-12)
+    assert -float(r.energy_lost) == pytest.approx(0.1125, rel=1e-12)
+
+
 # ------------------------------------------------------------------------------------
 # Drawn systems
 # ------------------------------------------------------------------------------------

@@ -82,10 +82,13 @@ and :math:`T_c^-` counts none of its effect.
 
 Energy: with :math:`e = 0` the impact never adds energy,
 :math:`T^- - T^+ = \tfrac12 \Delta v^T M \Delta v + \sum_i \mu_i \lambda_i p_i`. With
-:math:`e > 0` Newton's law with friction can add energy when a contact's slip reverses
-(Kane's paradox; Stronge 2000, ch. 5); it does not when every contact is at rest or
-approaching before the impact with zero slip (a rolling rover), for any :math:`e_i` in
-[0, 1] (tested, both).
+:math:`e > 0` Newton's law with friction can add energy when a contact's slip stops or
+reverses (Kane's paradox; Stronge 2000, ch. 5): a rod end that slides in and sticks with
+``e = 1`` keeps its whole normal rebound while its slip is stopped, and the impact gains
+energy (``test_energy_gain_when_slip_stops_without_reversing``: +0.1125 J of 0.68 J,
+the slip stopping in compression and never reversing). It does not when every contact
+is at rest or approaching before the impact with zero slip (a rolling rover), for any
+:math:`e_i` in [0, 1] (tested, both).
 """
 
 from __future__ import annotations
