@@ -276,6 +276,31 @@ def test_energy_gain_when_slip_stops_without_reversing():
     assert -float(r.energy_lost) == pytest.approx(0.1125, rel=1e-12)
 
 
+def test_polygon_cone_underestimates_mu():
+    r"""3-D point mass (M = I) at 1 m/s onto the floor, e = 0, mu = 0.5: P_n = 1 N s, and
+    Coulomb's circular cone stops a slip of 0.48 m/s in every direction (0.48 <= mu P_n).
+    The inscribed 8-gon reaches only cos(pi/8) mu P_n = 0.462 halfway between two of its
+    directions (22.5 deg): there the contact slides, along a direction it reaches fully
+    (0 deg) it sticks, and with 64 facets (cos(pi/64) = 0.9988) it sticks at 22.5 deg too.
+    Sliding at 1 m/s: the exact slip after is 0.5 m/s along the slip, the 8-gon's
+    |tau| = cos(pi/8) mu P_n at 22.5 deg (docs/active-set.md)."""
+    M, N, T = np.eye(3), [[0.0, 0.0, 1.0]], [[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]
+
+    def hit(speed, deg, facets=8):
+        a = np.radians(deg)
+        return frictional_impact(M, [speed * np.cos(a), speed * np.sin(a), -1.0], N, T,
+                                 0.5, 0.0, facets=facets)
+
+    assert hit(0.48, 0.0).state.tolist() == ["sticking"]
+    assert hit(0.48, 22.5).state.tolist() == ["sliding"]
+    assert hit(0.48, 22.5, facets=64).state.tolist() == ["sticking"]
+    r = hit(1.0, 22.5)
+    assert np.linalg.norm(r.impulse_tangent[0]) == pytest.approx(0.5 * np.cos(np.pi / 8),
+                                                                 rel=1e-9)
+    r = hit(1.0, 0.0)
+    assert r.v_plus[:2] == pytest.approx([0.5, 0.0], abs=1e-12)
+
+
 # ------------------------------------------------------------------------------------
 # Drawn systems
 # ------------------------------------------------------------------------------------

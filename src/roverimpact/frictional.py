@@ -450,7 +450,10 @@ def frictional_impact(M, v, normal, tangent, mu, restitution=0.0, bilateral=None
         Rows held with zero velocity after the impact (loop closures, locked joints).
     facets : int
         Friction directions of a contact with two tangent rows (an inscribed regular
-        polygon; 8 by default). Planar contacts use ``±t``.
+        polygon; 8 by default). Planar contacts use ``±t``. Between two directions the
+        polygon reaches ``cos(pi/facets) mu p`` only: a 3-D contact acts as if ``mu`` were
+        up to ``1 - cos(pi/facets)`` smaller (7.6 % for 8), which matters near the stick
+        threshold (docs/active-set.md).
     tol, rtol : float
         Tolerance of the complementarity decisions (relative to ``sqrt(2 T^-)`` in
         whitened units) and rank tolerance, as in :func:`~roverimpact.unilateral_impact`.
