@@ -235,6 +235,29 @@ def test_poisson_equals_newton_for_one_contact_and_for_e0():
     np.testing.assert_allclose(r1.impulse, r0.impulse, rtol=1e-12, atol=1e-14)
 
 
+def test_newton_different_e_with_a_separating_contact_adds_energy():
+    r"""Newton's law in the complementarity solver adds energy too, not only the bilateral
+    map (docs/theory.md): unit point mass, v = (1, 2), contact 1 with row (-1, -2)
+    approaching at 5 m/s (e = 1), contact 2 with row (1, 1) separating at 3 m/s (e = 0).
+    By hand, both holding: N v+ = (5, 0) gives v+ = (5, -5) with impulses
+    M (v+ - v-) = (4, -7) = 11 (-1, -2) + 15 (1, 1), both >= 0, slacks 0: a solution of
+    the LCP, T+ = 25 J against T- = 2.5 J. Poisson's law gives v+ = (0.5, -0.5) (T+ =
+    0.25 J: the contact that was separating takes the rebound). With one e = 1 Newton keeps
+    2.5 J (v+ = -v-)."""
+    N, v = [[-1.0, -2.0], [1.0, 1.0]], [1.0, 2.0]
+    r = unilateral_impact(np.eye(2), v, N, [1.0, 0.0])
+    np.testing.assert_allclose(r.v_plus, [5.0, -5.0], atol=1e-12)
+    np.testing.assert_allclose(r.impulse, [11.0, 15.0], rtol=1e-12)
+    assert float(r.T_plus) == pytest.approx(25.0) and float(r.T_minus) == pytest.approx(2.5)
+    rp = unilateral_impact(np.eye(2), v, N, [1.0, 0.0], law="poisson")
+    np.testing.assert_allclose(rp.v_plus, [0.5, -0.5], atol=1e-12)
+    assert float(rp.energy_lost) == pytest.approx(2.25)
+    r1 = unilateral_impact(np.eye(2), v, N, 1.0)
+    np.testing.assert_allclose(r1.v_plus, [-1.0, -2.0], atol=1e-12)
+    # ... and contact 2, separating at 3 m/s before, leaves approaching at e * 3 m/s
+    assert np.dot(N[1], r1.v_plus) == pytest.approx(-3.0)
+
+
 def test_redundant_ground_contacts_rank_deficient():
     """Two identical floor rows (redundant): the impulse splits, v+ and T_c^- are unique.
 
