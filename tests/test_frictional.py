@@ -301,6 +301,37 @@ def test_polygon_cone_underestimates_mu():
     assert r.v_plus[:2] == pytest.approx([0.5, 0.0], abs=1e-12)
 
 
+def test_slip_reversal_algebraic_law_not_routh():
+    r"""The impact law is the algebraic one (Coulomb on the slip *after* the impact), not
+    Routh's incremental analysis (Stronge 2000, ch. 4); they differ when the slip reverses
+    during the impact (docs/active-set.md).
+
+    Rod (m = 1, l = 1) at 45 degrees, no spin, end B at 1 m/s down with a forward slip of
+    0.2 m/s; e = 0.5, mu = 0.3. K = [[2.5, -1.5], [-1.5, 2.5]] in (t, n); the sticking
+    ratio 0.6 > mu, so B cannot stick. Algebraic law: the slip after is backward, the whole
+    friction impulse is +mu P_n: v_n gains 2.5 + 0.3 (-1.5) = 2.05 per unit P_n, so
+    P_n = 1.5/2.05 = 30/41, P_t = 9/41, slip after 0.2 - 0.75 P_n. Routh: forward slip stops
+    at P_n = 0.2/2.25 (v_n gains 2.95 per unit P_n on the way), then B slides backward to
+    v_n = 0.5: P_n = 0.693, P_t = 0.154, slip after -0.453 (the friction impulse 30 % smaller).
+    """
+    mu, e = 0.3, 0.5
+    M = _rod(1.0, 1.0)
+    n, t = _rod_end_rows(np.radians(45.0))
+    v = np.array([0.2, -1.0, 0.0])
+    r = frictional_impact(M, v, [n], [[t]], mu, e)
+    assert r.state.tolist() == ["sliding"]
+    assert r.impulse[0] == pytest.approx(30 / 41, rel=1e-12)
+    assert r.impulse_tangent[0, 0] == pytest.approx(9 / 41, rel=1e-12)
+    assert r.slip[0, 0] == pytest.approx(0.2 - 0.75 * 30 / 41, rel=1e-12)
+    # Routh's path, for the record of the difference
+    p1 = 0.2 / (mu * 2.5 + 1.5)
+    p2 = (e - (-1.0 + (2.5 + mu * 1.5) * p1)) / (2.5 - mu * 1.5)
+    routh_Pn, routh_Pt = p1 + p2, mu * (p2 - p1)
+    assert routh_Pn == pytest.approx(0.6927, abs=1e-4)
+    assert routh_Pt == pytest.approx(0.1545, abs=1e-4)
+    assert r.impulse_tangent[0, 0] / routh_Pt == pytest.approx(1.42, abs=0.01)
+
+
 # ------------------------------------------------------------------------------------
 # Drawn systems
 # ------------------------------------------------------------------------------------

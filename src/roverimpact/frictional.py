@@ -35,7 +35,10 @@ The last two lines are Coulomb's law on the polygon: a contact with slip
 (:math:`\lambda_i > 0`) has its impulse on the cone boundary, in the direction(s) most
 opposed to the slip (maximal dissipation); a contact without slip has any impulse in the
 cone. Newton's restitution acts on the normal only (the tangential velocity of a
-sticking contact is zero after the impact). The bilateral rows are eliminated exactly as
+sticking contact is zero after the impact). Coulomb's law acts on the slip after the
+impact, not along the impact as in Routh's incremental analysis (Stronge 2000, ch. 4):
+the two agree unless a contact's slip reverses during the impact
+(``test_slip_reversal_algebraic_law_not_routh``). The bilateral rows are eliminated exactly as
 in the frictionless problem (whitening with :math:`M = L L^T`, projection onto the
 orthogonal complement of the whitened bilateral rows); the remaining LCP in
 :math:`(p, \beta, \lambda)` has the matrix
