@@ -258,6 +258,20 @@ def test_newton_different_e_with_a_separating_contact_adds_energy():
     assert np.dot(N[1], r1.v_plus) == pytest.approx(-3.0)
 
 
+def test_newtons_cradle_is_one_simultaneous_impact():
+    r"""Three unit balls touching in a row, the first at 1 m/s, e = 1 (rows v2 - v1,
+    v3 - v2). The LCP treats both contacts in one impact: by hand, both hold with
+    gamma+ = (1, 0): v+ = (-1/3, 2/3, 2/3), energy kept (1/18 + 2/9 + 2/9 = 1/2 J), not the
+    (0, 0, 1) of a real cradle, whose impacts run one after the other (a property of every
+    simultaneous-impact law; Ceanga & Hurmuzlu, J. Appl. Mech. 68 (2001)). Poisson's
+    law gives the same here. docs/active-set.md."""
+    N = np.array([[-1.0, 1.0, 0.0], [0.0, -1.0, 1.0]])
+    for law in ("newton", "poisson"):
+        r = unilateral_impact(np.eye(3), [1.0, 0.0, 0.0], N, 1.0, law=law)
+        np.testing.assert_allclose(r.v_plus, [-1 / 3, 2 / 3, 2 / 3], atol=1e-12)
+        assert float(r.energy_lost) == pytest.approx(0.0, abs=1e-12)
+
+
 def test_redundant_ground_contacts_rank_deficient():
     """Two identical floor rows (redundant): the impulse splits, v+ and T_c^- are unique.
 
