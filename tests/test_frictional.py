@@ -332,6 +332,39 @@ def test_slip_reversal_algebraic_law_not_routh():
     assert r.impulse_tangent[0, 0] / routh_Pt == pytest.approx(1.42, abs=0.01)
 
 
+def test_mu_inf_no_friction_without_normal_impulse():
+    r"""mu = inf is the limit of Coulomb friction: a contact with zero normal impulse
+    carries no friction impulse (|tau| <= mu p_n), however large mu.
+
+    Planar body (x, z, theta), M = diag(1.4, 1.4, 0.42), contacts 1 and 2 with normal rows
+    (0, 1, 0.42), (0, 1, 0.11) and tangent rows (1, 0, 0.15), (1, 0, 0.32), both
+    approaching (v = (1.26, -0.37, -1.41)), e = 0. By hand: contact 1 sticking,
+    K [P_t, P_n] = -[slip_1, gamma_1] with K its 2 x 2 Delassus matrix, gives
+    P_n = 1.056, P_t = -1.572 (any mu >= 1.49), and contact 2 then separates
+    (gamma_2^+ = 0.284 > 0): a Coulomb solution for every mu >= 1.49, which
+    frictional_impact returns for mu = 10 and 1e6. With mu = inf the locked-set iteration
+    kept both contacts locked from its all-locked start and stopped the body (v+ = 0,
+    T_c^- 1.650 J instead of 1.332 J): contact 1 then took P_t = -6.5 N s with P_n = 0.
+    """
+    M = np.diag([1.4, 1.4, 0.42])
+    N = np.array([[0.0, 1.0, 0.42], [0.0, 1.0, 0.11]])
+    T = np.array([[[1.0, 0.0, 0.15]], [[1.0, 0.0, 0.32]]])
+    v = np.array([1.26, -0.37, -1.41])
+    J = np.vstack([T[0, 0], N[0]])
+    K = J @ np.linalg.solve(M, J.T)
+    Pt, Pn = np.linalg.solve(K, -(J @ v))
+    v_hand = v + np.linalg.solve(M, J.T @ [Pt, Pn])
+    assert Pn > 0 and abs(Pt) <= 1.5 * Pn and N[1] @ v_hand > 0.28
+    T_c_hand = 0.5 * (J @ v) @ np.linalg.solve(K, J @ v)
+    for mu in (10.0, 1e6, np.inf):
+        r = frictional_impact(M, v, N, T, mu, 0.0)
+        assert r.state.tolist() == ["sticking", "separating"], mu
+        np.testing.assert_allclose(r.v_plus, v_hand, rtol=1e-9, atol=1e-12)
+        assert r.impulse == pytest.approx([Pn, 0.0], abs=1e-12)
+        assert r.impulse_tangent[:, 0] == pytest.approx([Pt, 0.0], abs=1e-9)
+        assert float(r.T_c_minus) == pytest.approx(T_c_hand, rel=1e-9)
+
+
 # ------------------------------------------------------------------------------------
 # Drawn systems
 # ------------------------------------------------------------------------------------

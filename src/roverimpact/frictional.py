@@ -38,8 +38,8 @@ cone. Newton's restitution acts on the normal only (the tangential velocity of a
 sticking contact is zero after the impact). Coulomb's law acts on the slip after the
 impact, not along the impact as in Routh's incremental analysis (Stronge 2000, ch. 4):
 the two agree unless a contact's slip reverses during the impact
-(``test_slip_reversal_algebraic_law_not_routh``). The bilateral rows are eliminated exactly as
-in the frictionless problem (whitening with :math:`M = L L^T`, projection onto the
+(``test_slip_reversal_algebraic_law_not_routh``). The bilateral rows are eliminated
+exactly as in the frictionless problem (whitening with :math:`M = L L^T`, projection onto the
 orthogonal complement of the whitened bilateral rows); the remaining LCP in
 :math:`(p, \beta, \lambda)` has the matrix
 
@@ -57,8 +57,10 @@ and otherwise solves the LCP by Lemke's algorithm (lexicographic rule, exact sol
 the final basis; a fixed tiny perturbation of the right-hand side breaks the ties of
 very degenerate problems). ``mu = 0`` (or no tangent rows) gives exactly the
 frictionless problem. ``mu = inf`` means no slip while the contact holds: the tangent
-rows of such a contact are held as bilateral rows exactly when its normal holds (the
-set of these locked contacts is iterated to a consistent one, starting from all locked;
+rows of such a contact are held as bilateral rows exactly when its normal holds with a
+positive impulse (a contact holding at zero impulse carries no friction, as for any finite
+mu; the set of these locked contacts is iterated to a consistent one, starting from all
+locked;
 if there is none, those contacts are solved with :math:`\mu` = :data:`MU_INF` = 1e4
 and ``fallback`` is set). Several solutions can exist (friction makes the problem
 non-monotone); one of them is returned.

@@ -33,7 +33,9 @@ Per configuration, with no Python in the loop:
    unperturbed ``b`` (``fallback`` flag);
 4. ``mu = inf`` contacts hold their tangent rows as bilateral rows while they hold: the
    set of such locked contacts is iterated (lock every holding contact that slips,
-   release every locked contact that separates), starting from all of them locked (the
+   release every locked contact that separates or holds with a zero normal impulse, whose
+   locked tangent rows could otherwise carry friction without a normal impulse), starting
+   from all of them locked (the
    no-slip rows held), then, if that fails, from none, until it is consistent. If it
    never is (a contact that separates when locked and slips when released, the
    impulsive analogue of Painleve's paradox) or every locked set tried makes the
@@ -1236,11 +1238,17 @@ def friction_kernel(
                     slip[b, j, q] = w
                 slipn[j] = np.sqrt(sl)
             # mu = inf: lock the holding contacts that slip, release the separating ones
+            # and those that hold without a normal impulse (zero slack): their locked
+            # tangent rows could carry a friction impulse with none on the normal, which
+            # no mu allows (|tau| <= mu p = 0), and the locked set would not be the
+            # mu -> inf limit
             change = False
             cycle = False
             for j in range(k):
                 if inf[j]:
-                    if (lock[j] and not hn[j]) or (not lock[j] and hn[j] and slipn[j] > thr):
+                    pushes = xp[j] * sc[j] > thr
+                    if (lock[j] and not (hn[j] and pushes)) or (
+                            not lock[j] and hn[j] and slipn[j] > thr):
                         lock[j] = not lock[j]
                         change = True
                         flips[j] += 1
