@@ -332,6 +332,30 @@ def test_urdf_numbers_urdfdom_would_drop_and_massless_joints(tmp_path):
         load_robot(tmp_path / "arm.urdf")
 
 
+def test_zero_axis_on_a_fixed_joint_loads(tmp_path):
+    """A fixed joint ignores its <axis>; "0 0 0" there is common (go2, so101, romeo_laas_small
+    of example-robot-data, all refused with 'is no direction'). The model is Pinocchio's."""
+    import pinocchio as pin
+
+    p = tmp_path / "arm.urdf"
+    p.write_text(
+        '<robot name="arm"><link name="base"/><link name="l1"><inertial><mass value="2"/>'
+        '<origin xyz="0.3 0 0"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" '
+        'izz="0.03"/></inertial></link><joint name="j1" type="revolute"><parent link="base"/>'
+        '<child link="l1"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" '
+        'velocity="1"/></joint><link name="tool"><inertial><mass value="0.5"/><inertia '
+        'ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial></link>'
+        '<joint name="tool_fixed" type="fixed"><parent link="l1"/><child link="tool"/>'
+        '<origin xyz="0.6 0 0"/><axis xyz="0 0 0"/></joint></robot>')
+    mbm = ri.load_robot(p)
+    ref = pin.buildModelFromUrdf(str(p))
+    q = np.array([0.4])
+    M = pin.crba(mbm.model, mbm.model.createData(), q)
+    M_ref = pin.crba(ref, ref.createData(), q)
+    assert M[0, 0] == pytest.approx(0.03 + 2 * 0.3**2 + 0.001 + 0.5 * 0.6**2, rel=1e-12)
+    np.testing.assert_allclose(M, M_ref, rtol=1e-14)
+
+
 def test_malformed_roverimpact_elements_are_one_error_each(tmp_path):
     """roverimpact's own elements in an exported URDF, edited by hand: each impossible
     value is one ModelError naming the element (a negative radius, an unknown lockable
@@ -369,3 +393,4 @@ def test_malformed_roverimpact_elements_are_one_error_each(tmp_path):
         p.write_text(edited)
         with pytest.raises(ModelError, match=re.escape(match)):
             load_robot(p)
+

@@ -454,9 +454,15 @@ _URDF_NUMBERS = {"mass": {"value": 1},
                  "mimic": {"multiplier": 1, "offset": 1}}
 
 
+#: URDF joint types whose <axis> is used: a zero axis is refused on these only (fixed
+#: and floating joints ignore it; "0 0 0" on fixed joints is common: go2, so101).
+_AXIS_JOINTS = ("revolute", "continuous", "prismatic", "planar")
+
+
 def _check_urdf_numbers(root, path: Path) -> None:
     """One ModelError naming the link or joint, the element and the value for a number of
-    a link's <inertial> or of a joint (origin, axis, mimic) that is not a finite number."""
+    a link's <inertial> or of a joint (origin, axis, mimic) that is not a finite number,
+    or for a zero axis of a joint that moves along it."""
     for kind in ("link", "joint"):
         for owner in root.iter(kind):
             scope = owner.find("inertial") if kind == "link" else owner
@@ -472,7 +478,8 @@ def _check_urdf_numbers(root, path: Path) -> None:
                         ok = len(vals) == count and all(np.isfinite(vals))
                     except ValueError:
                         ok = False
-                    if ok and el.tag == "axis" and not any(vals):
+                    if ok and el.tag == "axis" and not any(vals) \
+                            and owner.get("type") in _AXIS_JOINTS:
                         raise ModelError(f"{path}: joint {owner.get('name')!r}: <axis xyz="
                                          f"\"{raw}\"> is no direction (all zero)")
                     if not ok:
