@@ -5,7 +5,7 @@ import pinocchio as pin
 import pytest
 
 import roverimpact as ri
-from roverimpact.models.robot_data import example_robot_urdf
+from roverimpact.models.robot_data import ROBOTS, example_robot_urdf
 
 
 @pytest.mark.parametrize("name", ["panda", "ur5"])
@@ -20,6 +20,19 @@ def test_example_robot_loads_and_has_spd_mass_matrix(name):
     a = np.zeros(model.nv)
     a[0] = 1.0
     assert ri.effective_mass(M, a) == pytest.approx(1.0 / np.linalg.inv(M)[0, 0], rel=1e-10)
+
+
+@pytest.mark.parametrize("name", sorted(ROBOTS))
+def test_every_short_name_loads_with_pinocchios_mass_matrix(name):
+    """Each short name of ROBOTS loads through load_robot ("erd:ur3" named ur3.urdf, an
+    empty <robot> without a name: 'Pinocchio cannot build a model from it'), and its M is
+    plain Pinocchio's of the same file."""
+    mbm = ri.load_robot(f"erd:{name}")
+    ref = pin.buildModelFromUrdf(str(example_robot_urdf(name)))
+    assert mbm.model.nv == ref.nv >= 6
+    q = pin.neutral(ref) + 0.3
+    np.testing.assert_allclose(pin.crba(mbm.model, mbm.model.createData(), q),
+                               pin.crba(ref, ref.createData(), q), rtol=1e-14, atol=0)
 
 
 def test_unknown_robot():

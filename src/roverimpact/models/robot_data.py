@@ -44,7 +44,7 @@ ERD_PREFIXES = (ERD_SCHEME, "erd:")
 #: Short names of a few arms and their URDF paths relative to the ``robots`` folder.
 ROBOTS = {
     "panda": "panda_description/urdf/panda.urdf",
-    "ur3": "ur_description/urdf/ur3.urdf",
+    "ur3": "ur_description/urdf/ur3_robot.urdf",  # ur3.urdf is an empty <robot/>
     "ur5": "ur_description/urdf/ur5_robot.urdf",
     "ur10": "ur_description/urdf/ur10_robot.urdf",
 }
