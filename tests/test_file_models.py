@@ -394,3 +394,40 @@ def test_malformed_roverimpact_elements_are_one_error_each(tmp_path):
         with pytest.raises(ModelError, match=re.escape(match)):
             load_robot(p)
 
+
+def test_unexpanded_xacro_is_one_clear_error(tmp_path):
+    """A URDF that still holds xacro: urdfdom skips <xacro:...> elements, so a leg made by
+    a macro call was silently missing (the file below loaded with 1 joint of 3, no error);
+    a ${...} was 'must be a finite number (a decimal point, not a comma ...)'. Each is one
+    ModelError saying to expand the file; a .xacro file too."""
+    inertia = ('<inertial><mass value="5"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" '
+               'izz="1"/></inertial>')
+    macro = ('<xacro:macro name="leg" params="prefix"><link name="${prefix}_leg">'
+             f'{inertia}</link><joint name="${{prefix}}_hip" type="continuous"><parent '
+             'link="base"/><child link="${prefix}_leg"/><axis xyz="0 1 0"/></joint>'
+             '</xacro:macro>')
+    body = (f'<link name="base"/><link name="arm">{inertia}</link><joint name="j" '
+            'type="continuous"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>'
+            '</joint>')
+    head = '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+    cases = {
+        "macro": (f'{head}{macro}{body}<xacro:leg prefix="left"/><xacro:leg prefix="right"/>'
+                  '</robot>', r"unexpanded xacro element <xacro:macro>"),
+        "expr": (f'{head}{body.replace("0 0 1", "0 0 ${z}")}</robot>',
+                 r"unexpanded xacro expression in <axis xyz=\"0 0 \$\{z\}\">"),
+        "find": (f'{head}<xacro:include filename="$(find pkg)/leg.xacro"/>{body}</robot>',
+                 r"unexpanded xacro element <xacro:include>"),
+    }
+    for name, (text, match) in cases.items():
+        p = tmp_path / f"{name}.urdf"
+        p.write_text(text)
+        with pytest.raises(ri.ModelError, match=match + r".*expand the file first: xacro "):
+            ri.load_robot(p)
+    p = tmp_path / "r.urdf.xacro"
+    p.write_text(f"{head}{body}</robot>")
+    with pytest.raises(ri.ModelError, match=r"a xacro file; expand it to URDF first"):
+        ri.load_robot(p)
+    # the namespace declaration alone (kept by xacro in expanded files) is fine
+    p = tmp_path / "plain.urdf"
+    p.write_text(f"{head}{body}</robot>")
+    assert ri.load_robot(p).model.nv == 1

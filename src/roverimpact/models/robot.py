@@ -454,6 +454,27 @@ _URDF_NUMBERS = {"mass": {"value": 1},
                  "mimic": {"multiplier": 1, "offset": 1}}
 
 
+#: How to expand a xacro file (ROS's xacro, also on PyPI as ``xacro``).
+XACRO_HINT = "xacro robot.urdf.xacro > robot.urdf (ROS's xacro, or pip install xacro)"
+
+
+def _check_not_xacro(root, path: Path) -> None:
+    """One ModelError for a URDF that still holds xacro: a ``<xacro:...>`` element (URDF
+    parsers skip it, so the links and joints of an unexpanded ``<xacro:macro>`` call are
+    silently missing from the model) or a ``${...}`` / ``$(...)`` in an attribute."""
+    for el in root.iter():
+        tag = el.tag if isinstance(el.tag, str) else ""
+        if tag.startswith("{") and "xacro" in tag.split("}", 1)[0]:
+            raise ModelError(f"{path}: unexpanded xacro element <xacro:{tag.split('}', 1)[1]}> "
+                             f"(its links and joints are not in the URDF); expand the file "
+                             f"first: {XACRO_HINT}")
+        for attr, raw in el.attrib.items():
+            if "${" in raw or "$(" in raw:
+                owner = f" {el.get('name')!r}" if el.get("name") else ""
+                raise ModelError(f"{path}: unexpanded xacro expression in <{tag}{owner} "
+                                 f"{attr}=\"{raw}\">; expand the file first: {XACRO_HINT}")
+
+
 #: URDF joint types whose <axis> is used: a zero axis is refused on these only (fixed
 #: and floating joints ignore it; "0 0 0" on fixed joints is common: go2, so101).
 _AXIS_JOINTS = ("revolute", "continuous", "prismatic", "planar")
@@ -601,6 +622,8 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         raise ModelError(f"{path}: no such URDF/MJCF file (a robot of example-robot-data: "
                          "erd:<name>)")
     suffix = path.suffix.lower()
+    if suffix == ".xacro":
+        raise ModelError(f"{path}: a xacro file; expand it to URDF first: {XACRO_HINT}")
     if suffix not in (".urdf", ".xml", ".mjcf"):
         raise ModelError(f"{path}: unknown robot file type {suffix!r}; use .urdf, .xml or .mjcf")
     meta = _parse_meta(path)
@@ -621,6 +644,7 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
     else:
         if meta["root"] != "robot":
             raise ModelError(f"{path}: not a URDF file (root element <{meta['root']}>)")
+        _check_not_xacro(meta["element"], path)
         _check_urdf_numbers(meta["element"], path)
         args = (str(path), pin.JointModelFreeFlyer()) if floating else (str(path),)
         parser_said: list[str] = []
