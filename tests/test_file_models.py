@@ -431,3 +431,46 @@ def test_unexpanded_xacro_is_one_clear_error(tmp_path):
     p = tmp_path / "plain.urdf"
     p.write_text(f"{head}{body}</robot>")
     assert ri.load_robot(p).model.nv == 1
+
+
+
+def _two_link_urdf(tmp_path, *, mass2="1", inertia2="1 0 0 1 0 1", extra_joint=""):
+    ixx, ixy, ixz, iyy, iyz, izz = inertia2.split()
+    lim = '<limit lower="-3" upper="3" effort="1" velocity="1"/>'
+    p = tmp_path / "r.urdf"
+    p.write_text(
+        '<robot name="r"><link name="base"/>'
+        '<link name="l1"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" '
+        'iyz="0" izz="1"/></inertial></link>'
+        f'<link name="l2"><inertial><mass value="{mass2}"/><inertia ixx="{ixx}" ixy="{ixy}" '
+        f'ixz="{ixz}" iyy="{iyy}" iyz="{iyz}" izz="{izz}"/></inertial></link>'
+        f'<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>'
+        f'<axis xyz="0 0 1"/>{lim}</joint>'
+        f'<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>'
+        f'<origin xyz="0.5 0 0"/><axis xyz="0 0 1"/>{lim}</joint>{extra_joint}</robot>')
+    return p
+
+
+def test_urdf_with_a_link_of_two_parents_is_one_clear_error(tmp_path):
+    """A closed chain written as URDF (link l2 child of j2 and j3): Pinocchio said 'Model
+    does not have any body named l1' or 'joints [...] move no mass'; now one ModelError
+    naming the link, its joints and the way to close the loop."""
+    j3 = ('<joint name="j3" type="revolute"><parent link="base"/><child link="l2"/>'
+          '<axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
+    with pytest.raises(ri.ModelError, match=r"link 'l2' is the child of 2 joints \['j2', "
+                                            r"'j3'\]: a URDF is a tree.*contacts.loops"):
+        ri.load_robot(_two_link_urdf(tmp_path, extra_joint=j3))
+
+
+def test_urdf_inertia_with_a_negative_principal_moment_is_refused(tmp_path):
+    """Pinocchio builds M with an inertia no body has (ixy with the wrong sign convention,
+    say) and MuJoCo refuses the file, so the cross-check was skipped and the model loaded
+    without a word. The eigenvalues of [[a, b, 0], [b, a, 0], [0, 0, 1]] are a -+ b and 1."""
+    ok = ri.load_robot(_two_link_urdf(tmp_path, inertia2="1 0.5 0 1 0 1"))  # 0.5, 1, 1.5
+    assert ok.params["mujoco_check"] == "passed"
+    with pytest.raises(ri.ModelError, match=r"link 'l2': the <inertia> has a negative principal "
+                                            r"moment \(-0.5 kg m\^2; principal moments -0.5, "
+                                            r"1, 1.5\)"):
+        ri.load_robot(_two_link_urdf(tmp_path, inertia2="0.5 1 0 0.5 0 1"))
+    with pytest.raises(ri.ModelError, match=r"link 'l2': <mass value=\"-1\"> is negative"):
+        ri.load_robot(_two_link_urdf(tmp_path, mass2="-1"))

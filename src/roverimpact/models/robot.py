@@ -511,6 +511,54 @@ def _check_urdf_numbers(root, path: Path) -> None:
                             " (a decimal point, not a comma; SI units)")
 
 
+def _check_urdf_tree(root, path: Path) -> None:
+    """One ModelError for a link that is the child of two joints (a closed chain written
+    as URDF: urdfdom keeps one parent, and Pinocchio said "Model does not have any body
+    named ..." or "joints [...] move no mass")."""
+    parents: dict[str, list[str]] = {}
+    for j in root.findall("joint"):
+        child = j.find("child")
+        if child is not None and child.get("link"):
+            parents.setdefault(child.get("link"), []).append(j.get("name"))
+    for link, joints in parents.items():
+        if len(joints) > 1:
+            raise ModelError(
+                f"{path}: link {link!r} is the child of {len(joints)} joints {joints}: a URDF "
+                "is a tree; cut the closed chain at one joint (give that link's copy its own "
+                "name) and close it in the scenario with [[contacts.loops]]")
+
+
+def _check_urdf_inertias(root, path: Path) -> None:
+    """One ModelError naming the link whose <inertial> is no physical body: a negative mass
+    or a negative principal moment of inertia (Pinocchio builds M with it; MuJoCo refuses
+    the file, so the cross-check is skipped). Tolerance: 1e-6 of the largest principal
+    moment of the file's links (the rounding of CAD exports: tiago's antenna links have
+    -3.5e-8 kg m^2, 6e-8 of tiago's largest; romeo_laas_small's body -0.021, 0.22 of it)."""
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    moments = []
+    for link in root.findall("link"):
+        el = link.find("inertial")
+        if el is None:
+            continue
+        mass, inertia = el.find("mass"), el.find("inertia")
+        if mass is not None and float(mass.get("value", 0.0)) < 0.0:
+            raise ModelError(f"{path}: link {link.get('name')!r}: <mass value="
+                             f"\"{mass.get('value')}\"> is negative")
+        if inertia is not None:
+            xx, xy, xz, yy, yz, zz = (float(inertia.get(k, 0.0)) for k in keys)
+            moments.append((link.get("name"), np.linalg.eigvalsh(
+                np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]))))
+    scale = max((float(ev[-1]) for _n, ev in moments), default=0.0)
+    for name, ev in moments:
+        if ev[0] < -1e-6 * scale:
+            raise ModelError(
+                f"{path}: link {name!r}: the <inertia> has a negative principal moment "
+                f"({ev[0]:.4g} kg m^2; principal moments "
+                f"{', '.join(f'{x:.4g}' for x in ev)}): no physical body has it; check the "
+                "signs of the products ixy, ixz, iyz (URDF takes the tensor's entries, not "
+                "their negatives)")
+
+
 def _check_moving_mass(model, path: Path) -> None:
     """One ModelError naming the joints that move no mass (their links and every link
     they carry have no <inertial>): their column of M is zero, so M is singular at every
@@ -646,6 +694,8 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
             raise ModelError(f"{path}: not a URDF file (root element <{meta['root']}>)")
         _check_not_xacro(meta["element"], path)
         _check_urdf_numbers(meta["element"], path)
+        _check_urdf_tree(meta["element"], path)
+        _check_urdf_inertias(meta["element"], path)
         args = (str(path), pin.JointModelFreeFlyer()) if floating else (str(path),)
         parser_said: list[str] = []
         try:
