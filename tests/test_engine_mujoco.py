@@ -102,7 +102,16 @@ ROVERS = {
     "rover2d-prismatic": lambda: rover2d(suspension="prismatic", com_x=0.05),
     "rocker_bogie": lambda: rocker_bogie(),
     "rocker_bogie-mer": lambda: rocker_bogie("mer"),
+    "rocker_bogie-armature": lambda: _with_armature(rocker_bogie()),
 }
+
+
+def _with_armature(mbm):
+    """Rotor inertia (MJCF's joint ``armature``, Pinocchio's ``model.armature``) on every
+    joint, the free-flyer root included: export_mjcf dropped it, so MuJoCo's M missed
+    the 0.25 kg m^2 of each geared joint."""
+    mbm.model.armature[:] = 0.25
+    return mbm
 
 
 # ------------------------------------------------------------------------- export_mjcf

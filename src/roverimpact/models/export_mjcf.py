@@ -30,6 +30,8 @@ the same bodies, inertias and joints, plus what MuJoCo needs to simulate the rov
   tendon per row with the row's coefficients, and an ``<equality><tendon>`` holding its
   length at 0 (``polycoef = 0``), i.e. :math:`\sum_i C_{ki} q_i = 0` exactly as
   ``mbm.loop_closure``.
+* **Rotor inertia** (``model.armature``, an MJCF model's joint ``armature``): the joint's
+  ``armature`` (one value per joint, as MuJoCo has it).
 * **Joint springs/dampers** (``springs``: ``{joint: JointSpring or dict(k, c, q0)}``, as
   :class:`~roverimpact.simulate.SimulationConfig.springs`): ``stiffness``, ``damping``,
   ``springref`` of the MJCF joint, :math:`\tau = -k(q - q_0) - c\dot q`.
@@ -169,14 +171,29 @@ def mjcf_element(mbm: MultibodyModel, *, springs: dict | None = None,
         wheel_frames.setdefault(int(f.parentJoint), []).append((w, f.placement))
     merged: set[int] = set()
 
+    def armature(j) -> dict:
+        """``{"armature": ...}`` of joint ``j`` (rotor inertia, on M's diagonal), if any."""
+        jm = model.joints[j]
+        arm = np.asarray(model.armature[jm.idx_v:jm.idx_v + jm.nv], dtype=float)
+        if not np.any(arm != 0.0):
+            return {}
+        if np.any(arm != arm[0]):
+            raise ModelError(f"export_mjcf: the armature of joint {model.names[j]!r} differs "
+                             f"between its DoFs ({arm.tolist()}); MuJoCo has one per joint")
+        return {"armature": fmt_floats(arm[0])}
+
     def add_joint(body_el, j, kind, axis, anchor):
         name = model.names[j]
         layout.joints.append((name, kind))
         if kind == "free":
             layout.free_joint = name
-            ET.SubElement(body_el, "freejoint", name=name)
+            if armature(j):
+                ET.SubElement(body_el, "joint", name=name, type="free", **armature(j))
+            else:
+                ET.SubElement(body_el, "freejoint", name=name)
             return
         attrs = {"name": name, "type": kind, "axis": fmt_floats(axis), "pos": fmt_floats(anchor)}
+        attrs.update(armature(j))
         if name in springs:
             k, c, q0 = _spring_values(springs[name])
             jm = model.joints[j]
