@@ -719,3 +719,37 @@ def test_a_joint_named_as_its_child_link(files, tmp_path):
         out.append((float(e.T), float(e.T_c_minus), float(e.m_eff), float(pt.T_c_minus)))
     np.testing.assert_allclose(out[1], out[0], rtol=1e-12)
     assert out[0][1] > 0 and out[0][3] > 0
+
+
+def test_export_urdf_keeps_the_armature_of_an_mjcf_model(tmp_path):
+    """MuJoCo's joint ``armature`` (rotor inertia, on the diagonal of mj_fullM; here on the
+    free joint too) goes to Pinocchio's ``model.armature``; export_urdf dropped it, so the reloaded model's M
+    lacked it (max |dM| 0.3 kg m^2 here: the first joint's armature) and its load-time
+    check against MuJoCo compared two copies without it. Reference: mj_fullM of the
+    original MJCF at random states."""
+    from roverimpact.models.robot import export_urdf
+
+    src = tmp_path / "geared.xml"
+    src.write_text(
+        "<mujoco><worldbody><body name='base' pos='0.3 0 1' euler='0 20 0'>"
+        "<joint type='free' name='fly' armature='0.05'/><geom type='box' size='.2 .1 .1'/>"
+        "<body name='l1' pos='0.2 0 0'><joint name='j1' axis='0 0 1' armature='0.3'/>"
+        "<geom type='capsule' fromto='0 0 0 0.4 0 0' size='0.03' mass='2'/>"
+        "<body name='l2' pos='0.4 0 0'><joint name='j2' axis='0 1 1' armature='0.1'/>"
+        "<geom type='capsule' fromto='0 0 0 0.3 0 0' size='0.03' mass='1'/>"
+        "</body></body></body></worldbody></mujoco>")
+    mbm = load_robot(src)
+    back = load_robot(export_urdf(mbm, tmp_path / "geared.urdf"))
+    assert back.params["mujoco_check"] == "passed"
+    np.testing.assert_array_equal(np.asarray(back.model.armature), [0.05] * 6 + [0.3, 0.1])
+    m = mujoco.MjModel.from_xml_path(str(src))
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        d.qpos[:] = _random_qpos(m, rng)
+        mujoco.mj_forward(m, d)
+        q, _ = mujoco_state_to_pinocchio(mbm, d.qpos)
+        T = _velocity_matrix(mbm, q, m.nv)
+        assert _rel(T.T @ _pin_M(back.model, q) @ T, _mj_M(m, d)) < 1e-12
+    with pytest.raises(ModelError, match=r"rotor inertia .* a plain URDF cannot hold"):
+        ri.models.export_plain_urdf(mbm, tmp_path / "plain.urdf")

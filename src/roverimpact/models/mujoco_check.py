@@ -217,6 +217,14 @@ def _compile_urdf(mujoco, root: ET.Element, floating: bool):
         if body is None or name == "world":
             return None, None, 0.0, 0.0
         body.add_freejoint(name="root_joint")
+    for el in root.iter("roverimpact_armature"):  # export_urdf's rotor inertia
+        joint = spec.joint(el.get("joint"))
+        arm = [float(x) for x in el.get("value").split()]
+        if joint is not None:
+            if len(set(arm)) != 1:
+                raise ValueError(f"the armature of joint {el.get('joint')!r} differs between "
+                                 "its DoFs; MuJoCo has one per joint")
+            joint.armature = arm[0]
     moving = [b for b in spec.bodies if any(True for _ in b.joints)]
     total = sum(float(b.mass) for b in spec.bodies)
     imax = 0.0

@@ -269,6 +269,13 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
                       coefficients=fmt_floats(row))
     for jn in mbm.lockable_joints:
         ET.SubElement(robot, "roverimpact_lockable", joint=jn)
+    for j in range(1, model.njoints):  # URDF has no rotor inertia: MJCF's armature
+        jm = model.joints[j]
+        arm = np.asarray(model.armature[jm.idx_v:jm.idx_v + jm.nv], dtype=float)
+        if np.any(arm != 0.0):  # the free-flyer root comes back as Pinocchio's root_joint
+            ET.SubElement(robot, "roverimpact_armature",
+                          joint="root_joint" if floating and j == 1 else model.names[j],
+                          value=fmt_floats(arm))
     params = {k: v for k, v in mbm.params.items() if isinstance(v, (int, float, str, bool, list))}
     ET.SubElement(robot, "roverimpact_params").text = json.dumps(params)
     ET.indent(robot)
@@ -299,8 +306,8 @@ def export_plain_urdf(mbm: MultibodyModel, path: str | Path) -> dict:
     Raises
     ------
     ModelError
-        A loop that is not a linear coupling of two joints, or a joint type
-        :func:`export_urdf` cannot write.
+        A loop that is not a linear coupling of two joints, a joint type
+        :func:`export_urdf` cannot write, or rotor inertia (``model.armature``).
 
     Examples
     --------
@@ -311,6 +318,10 @@ def export_plain_urdf(mbm: MultibodyModel, path: str | Path) -> dict:
     (['left_front', 'left_middle'], {'kind': 'floating'})
     """
     path = Path(path)
+    if np.any(np.asarray(mbm.model.armature) != 0.0):
+        raise ModelError("export_plain_urdf: the model has rotor inertia (model.armature, "
+                         "an MJCF joint's armature) that a plain URDF cannot hold; use "
+                         "export_urdf, which keeps it in a roverimpact_armature element")
     export_urdf(mbm, path)
     root = ET.parse(path).getroot()
     for el in [e for e in root if e.tag.startswith("roverimpact_")]:
@@ -372,7 +383,7 @@ def _parse_meta(path: Path) -> dict:
     except ET.ParseError as exc:
         raise ModelError(f"{path}: malformed XML ({exc})") from None
     meta = {"floating": root.find("roverimpact_base") is not None, "wheels": [], "loops": [],
-            "lockable": [], "params": {}, "root": root.tag, "element": root}
+            "lockable": [], "armature": [], "params": {}, "root": root.tag, "element": root}
     try:
         for el in root.iter("roverimpact_wheel"):
             meta["wheels"].append(Wheel(
@@ -384,6 +395,8 @@ def _parse_meta(path: Path) -> dict:
             meta["loops"].append((el.get("name"), el.get("joints").split(),
                                   [float(x) for x in el.get("coefficients").split()]))
         meta["lockable"] = [el.get("joint") for el in root.iter("roverimpact_lockable")]
+        meta["armature"] = [(el.get("joint"), [float(x) for x in el.get("value").split()])
+                            for el in root.iter("roverimpact_armature")]
         p = root.find("roverimpact_params")
         if p is not None and p.text:
             meta["params"] = json.loads(p.text)
@@ -416,6 +429,10 @@ def _check_meta(meta: dict, path: Path) -> None:
         if len(coeffs) != len(joints):
             raise bad(f"roverimpact_loop {name!r}: {len(coeffs)} coefficients for "
                       f"{len(joints)} joints")
+    for joint, arm in meta["armature"]:
+        if not joint or not arm or not all(np.isfinite(arm)) or min(arm) < 0.0:
+            raise bad(f"roverimpact_armature {joint!r}: needs a joint and values >= 0, got "
+                      f"{arm}")
     if not isinstance(meta["params"], dict):
         raise bad("roverimpact_params must hold a JSON object ({...}), got "
                   f"{type(meta['params']).__name__}")
@@ -576,6 +593,20 @@ def _check_moving_mass(model, path: Path) -> None:
             "inertia, or make the joints fixed")
 
 
+def _set_armature(model, armature, path: Path) -> None:
+    """``model.armature`` from the file's ``roverimpact_armature`` elements (written by
+    :func:`export_urdf` for a model with rotor inertia, e.g. loaded from MJCF; Pinocchio's
+    CRBA adds it to the diagonal of M, as MuJoCo's ``mj_fullM`` does)."""
+    for joint, arm in armature:
+        if not model.existJointName(joint):
+            raise ModelError(f"{path}: roverimpact_armature names unknown joint {joint!r}")
+        jm = model.joints[model.getJointId(joint)]
+        if len(arm) not in (1, jm.nv):
+            raise ModelError(f"{path}: roverimpact_armature {joint!r}: {len(arm)} values for "
+                             f"a joint of {jm.nv} DoF")
+        model.armature[jm.idx_v:jm.idx_v + jm.nv] = np.broadcast_to(np.asarray(arm), jm.nv)
+
+
 def _urdf_mimic(root) -> list[list]:
     """``[[joint, leader, multiplier, offset], ...]`` of the URDF's ``<mimic>`` elements."""
     out = []
@@ -708,6 +739,7 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
             raise ModelError(f"{path}: Pinocchio cannot build a model from it ("
                              + (f"{said[0]}; " if said else "") + f"{msg})") from None
         _unique_frame_names(model)
+        _set_armature(model, meta["armature"], path)
         extra["mujoco_check"] = "off"
         if mujoco_check and model.nv > 0:
             from .mujoco_check import check_urdf
