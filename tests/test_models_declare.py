@@ -279,3 +279,68 @@ def test_a_declared_spin_joint_turns_this_wheel_about_its_axis(tmp_path):
             "obstacle": {"wheel": "ml", "beta_deg": 45.0}}).model)
     ok = {w.name: w for w in model(spin="fr_spin").wheels}["fr"]
     assert ok.spin == "fr_spin" and np.allclose(np.abs(ok.axis), [0.0, 1.0, 0.0])
+
+
+OFFSET_XML = """<mujoco model="rover_off">
+  <compiler angle="degree"/>
+  <default><default class="visual"><geom contype="0" conaffinity="0" group="1"/></default>
+  </default>
+  <worldbody>
+    <body name="chassis" pos="0 0 0.35">
+      <joint name="x" type="slide" axis="1 0 0"/>
+      <joint name="z" type="slide" axis="0 0 1"/>
+      <joint name="pitch" type="hinge" axis="0 1 0"/>
+      <geom class="visual" type="box" size="0.35 0.2 0.075" mass="20"/>
+      <body name="front_wheel" pos="0.1 0 0">
+        <joint name="wheel_front" axis="0 1 0" pos="0.2 0 -0.2"/>
+        <geom name="front_tire" type="cylinder" size="0.15 0.05" euler="90 0 0"
+              pos="0.2 0 -0.2" mass="2"/>
+      </body>
+      <body name="rear_wheel" pos="-0.3 0 -0.2">
+        <joint name="wheel_rear" axis="0 1 0"/>
+        <geom name="rear_hub" class="visual" type="cylinder" size="0.04 0.06" euler="90 0 0"
+              mass="0.2"/>
+        <geom name="strut" type="cylinder" size="0.2 0.01" mass="0.1"/>
+        <geom name="rear_tire" type="cylinder" size="0.15 0.05" euler="90 0 0" mass="2"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>"""
+
+
+def test_wheel_by_body_takes_the_tire_at_the_frame_origin(tmp_path):
+    """A wheel named by its body: the radius was the first round geom's, a visual hub
+    (0.04 m instead of the tire's 0.15 m), and a tire placed away from the body origin
+    (pos 0.2 0 -0.2, the hinge there too) put the contact point 0.28 m from the tire's rim.
+    Now the radius is the largest colliding sphere or cylinder about the wheel axis (not
+    the vertical 'strut', radius 0.2), and a frame off the tire's centre is one ModelError
+    naming the geom. Reference: MuJoCo's geom_xpos of the tire and the closed-form rim
+    point centre - r n of a wheel meeting a 45 deg face (outward normal n)."""
+    from roverimpact.exceptions import ModelError
+    from roverimpact.scenario.build import ImpactSetup
+
+    f = tmp_path / "rover_off.xml"
+    f.write_text(OFFSET_XML)
+
+    def scenario(front):
+        return Scenario.model_validate({
+            "model": {"file": str(f), "base": {"kind": "planar", "joints": ["x", "z", "pitch"]},
+                      "wheels": {"front": {"frame": front}, "rear": {"frame": "rear_wheel"}}},
+            "velocity": {"u": 0.5}, "contacts": {"ground_wheels": []},
+            "obstacle": {"wheel": "front", "beta_deg": 45.0}})
+
+    with pytest.raises(ModelError, match=r"model.wheels.front: frame 'front_wheel' is 0.2828 m "
+                                         r"from the centre of the cylinder geom 'front_tire'.*"
+                                         r"give frame = 'front_tire'"):
+        make_model(scenario("front_wheel").model)
+    setup = ImpactSetup.from_scenario(scenario("front_tire"))
+    w = {x.name: x for x in setup.model.wheels}
+    assert w["rear"].radius == 0.15 and w["front"].radius == 0.15
+    mj = mujoco.MjModel.from_xml_path(str(f))
+    d = mujoco.MjData(mj)
+    mujoco.mj_forward(mj, d)
+    centre = d.geom_xpos[mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_GEOM, "front_tire")]
+    # the face's outward normal n points back and up at 45 deg; the rim point is centre - r n
+    n = setup.normal
+    np.testing.assert_allclose(n, [-np.sqrt(0.5), 0.0, np.sqrt(0.5)], atol=1e-12)
+    np.testing.assert_allclose(setup.contact_point, centre - 0.15 * n, atol=1e-12)

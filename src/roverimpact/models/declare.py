@@ -274,26 +274,66 @@ def declare_wheels(mbm: MultibodyModel, specs: dict) -> None:
                 axis = (0.0, 1.0, 0.0)
         radius = sp.radius
         if radius is None:
-            radius = _geom_radius(model, geoms, jid, sp.frame)
-            if radius is None:
+            found = _wheel_geom(model, geoms, jid, fid, sp.frame, np.asarray(axis, float))
+            if found is None:
                 raise ModelError(f"model.wheels.{name}: give radius (no sphere or cylinder "
-                                 f"geom found on the body of frame {sp.frame!r})")
+                                 f"geom about the wheel axis found on the body of frame "
+                                 f"{sp.frame!r})")
+            radius, offset, g = found
+            if offset > 1e-9:
+                what = f"geom {g['name']!r}" if g.get("name") else "an unnamed geom"
+                raise ModelError(
+                    f"model.wheels.{name}: frame {sp.frame!r} is {offset:.4g} m from the "
+                    f"centre of the {g['type']} {what} (radius {radius:g} m) that gives the "
+                    "wheel its radius; the wheel's centre is its frame's origin: give "
+                    + (f"frame = {g['name']!r}" if g.get("name") else "that geom a name in "
+                       "the file and use it as the frame")
+                    + " (or give radius, if the frame's origin is the wheel's centre)")
         wheels.append(Wheel(name=name, frame=sp.frame, radius=float(radius),
                             width=float(sp.width), axis=tuple(float(x) for x in axis),
                             spin=spin))
     mbm.wheels = wheels
 
 
-def _geom_radius(model, geoms, jid: int, frame: str) -> float | None:
-    """Radius of a sphere/cylinder geom (MJCF ``params["geoms"]``): the geom named
-    ``frame``, else one on the body named ``frame``, else one carried by joint ``jid``."""
-    round_ = [g for g in geoms if g.get("type") in ("sphere", "cylinder")]
+def _wheel_geom(model, geoms, jid: int, fid: int, frame: str, axis: np.ndarray):
+    """``(radius, offset, geom)`` of the MJCF geom (``params["geoms"]``) that makes the
+    wheel of frame ``fid`` on joint ``jid``, or ``None``: the geom named ``frame``, else
+    the sphere or cylinder (about ``axis``, in the frame's axes) on the body named
+    ``frame``, else one carried by joint ``jid``; among several, a colliding one before a
+    visual one (``contype = conaffinity = 0``: a hub), then the largest radius (the tire).
+    ``offset`` [m]: the distance of the geom's centre from the frame's origin."""
+    Xw = model.frames[fid].placement
+
+    def placed(g):  # the geom in the wheel frame, None if not on joint jid
+        body = g.get("body")
+        if not (body and model.existFrame(body, pin.FrameType.BODY)):
+            return None
+        bf = model.frames[model.getFrameId(body, pin.FrameType.BODY)]
+        if int(bf.parentJoint) != jid:
+            return None
+        w, x, y, z = g["quat"]
+        Xg = pin.SE3(pin.Quaternion(w, x, y, z).normalized().toRotationMatrix(),
+                     np.asarray(g["pos"], dtype=float))
+        return Xw.actInv(bf.placement * Xg)
+
+    cands = []
+    for g in geoms:
+        if g.get("type") not in ("sphere", "cylinder"):
+            continue
+        X = placed(g)
+        if X is None:
+            continue
+        about = g["type"] == "sphere" or np.linalg.norm(
+            np.cross(X.rotation[:, 2], axis)) <= 1e-9 * np.linalg.norm(axis)
+        cands.append((g, X, about))
     for match in (lambda g: g.get("name") == frame, lambda g: g.get("body") == frame,
-                  lambda g: (g.get("frame") and model.existFrame(g["frame"]) and
-                             _frame_joint(model, model.getFrameId(g["frame"])) == jid)):
-        found = [g for g in round_ if match(g)]
+                  lambda g: True):
+        found = [(g, X) for g, X, about in cands if match(g) and (about or g.get("name") == frame)]
         if found:
-            return float(found[0]["size"][0])
+            g, X = max(found, key=lambda c: (bool(c[0].get("contype") or
+                                                   c[0].get("conaffinity")),
+                                              float(c[0]["size"][0])))
+            return float(g["size"][0]), float(np.linalg.norm(X.translation)), g
     return None
 
 
