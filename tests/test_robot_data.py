@@ -38,6 +38,10 @@ def test_every_short_name_loads_with_pinocchios_mass_matrix(name):
 def test_unknown_robot():
     with pytest.raises(ri.ModelError, match="no robot 'nope'"):
         example_robot_urdf("nope")
+    # a family name without a URDF of that stem lists the package's files that contain it
+    with pytest.raises(ri.ModelError, match=r"no robot 'talos' .*URDFs whose name contains "
+                                            r"it: \[.*'talos_reduced'"):
+        example_robot_urdf("talos")
 
 
 def test_both_spellings_name_the_same_file():

@@ -94,9 +94,12 @@ def example_robot_urdf(name: str) -> Path:
         hits = sorted(root.glob(pattern))
         if hits:
             return hits[0]
+    like = sorted({p.stem for p in root.glob(f"*/*/*{Path(name).stem}*.urdf")})
     raise ModelError(
-        f"no robot {name!r} in example-robot-data (short names: {sorted(ROBOTS)}; or the "
-        "stem of any URDF under its robots folder, or a path relative to it)"
+        f"no robot {name!r} in example-robot-data ("
+        + (f"URDFs whose name contains it: {like[:12]}; " if like else "")
+        + f"short names: {sorted(ROBOTS)}; or the stem of any URDF under its robots folder, "
+        "or a path relative to it)"
     )
 
 
