@@ -753,3 +753,29 @@ def test_export_urdf_keeps_the_armature_of_an_mjcf_model(tmp_path):
         assert _rel(T.T @ _pin_M(back.model, q) @ T, _mj_M(m, d)) < 1e-12
     with pytest.raises(ModelError, match=r"rotor inertia .* a plain URDF cannot hold"):
         ri.models.export_plain_urdf(mbm, tmp_path / "plain.urdf")
+
+
+def test_mjcf_joint_range_becomes_the_position_limits(tmp_path):
+    """A limited hinge's or slide's range (compiled by MuJoCo: degrees to radians) is the
+    Pinocchio model's position limits and survives export_urdf (they were dropped: the
+    URDF said the largest double). Reference: MuJoCo's jnt_range."""
+    from roverimpact.models.robot import export_urdf
+
+    src = tmp_path / "limited.xml"
+    src.write_text(
+        "<mujoco><compiler angle='degree'/><worldbody><body name='l1'>"
+        "<joint name='h' axis='0 0 1' range='-30 60' ref='10'/><geom size='.1' mass='1'/>"
+        "<body name='l2' pos='0.3 0 0'><joint name='s' type='slide' axis='1 0 0' "
+        "range='-0.1 0.2'/><joint name='free_h' axis='0 1 0'/>"
+        "<geom size='.1' mass='1'/></body></body></worldbody></mujoco>")
+    m = mujoco.MjModel.from_xml_path(str(src))
+    for mbm in (load_robot(src), load_robot(export_urdf(load_robot(src), tmp_path / "l.urdf"))):
+        model = mbm.model
+        for name in ("h", "s"):
+            k = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
+            iq = model.joints[model.getJointId(name)].idx_q
+            assert model.lowerPositionLimit[iq] == pytest.approx(m.jnt_range[k][0], abs=1e-15)
+            assert model.upperPositionLimit[iq] == pytest.approx(m.jnt_range[k][1], abs=1e-15)
+        iq = model.joints[model.getJointId("free_h")].idx_q
+        assert model.upperPositionLimit[iq] > 1e300
+    assert np.deg2rad(60.0) == pytest.approx(float(m.jnt_range[0][1]), rel=1e-15)

@@ -16,7 +16,8 @@ mass, ``fusestatic`` ...) and :func:`pinocchio_from_mujoco` copies the result:
   several joints in one body become a chain (massless intermediate bodies, the body's
   inertia on the last joint), in MuJoCo's order;
 * bodies without joints are welded to their parent; ``dof_armature`` goes to
-  ``model.armature``;
+  ``model.armature``, a hinge's or slide's ``range`` (``jnt_range`` of a limited joint,
+  radians) to ``model.lowerPositionLimit`` / ``upperPositionLimit``;
 * frames: a BODY frame per body, a JOINT frame per joint, an OP_FRAME per site and per
   named geom. A joint, site or geom whose name is already a frame name gets the suffix
   ``_joint``, ``_site`` or ``_geom`` (Pinocchio needs unique frame names).
@@ -234,6 +235,9 @@ def pinocchio_from_mujoco(m, *, name: str | None = None) -> tuple[pin.Model, dic
                 after = _translation(-anchor)
             jid = model.addJoint(jid, _joint_model(kind, axis), placement, joint_names[k])
             jm = model.joints[jid]
+            if kind in ("hinge", "slide") and bool(m.jnt_limited[k]):  # range: qpos limits
+                model.lowerPositionLimit[jm.idx_q] = float(m.jnt_range[k][0])
+                model.upperPositionLimit[jm.idx_q] = float(m.jnt_range[k][1])
             armature.append((jm.idx_v, np.asarray(m.dof_armature[da:da + jm.nv], dtype=float)))
             fname = _unique(joint_names[k], frames_taken, "_joint")
             frames_taken.add(fname)
