@@ -344,3 +344,18 @@ def test_wheel_by_body_takes_the_tire_at_the_frame_origin(tmp_path):
     n = setup.normal
     np.testing.assert_allclose(n, [-np.sqrt(0.5), 0.0, np.sqrt(0.5)], atol=1e-12)
     np.testing.assert_allclose(setup.contact_point, centre - 0.15 * n, atol=1e-12)
+
+
+def test_floating_base_on_an_mjcf_without_a_free_joint_says_how(tmp_path):
+    """kind = 'floating' on an MJCF file without a free joint: the message spoke of URDF
+    only ('for a URDF, the free-flyer is added'); it now says to add <freejoint/>."""
+    from roverimpact.exceptions import ModelError
+
+    f = tmp_path / "arm.xml"
+    f.write_text("<mujoco><worldbody><body name='l1'><joint name='j1' axis='0 0 1'/>"
+                 "<geom size='.1' mass='1'/></body></worldbody></mujoco>")
+    sc = Scenario.model_validate({"model": {"file": str(f), "base": {"kind": "floating"}},
+                                  "obstacle": {"frame": "l1", "normal": [0, 1, 0]}})
+    with pytest.raises(ModelError, match=r"has no free joint at its root: add <freejoint/> "
+                                         r"to its top-level body"):
+        make_model(sc.model)

@@ -145,9 +145,14 @@ def declare_base(mbm: MultibodyModel, kind: str, joints: Sequence[str] | None = 
     model = mbm.model
     if kind == "floating":
         if not (model.njoints > 1 and _short(model, 1) == "FreeFlyer"):
+            src = str((mbm.params or {}).get("source", ""))
+            how = ("add <freejoint/> to its top-level body in the file (MuJoCo's way; alone "
+                   "in that body: put a body with other joints under it)"
+                   if src.lower().endswith((".xml", ".mjcf")) else
+                   "for a URDF, the free-flyer is added: remove a fixed root or set the kind "
+                   "from the file")
             raise ModelError(f"model.base.kind = 'floating' but {mbm.name!r} has no free joint "
-                             "at its root (for a URDF, the free-flyer is added: remove a "
-                             "fixed root or set the kind from the file)")
+                             f"at its root: {how}")
         mbm.params["base"] = {"kind": "floating", "joints": [model.names[1]]}
         return
     if kind == "fixed":
