@@ -779,3 +779,31 @@ def test_mjcf_joint_range_becomes_the_position_limits(tmp_path):
         iq = model.joints[model.getJointId("free_h")].idx_q
         assert model.upperPositionLimit[iq] > 1e300
     assert np.deg2rad(60.0) == pytest.approx(float(m.jnt_range[0][1]), rel=1e-15)
+
+
+def test_a_site_named_as_its_body_is_announced(tmp_path):
+    """A site named as a body ('foot' at the sole of body 'foot', whose origin is the
+    knee) becomes frame 'foot_site'; obstacle.frame = 'foot' took the knee without a word.
+    The loader now warns, naming the site's frame; the two frames are MuJoCo's body and
+    site positions (reference: site_xpos, xpos)."""
+    f = tmp_path / "leg.xml"
+    f.write_text(
+        "<mujoco><worldbody><body name='thigh' pos='0 0 1'><joint name='hip' axis='0 1 0'/>"
+        "<geom type='capsule' fromto='0 0 0 0 0 -0.4' size='0.03' mass='2'/>"
+        "<body name='foot' pos='0 0 -0.4'><joint name='knee' axis='0 1 0'/>"
+        "<geom type='capsule' fromto='0 0 0 0 0 -0.4' size='0.03' mass='1'/>"
+        "<site name='foot' pos='0 0 -0.4'/></body></body></worldbody></mujoco>")
+    with pytest.warns(UserWarning, match=r"sites \['foot'\] share their names with bodies or "
+                                         r"joints.*the sites are 'foot_site'"):
+        mbm = load_robot(f)
+    m = mujoco.MjModel.from_xml_path(str(f))
+    d = mujoco.MjData(m)
+    d.qpos[:] = [0.3, -0.6]
+    mujoco.mj_forward(m, d)
+    model = mbm.model
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, np.array([0.3, -0.6]))
+    np.testing.assert_allclose(data.oMf[model.getFrameId("foot_site")].translation,
+                               d.site_xpos[0], atol=1e-14)
+    np.testing.assert_allclose(data.oMf[model.getFrameId("foot")].translation,
+                               d.xpos[2], atol=1e-14)
