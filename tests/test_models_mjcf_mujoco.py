@@ -783,9 +783,13 @@ def test_mjcf_joint_range_becomes_the_position_limits(tmp_path):
 
 def test_a_site_named_as_its_body_is_announced(tmp_path):
     """A site named as a body ('foot' at the sole of body 'foot', whose origin is the
-    knee) becomes frame 'foot_site'; obstacle.frame = 'foot' took the knee without a word.
-    The loader now warns, naming the site's frame; the two frames are MuJoCo's body and
-    site positions (reference: site_xpos, xpos)."""
+    knee; dm_control's humanoid and quadruped do this) becomes frame 'foot_site', and
+    obstacle.frame = 'foot' took the knee without a word. A scenario naming such a frame
+    now gets a warning naming the site's frame; the two frames are MuJoCo's body and site
+    positions (reference: site_xpos, xpos)."""
+    from roverimpact.scenario import Scenario
+    from roverimpact.scenario.build import ImpactSetup
+
     f = tmp_path / "leg.xml"
     f.write_text(
         "<mujoco><worldbody><body name='thigh' pos='0 0 1'><joint name='hip' axis='0 1 0'/>"
@@ -793,17 +797,24 @@ def test_a_site_named_as_its_body_is_announced(tmp_path):
         "<body name='foot' pos='0 0 -0.4'><joint name='knee' axis='0 1 0'/>"
         "<geom type='capsule' fromto='0 0 0 0 0 -0.4' size='0.03' mass='1'/>"
         "<site name='foot' pos='0 0 -0.4'/></body></body></worldbody></mujoco>")
-    with pytest.warns(UserWarning, match=r"sites \['foot'\] share their names with bodies or "
-                                         r"joints.*the sites are 'foot_site'"):
-        mbm = load_robot(f)
+
+    def setup(frame):
+        return ImpactSetup.from_scenario(Scenario.model_validate({
+            "model": {"file": str(f)}, "configuration": {"joints": {"hip": 0.3, "knee": -0.6}},
+            "velocity": {"joints": {"hip": 1.0}},
+            "obstacle": {"frame": frame, "normal": [0.0, 0.0, 1.0]}}))
+
+    with pytest.warns(UserWarning, match=r"obstacle.frame = 'foot' is the frame of the body.*"
+                                         r"the MJCF site of that name is frame 'foot_site'"):
+        body = setup("foot")
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        site = setup("foot_site")
     m = mujoco.MjModel.from_xml_path(str(f))
     d = mujoco.MjData(m)
     d.qpos[:] = [0.3, -0.6]
     mujoco.mj_forward(m, d)
-    model = mbm.model
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, np.array([0.3, -0.6]))
-    np.testing.assert_allclose(data.oMf[model.getFrameId("foot_site")].translation,
-                               d.site_xpos[0], atol=1e-14)
-    np.testing.assert_allclose(data.oMf[model.getFrameId("foot")].translation,
-                               d.xpos[2], atol=1e-14)
+    np.testing.assert_allclose(site.contact_point, d.site_xpos[0], atol=1e-14)
+    np.testing.assert_allclose(body.contact_point, d.xpos[2], atol=1e-14)

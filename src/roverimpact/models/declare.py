@@ -31,7 +31,7 @@ from .base import MultibodyModel, Wheel
 from .constraints import point_jacobian
 
 __all__ = ["BaseInfo", "FrameLoop", "attach_frame_loops", "base_info", "declare_wheels",
-           "detect_base", "joint_axis", "placed_axis"]
+           "detect_base", "joint_axis", "placed_axis", "warn_site_twin"]
 
 
 @dataclass(frozen=True)
@@ -193,6 +193,20 @@ def _check_planar_signs(model, ids, axes) -> None:
             "axes as 1 0 0, 0 0 1 and 0 1 0")
 
 
+def warn_site_twin(mbm: MultibodyModel, name: str, what: str) -> None:
+    """Warn when a scenario names frame ``name`` and an MJCF site of that name exists
+    under another frame name (``<name>_site``: the bare name is a body's or joint's frame,
+    so the point is the body origin, not the site; dm_control's humanoid, quadruped and
+    manipulator name many sites as their bodies)."""
+    frame = ((mbm.params or {}).get("sites") or {}).get(name)
+    if frame is not None and frame != name:
+        import warnings
+
+        warnings.warn(f"{what} = {name!r} is the frame of the body (or joint) {name!r}; the "
+                      f"MJCF site of that name is frame {frame!r}: name it to use the site",
+                      UserWarning, stacklevel=3)
+
+
 def _frame_joint(model, fid: int) -> int:
     return int(model.frames[fid].parentJoint)
 
@@ -256,6 +270,7 @@ def declare_wheels(mbm: MultibodyModel, specs: dict) -> None:
             known = sorted({f.name for f in model.frames if f.name != "universe"})
             raise ModelError(f"model.wheels.{name}: unknown frame {sp.frame!r} (a link, joint, "
                              f"site or geom of the file); frames: {known}")
+        warn_site_twin(mbm, sp.frame, f"model.wheels.{name}.frame")
         fid = model.getFrameId(sp.frame)
         jid = _frame_joint(model, fid)
         spin = sp.spin
@@ -414,6 +429,7 @@ def attach_frame_loops(mbm: MultibodyModel, loops: Sequence[FrameLoop], q_ref) -
                 known = sorted({fr.name for fr in model.frames if fr.name != "universe"})
                 raise ModelError(f"contacts.loops {lp.name!r}: unknown frame {f!r}; "
                                  f"frames: {known}")
+            warn_site_twin(mbm, f, f"contacts.loops {lp.name!r} frame")
         ids.append((model.getFrameId(lp.frame_a), np.asarray(lp.point_a, float),
                     model.getFrameId(lp.frame_b), np.asarray(lp.point_b, float)))
     q_ref = np.asarray(q_ref, float)

@@ -713,13 +713,6 @@ def load_mjcf(path: str | Path, *, floating_base: bool | None = None):
         model.name = path.stem
     mbm = MultibodyModel(model=model, name=model.name, params={"source": str(path)} | info)
     mbm.params["total_mass"] = float(sum(Y.mass for Y in model.inertias))
-    renamed = {nm: f for nm, f in info["sites"].items() if nm != f}
-    if renamed:  # the bare name is another frame (a body's): a point elsewhere
-        warnings.warn(f"{path}: sites {sorted(renamed)} share their names with bodies or "
-                      f"joints; the bare name is the body's (or joint's) frame, the sites are "
-                      f"{', '.join(repr(f) for _n, f in sorted(renamed.items()))}: name "
-                      "those in a scenario (obstacle.frame, wheels, contacts) to use the "
-                      "sites", UserWarning, stacklevel=2)
     if info.get("mujoco_equalities_ignored"):
         warnings.warn(f"{path}: MuJoCo equality constraints "
                       f"{', '.join(info['mujoco_equalities_ignored_why'])} are not linear "

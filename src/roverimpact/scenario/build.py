@@ -786,6 +786,7 @@ def candidate_constraints(mbm, obstacle: ObstacleSpec, contacts: ContactsSpec,
     obstacle contact.
     """
     from ..models.constraints import GroundContact, LockedJoint, LoopClosure, PointContact
+    from ..models.declare import warn_site_twin
 
     cons = []
     obs = obstacle
@@ -815,6 +816,7 @@ def candidate_constraints(mbm, obstacle: ObstacleSpec, contacts: ContactsSpec,
         if not mbm.model.existFrame(obs.frame):
             names = sorted({f.name for f in mbm.model.frames})
             raise ConfigError(f"obstacle.frame: unknown frame/body {obs.frame!r}; frames: {names}")
+        warn_site_twin(mbm, obs.frame, "obstacle.frame")
         cons.append(PointContact(obs.frame, obs.frame, n, point=tuple(obs.point)))
     return cons
 
@@ -869,10 +871,12 @@ def _point_contacts(mbm, pt, k: int, planar: bool) -> list:
     its no-slip rows (two world directions orthogonal to the normal; one in the x-z plane
     for a planar model)."""
     from ..models.constraints import PointContact
+    from ..models.declare import warn_site_twin
 
     if not mbm.model.existFrame(pt.frame):
         names = sorted({f.name for f in mbm.model.frames if f.name != "universe"})
         raise ConfigError(f"contacts.points[{k}]: unknown frame {pt.frame!r}; frames: {names}")
+    warn_site_twin(mbm, pt.frame, f"contacts.points[{k}].frame")
     name = pt.name or f"{pt.frame}{k}"
     n = np.asarray(pt.normal, float)
     n = n / np.linalg.norm(n)
