@@ -359,3 +359,22 @@ def test_floating_base_on_an_mjcf_without_a_free_joint_says_how(tmp_path):
     with pytest.raises(ModelError, match=r"has no free joint at its root: add <freejoint/> "
                                          r"to its top-level body"):
         make_model(sc.model)
+
+
+def test_a_urdf_planar_joint_as_planar_base_says_what_to_write(tmp_path):
+    """kind = 'planar' on a URDF whose base is a `planar` joint said only 'joints ['p',
+    'j2'] are not'; it now says that a URDF planar joint is not roverimpact's x-z base and
+    how to write one."""
+    from roverimpact.exceptions import ModelError
+
+    inertia = ('<inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" '
+               'izz="1"/></inertial>')
+    f = tmp_path / "p.urdf"
+    f.write_text(f'<robot name="r"><link name="world_link"/><link name="body">{inertia}</link>'
+                 '<joint name="p" type="planar"><parent link="world_link"/><child link="body"/>'
+                 '<axis xyz="0 0 1"/></joint></robot>')
+    sc = Scenario.model_validate({"model": {"file": str(f), "base": {"kind": "planar"}},
+                                  "obstacle": {"frame": "body", "normal": [0, 0, 1]}})
+    with pytest.raises(ModelError, match=r"'p' is a URDF planar joint .*write the base as "
+                                         r"prismatic x, prismatic z and revolute y joints"):
+        make_model(sc.model)

@@ -172,8 +172,13 @@ def declare_base(mbm: MultibodyModel, kind: str, joints: Sequence[str] | None = 
         ok = all(abs(abs(a @ np.asarray(w, float)) - 1.0) < 1e-9 for a, w in zip(ax, want,
                                                                                 strict=True))
     if not ok:
+        urdf_planar = [jn for jn, j in zip(names, ids, strict=True) if _short(model, j) == "Planar"]
         raise ModelError(f"model.base: a planar base needs an x slide, a z slide and a y hinge; "
-                         f"joints {names} are not (give model.base.joints in that order)")
+                         f"joints {names} are not (give model.base.joints in that order)"
+                         + (f"; {urdf_planar[0]!r} is a URDF planar joint (x, y and a turn "
+                            "about z in its frame): write the base as prismatic x, prismatic "
+                            "z and revolute y joints through two massless links"
+                            if urdf_planar else ""))
     _check_planar_signs(model, ids, ax)
     mbm.params["base"] = {"kind": "planar", "joints": names}
 
