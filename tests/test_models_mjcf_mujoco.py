@@ -818,3 +818,39 @@ def test_a_site_named_as_its_body_is_announced(tmp_path):
     mujoco.mj_forward(m, d)
     np.testing.assert_allclose(site.contact_point, d.site_xpos[0], atol=1e-14)
     np.testing.assert_allclose(body.contact_point, d.xpos[2], atol=1e-14)
+
+
+def test_unset_base_angles_keep_the_files_orientation(tmp_path):
+    """configuration.base documents 'unset = model's nominal', but roll/pitch/yaw defaulted
+    to 0: an MJCF free body placed with euler='0 10 90' was turned back to the identity
+    (the tip site at (0.6, 0, 0.4) instead of MuJoCo's (0, 0.6, 0.4) at qpos0). Unset
+    angles now keep the nominal ones, a given angle replaces only itself (Pinocchio's
+    rpy: R = Rz(yaw) Ry(pitch) Rx(roll)). Reference: MuJoCo's site_xpos at qpos0."""
+    from roverimpact.scenario import Scenario
+    from roverimpact.scenario.build import ImpactSetup
+
+    f = tmp_path / "tilted.xml"
+    f.write_text(
+        "<mujoco><compiler angle='degree'/><worldbody><body name='rover' pos='0 0 0.4' "
+        "euler='0 10 90'><freejoint name='root'/><geom type='box' size='0.3 0.2 0.1' "
+        "mass='10'/><body name='arm' pos='0.3 0 0'><joint name='j' axis='0 1 0'/>"
+        "<geom type='capsule' fromto='0 0 0 0.3 0 0' size='0.02' mass='1'/>"
+        "<site name='tip' pos='0.3 0 0'/></body></body></worldbody></mujoco>")
+
+    def setup(base):
+        return ImpactSetup.from_scenario(Scenario.model_validate({
+            "model": {"file": str(f)}, "configuration": {"base": base},
+            "velocity": {"joints": {"j": 1.0}},
+            "obstacle": {"frame": "tip", "normal": [0.0, 0.0, 1.0]}}))
+
+    m = mujoco.MjModel.from_xml_path(str(f))
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    np.testing.assert_allclose(setup({}).contact_point, d.site_xpos[0], atol=1e-12)
+    R0 = pin.Quaternion(*m.qpos0[3:7]).toRotationMatrix()  # w x y z
+    roll, _, yaw = pin.rpy.matrixToRpy(R0)
+    q = setup({"pitch_deg": 5.0}).q
+    np.testing.assert_allclose(pin.Quaternion(q[3:7]).toRotationMatrix(),
+                               pin.rpy.rpyToMatrix(roll, np.deg2rad(5.0), yaw), atol=1e-12)
+    q = setup({"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0}).q   # all given: level
+    np.testing.assert_allclose(q[3:7], [0.0, 0.0, 0.0, 1.0], atol=1e-15)

@@ -530,10 +530,20 @@ def _joint(model, name: str, what: str):
     return model.joints[model.getJointId(name)]
 
 
-def _rpy_matrix(base: BaseSpec) -> np.ndarray:
+def _base_quaternions(base: BaseSpec, quat: np.ndarray) -> np.ndarray:
+    """The base quaternions (..., 4) (x y z w) with the roll, pitch and yaw that ``base``
+    gives replaced, the others kept from ``quat`` (the nominal orientation: a file's own
+    pose of its free body)."""
     import pinocchio as pin
 
-    return pin.rpy.rpyToMatrix(*np.deg2rad([base.roll_deg, base.pitch_deg, base.yaw_deg]))
+    given = (base.roll_deg, base.pitch_deg, base.yaw_deg)
+    flat = np.asarray(quat, dtype=float).reshape(-1, 4)
+    out = np.empty_like(flat)
+    for i, xyzw in enumerate(flat):
+        rpy = pin.rpy.matrixToRpy(pin.Quaternion(xyzw).normalized().toRotationMatrix())
+        rpy = [np.deg2rad(g) if g is not None else r for g, r in zip(given, rpy, strict=True)]
+        out[i] = pin.Quaternion(pin.rpy.rpyToMatrix(*rpy)).coeffs()
+    return out.reshape(np.shape(quat))
 
 
 def base_slices(mbm):
@@ -592,13 +602,15 @@ def configuration(mbm, spec: ConfigurationSpec, q_nominal=None) -> np.ndarray:
             q[..., iq[0]] = b.x
         if b.z is not None:
             q[..., iq[1]] = b.z
-        q[..., iq[2]] = np.deg2rad(b.pitch_deg)
+        if b.pitch_deg is not None:
+            q[..., iq[2]] = np.deg2rad(b.pitch_deg)
     elif kind == "floating":
         i0 = iq[0]
         for i, val in enumerate((b.x, b.y, b.z)):
             if val is not None:
                 q[..., i0 + i] = val
-        q[..., i0 + 3:i0 + 7] = pin.Quaternion(_rpy_matrix(b)).coeffs()
+        if (b.roll_deg, b.pitch_deg, b.yaw_deg) != (None, None, None):
+            q[..., i0 + 3:i0 + 7] = _base_quaternions(b, q[..., i0 + 3:i0 + 7])
     elif b != BaseSpec():
         raise ConfigError("configuration.base: this model has a fixed base; remove [base] or "
                           "declare [model.base] kind = 'floating'")

@@ -173,14 +173,16 @@ class ModelSpec(StrictModel):
 
 
 class BaseSpec(StrictModel):
-    """Base pose (world): position [m] and roll/pitch/yaw [deg]; unset = model's nominal."""
+    """Base pose (world): position [m] and roll/pitch/yaw [deg]; unset = model's nominal
+    (each coordinate and angle on its own: ``pitch_deg = 5`` keeps the nominal roll and
+    yaw, e.g. the orientation an MJCF file gives its free body)."""
 
     x: float | None = None
     y: float | None = None
     z: float | None = None
-    roll_deg: float = 0.0
-    pitch_deg: float = 0.0
-    yaw_deg: float = 0.0
+    roll_deg: float | None = None
+    pitch_deg: float | None = None
+    yaw_deg: float | None = None
 
 
 JointValue = float | list[float]
