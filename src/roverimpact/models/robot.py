@@ -6,8 +6,8 @@ optional free-flyer base; ``<mimic>`` couplings as constraint rows) or an MJCF f
 (:mod:`roverimpact.models.mujoco_check`). :func:`export_urdf`
 writes a built-in rover or a loaded robot as URDF (plain ``xml.etree``) so it can be
 opened in other tools; roverimpact's extra description (wheels, linear loop closures,
-lockable joints, floating base) travels in ``<roverimpact_*>`` elements that URDF parsers
-ignore, so loading the file back gives the same M and A. A ``<mujoco><compiler
+lockable joints, floating base, rotor inertia) travels in ``<roverimpact_*>`` elements
+that URDF parsers ignore, so loading the file back gives the same M and A. A ``<mujoco><compiler
 boundmass boundinertia/>`` element (:data:`MUJOCO_BOUND`) lets MuJoCo compile the
 massless links of a planar base without changing any body that has mass.
 """
@@ -160,6 +160,8 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
     fixed to the ground (Pinocchio's ``model.inertias[0]``: a fixed base link) is the
     ``<inertial>`` of the ``ground`` link. A ``<mujoco><compiler boundmass boundinertia/>``
     element (:data:`MUJOCO_BOUND`) lets MuJoCo compile massless links between joints.
+    Rotor inertia (``model.armature``, an MJCF joint's ``armature``; URDF has no element
+    for it) is a ``<roverimpact_armature joint= value=/>`` per joint that has one.
 
     Parameters
     ----------
