@@ -854,3 +854,33 @@ def test_unset_base_angles_keep_the_files_orientation(tmp_path):
                                pin.rpy.rpyToMatrix(roll, np.deg2rad(5.0), yaw), atol=1e-12)
     q = setup({"roll_deg": 0.0, "pitch_deg": 0.0, "yaw_deg": 0.0}).q   # all given: level
     np.testing.assert_allclose(q[3:7], [0.0, 0.0, 0.0, 1.0], atol=1e-15)
+
+
+def test_missing_texture_files_do_not_stop_the_load(tmp_path):
+    """An MJCF copied without its textures/ folder: MuJoCo stops at "Error opening file
+    'textures/grid.png'" and the model was unloadable, though textures change no number.
+    It now loads with a warning naming the files; M equals MuJoCo's mj_fullM of the same
+    model written without the texture (reference), and a missing mesh still fails."""
+    body = ("<worldbody><geom name='floor' type='plane' size='5 5 0.1' material='m'/>"
+            "<body name='a' pos='0 0 1'><joint name='j' axis='0 1 0'/><geom type='box' "
+            "size='0.1 0.2 0.3' pos='0.2 0 0' mass='2' material='m'/></body></worldbody>")
+    f = tmp_path / "tex.xml"
+    f.write_text("<mujoco><asset><texture name='grid' type='2d' file='textures/grid.png'/>"
+                 f"<material name='m' texture='grid'/></asset>{body}</mujoco>")
+    with pytest.warns(UserWarning, match=r"texture files \['textures/grid.png'\].*loaded "
+                                         r"without textures"):
+        mbm = load_robot(f)
+    m = mujoco.MjModel.from_xml_string(f"<mujoco><asset><material name='m'/></asset>{body}"
+                                       "</mujoco>")
+    d = mujoco.MjData(m)
+    d.qpos[:] = [0.7]
+    mujoco.mj_forward(m, d)
+    assert _pin_M(mbm.model, np.array([0.7]))[0, 0] == pytest.approx(_mj_M(m, d)[0, 0],
+                                                                     rel=1e-14)
+    assert _mj_M(m, d)[0, 0] == pytest.approx(2 * (0.2**2 + (0.2**2 + 0.6**2) / 12), rel=1e-12)
+    g = tmp_path / "mesh.xml"
+    g.write_text(f.read_text().replace(
+        "<material", "<mesh name='hull' file='hull.obj'/><material").replace(
+        "<geom type='box' size='0.1 0.2 0.3'", "<geom type='mesh' mesh='hull'"))
+    with pytest.raises(ModelError, match=r"hull\.obj"):
+        load_robot(g)

@@ -667,7 +667,10 @@ def _compile(mujoco, path: Path, floating_base):
             for body in spec.worldbody.bodies:
                 for j in [j for j in body.joints if j.type == mujoco.mjtJoint.mjJNT_FREE]:
                     spec.delete(j)
-        return spec.compile()
+        try:
+            return spec.compile()
+        except Exception as exc:
+            return _compile_without_textures(spec, path, exc)
     except ModelError:
         raise
     except ET.ParseError as exc:
@@ -675,6 +678,30 @@ def _compile(mujoco, path: Path, floating_base):
     except Exception as exc:  # MuJoCo raises ValueError with its compiler message
         msg = " ".join(str(exc).split()) or type(exc).__name__
         raise ModelError(f"{path}: MuJoCo cannot compile it ({msg})") from None
+
+
+def _compile_without_textures(spec, path: Path, exc: Exception):
+    """Compile ``spec`` again without its textures when the first compile failed and the
+    file names texture files (a model copied without its ``textures/`` folder: MuJoCo
+    stops at "Error opening file 'textures/grid.png'", though textures change no number
+    roverimpact computes); a warning names them. Re-raises ``exc`` if that does not help
+    (a missing mesh does change the inertias)."""
+    files = [t.file for t in spec.textures if t.file]
+    if not files:
+        raise exc
+    for t in list(spec.textures):
+        spec.delete(t)
+    for mat in spec.materials:
+        mat.textures = [""] * len(mat.textures)
+    try:
+        m = spec.compile()
+    except Exception:
+        raise exc from None
+    msg = " ".join(str(exc).split())
+    warnings.warn(f"{path}: MuJoCo could not load it with its texture files {files} ({msg}); "
+                  "loaded without textures, which change no mass, inertia or number "
+                  "roverimpact computes", UserWarning, stacklevel=4)
+    return m
 
 
 def load_mjcf(path: str | Path, *, floating_base: bool | None = None):
