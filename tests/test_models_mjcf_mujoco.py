@@ -857,9 +857,9 @@ def test_unset_base_angles_keep_the_files_orientation(tmp_path):
 
 
 def test_missing_texture_files_do_not_stop_the_load(tmp_path):
-    """An MJCF copied without its textures/ folder: MuJoCo stops at "Error opening file
-    'textures/grid.png'" and the model was unloadable, though textures change no number.
-    It now loads with a warning naming the files; M equals MuJoCo's mj_fullM of the same
+    """An MJCF copied without its textures/ folder (or its terrain height-field image):
+    MuJoCo stops at "Error opening file 'textures/grid.png'" and the model was unloadable,
+    though neither changes any number. It now loads with a warning naming the files; M equals MuJoCo's mj_fullM of the same
     model written without the texture (reference), and a missing mesh still fails."""
     body = ("<worldbody><geom name='floor' type='plane' size='5 5 0.1' material='m'/>"
             "<body name='a' pos='0 0 1'><joint name='j' axis='0 1 0'/><geom type='box' "
@@ -867,8 +867,8 @@ def test_missing_texture_files_do_not_stop_the_load(tmp_path):
     f = tmp_path / "tex.xml"
     f.write_text("<mujoco><asset><texture name='grid' type='2d' file='textures/grid.png'/>"
                  f"<material name='m' texture='grid'/></asset>{body}</mujoco>")
-    with pytest.warns(UserWarning, match=r"texture files \['textures/grid.png'\].*loaded "
-                                         r"without textures"):
+    with pytest.warns(UserWarning, match=r"texture and terrain files "
+                                         r"\['textures/grid.png'\].*loaded without textures"):
         mbm = load_robot(f)
     m = mujoco.MjModel.from_xml_string(f"<mujoco><asset><material name='m'/></asset>{body}"
                                        "</mujoco>")
@@ -884,3 +884,13 @@ def test_missing_texture_files_do_not_stop_the_load(tmp_path):
         "<geom type='box' size='0.1 0.2 0.3'", "<geom type='mesh' mesh='hull'"))
     with pytest.raises(ModelError, match=r"hull\.obj"):
         load_robot(g)
+    # a height-field terrain read from a missing file, on the world body: dropped too
+    h = tmp_path / "terrain.xml"
+    h.write_text(f.read_text().replace(
+        "<material", "<hfield name='ground' file='terrain.png' size='5 5 0.5 0.1'/><material")
+        .replace("type='plane' size='5 5 0.1'", "type='hfield' hfield='ground'"))
+    with pytest.warns(UserWarning, match=r"\['textures/grid.png', 'terrain.png'\].*without "
+                                         r"the static height fields \['ground'\]"):
+        mbm = load_robot(h)
+    assert _pin_M(mbm.model, np.array([0.7]))[0, 0] == pytest.approx(_mj_M(m, d)[0, 0],
+                                                                     rel=1e-14)

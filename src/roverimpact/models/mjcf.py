@@ -680,27 +680,49 @@ def _compile(mujoco, path: Path, floating_base):
         raise ModelError(f"{path}: MuJoCo cannot compile it ({msg})") from None
 
 
+def _static(body) -> bool:
+    """Whether a spec body and all its ancestors have no joint (it cannot move)."""
+    while body is not None and body.name != "world":
+        if any(True for _ in body.joints):
+            return False
+        body = body.parent
+    return True
+
+
 def _compile_without_textures(spec, path: Path, exc: Exception):
-    """Compile ``spec`` again without its textures when the first compile failed and the
-    file names texture files (a model copied without its ``textures/`` folder: MuJoCo
-    stops at "Error opening file 'textures/grid.png'", though textures change no number
-    roverimpact computes); a warning names them. Re-raises ``exc`` if that does not help
-    (a missing mesh does change the inertias)."""
-    files = [t.file for t in spec.textures if t.file]
+    """Compile ``spec`` again without the files that change no number roverimpact
+    computes, when the first compile failed and the file names some: textures (a model
+    copied without its ``textures/`` folder: MuJoCo stops at "Error opening file
+    'textures/grid.png'") and height fields read from a file whose geoms are all on
+    static bodies (terrain; roverimpact's comes from ``[terrain]``). A warning names them.
+    Re-raises ``exc`` if that does not help (a missing mesh does change the inertias)."""
+    import mujoco
+
+    hf = mujoco.mjtGeom.mjGEOM_HFIELD
+    terrain = [h for h in spec.hfields if h.file and all(
+        _static(g.parent) for g in spec.geoms if g.type == hf and g.hfieldname == h.name)]
+    files = [t.file for t in spec.textures if t.file] + [h.file for h in terrain]
     if not files:
         raise exc
     for t in list(spec.textures):
         spec.delete(t)
     for mat in spec.materials:
         mat.textures = [""] * len(mat.textures)
+    names = {h.name for h in terrain}
+    for g in [g for g in spec.geoms if g.type == hf and g.hfieldname in names]:
+        spec.delete(g)
+    for h in terrain:
+        spec.delete(h)
     try:
         m = spec.compile()
     except Exception:
         raise exc from None
     msg = " ".join(str(exc).split())
-    warnings.warn(f"{path}: MuJoCo could not load it with its texture files {files} ({msg}); "
-                  "loaded without textures, which change no mass, inertia or number "
-                  "roverimpact computes", UserWarning, stacklevel=4)
+    warnings.warn(f"{path}: MuJoCo could not load it with its texture and terrain files "
+                  f"{files} ({msg}); loaded without textures"
+                  + (f" and without the static height fields {sorted(names)}" if names else "")
+                  + ", which change no mass, inertia or number roverimpact computes",
+                  UserWarning, stacklevel=4)
     return m
 
 
