@@ -7,6 +7,7 @@ import os
 import signal
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -188,6 +189,33 @@ def test_a_folder_of_other_files_is_refused_and_overwrite_leaves_no_stale_table(
         assert not (out / name).exists(), name
     with pytest.raises(ConfigError):
         load_results(out)
+
+
+def test_a_study_reads_its_base_scenarios_terrain_relative_to_that_file(tmp_path,
+                                                                        monkeypatch):
+    """A base scenario's relative ``terrain.function`` (and ``terrain.file``) was read
+    from the working folder, not from the scenario's: the study of a scenario that
+    ``roverimpact energy`` reads failed ("no file 'terrain/bumps.py'"), or used another
+    terrain of that name in the working folder. Reference: the scenario file loaded on
+    its own (load_scenario resolves it next to the file)."""
+    import shutil
+
+    from roverimpact.scenario import ImpactSetup, load_scenario
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    proj = tmp_path / "proj"
+    (proj / "terrain").mkdir(parents=True)
+    shutil.copy(ex / "rocker_bogie_on_bumps.toml", proj / "scen.toml")
+    shutil.copy(ex / "terrain" / "bumps.py", proj / "terrain" / "bumps.py")
+    (proj / "st.toml").write_text('name = "bumps"\nbase = "scen.toml"\n'
+                                  '[[cases]]\n"velocity.u" = 0.3\n')
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / "terrain").mkdir(parents=True)  # a flat terrain of the same name here
+    (elsewhere / "terrain" / "bumps.py").write_text("def h(x, y):\n    return 0.0 * x\n")
+    monkeypatch.chdir(elsewhere)
+    res = run_study(proj / "st.toml", tmp_path / "out")
+    ref = ImpactSetup.from_scenario(load_scenario(proj / "scen.toml")).partition()
+    assert res.table["T_c_minus"].iloc[0] == pytest.approx(float(ref.T_c_minus), rel=1e-12)
 
 
 def test_resumed_with_a_cluster_never_reads_a_damaged_chunk(tmp_path):

@@ -227,8 +227,9 @@ def load_study(path: str | Path) -> tuple[Study, str]:
 
     A ``base = "file.toml"`` string is read relative to the study file (the text is then
     ``None``: the study is self-contained only once the base is inlined). A relative
-    ``model.file`` is read relative to the file that names it (the base file, or the
-    study file for a ``[base]`` table), as a scenario file's is.
+    ``model.file``, ``terrain.file`` or ``terrain.function`` file is read relative to the
+    file that names it (the base file, or the study file for a ``[base]`` table), as a
+    scenario file's is.
 
     Raises
     ------
@@ -245,10 +246,10 @@ def load_study(path: str | Path) -> tuple[Study, str]:
     if isinstance(raw.get("base"), str):
         # the base lives in another file: the copy written next to results inlines it
         base_path = (path.parent / raw["base"]).resolve()
-        raw["base"] = _robot_file_from(read_toml(base_path), base_path.parent)
+        raw["base"] = _files_from(read_toml(base_path), base_path.parent)
         text = None
     elif isinstance(raw.get("base"), dict):
-        raw["base"] = _robot_file_from(raw["base"], path.parent)
+        raw["base"] = _files_from(raw["base"], path.parent)
     try:
         study = Study.model_validate(raw)
     except ValidationError as exc:
@@ -256,16 +257,35 @@ def load_study(path: str | Path) -> tuple[Study, str]:
     return study, text
 
 
-def _robot_file_from(base: Any, folder: Path) -> Any:
-    """``base`` with a relative ``model.file`` read from ``folder`` (the folder of the file
-    that names it), as :func:`roverimpact.scenario.load_scenario` reads a scenario's."""
+def _files_from(base: Any, folder: Path) -> Any:
+    """``base`` with its relative file names read from ``folder`` (the folder of the file
+    that names them), as :func:`roverimpact.scenario.load_scenario` reads a scenario's:
+    ``model.file``, ``terrain.file`` and a ``terrain.function`` of a ``.py`` file. (Only
+    ``model.file`` was, and a study of a scenario that ``roverimpact energy`` reads
+    refused its terrain, or took another one of the same name from the working folder.)"""
     from ..scenario.schema import is_example_robot_name
 
-    model = base.get("model") if isinstance(base, dict) else None
-    f = model.get("file") if isinstance(model, dict) else None
-    if not isinstance(f, str) or is_example_robot_name(f) or Path(f).is_absolute():
+    if not isinstance(base, dict):
         return base
-    return base | {"model": model | {"file": str((folder / f).resolve())}}
+    out = dict(base)
+    model = base.get("model")
+    f = model.get("file") if isinstance(model, dict) else None
+    if isinstance(f, str) and not is_example_robot_name(f) and not Path(f).is_absolute():
+        out["model"] = model | {"file": str((folder / f).resolve())}
+    terrain = base.get("terrain")
+    if isinstance(terrain, dict):
+        upd = {}
+        f = terrain.get("file")
+        if isinstance(f, str) and not Path(f).is_absolute():
+            upd["file"] = str((folder / f).resolve())
+        fn = terrain.get("function")
+        if isinstance(fn, str):
+            mod, _, name = fn.rpartition(":")
+            if mod.endswith(".py") and not Path(mod).is_absolute():
+                upd["function"] = f"{(folder / mod).resolve()}:{name}"
+        if upd:
+            out["terrain"] = terrain | upd
+    return out
 
 
 def study_from_dict(data: Mapping[str, Any], where: str = "study") -> Study:
