@@ -433,6 +433,9 @@ CASES = [
      "results"),
     ("sweep-foreign-folder", ["sweep", "{ex}/study_rigid_body.toml", "-o", "{o}/exists",
                               "--overwrite"], ["{o}/exists"], "no study results", "exists"),
+    ("sweep-out-is-a-file", ["sweep", "{ex}/study_rigid_body.toml", "-o",
+                             "{o}/exists/keep.txt"], ["{o}/exists"], "is a file, not a folder",
+     "exists"),
     # sweep
     ("sweep-missing", ["sweep", "{d}/nope.toml", "-o", "{o}/r"], ["{o}/r"], "no such file",
      None),

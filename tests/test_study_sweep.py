@@ -191,6 +191,81 @@ def test_a_folder_of_other_files_is_refused_and_overwrite_leaves_no_stale_table(
         load_results(out)
 
 
+def test_a_second_run_into_a_folder_being_written_is_refused(tmp_path):
+    """A run started into the folder of a running study (another terminal's ``sweep -o
+    same --overwrite``) deleted the first run's chunks and wrote its own in their place:
+    the first run's table then held the other study's rows under its own case numbers
+    (no error), or it died on a chunk gone missing. Now the second run is refused and the
+    first one's table is that of a run alone."""
+    alone = run_study(_study(chunk_size=4), tmp_path / "alone",
+                      evaluator=ScenarioEvaluator()).table
+    other = _study(chunk_size=4)
+    other["base"] = {**BASE, "velocity": {"u": 2.0}}  # same case numbers, other rows
+    out = tmp_path / "r"
+    refused = []
+
+    def second_run(done, total):
+        if done == 4:  # the first run has written its first chunk
+            try:
+                run_study(other, out, evaluator=ScenarioEvaluator(), overwrite=True)
+            except ConfigError as exc:
+                refused.append(str(exc))
+
+    res = run_study(_study(chunk_size=4), out, evaluator=ScenarioEvaluator(),
+                    progress=second_run)
+    pd.testing.assert_frame_equal(res.table, alone)
+    assert len(refused) == 1 and "another roverimpact run is writing" in refused[0]
+    # the folder is free again once the run ended
+    again = run_study(other, out, evaluator=ScenarioEvaluator(), overwrite=True).table
+    np.testing.assert_allclose(again["v_n"], 4 * alone["v_n"], rtol=1e-12)  # T ~ u^2: v_n ~ u
+
+
+def test_a_shared_cluster_does_not_keep_a_finished_studys_folder_locked(tmp_path,
+                                                                        monkeypatch):
+    """A local cluster forked while a study holds its folder gives its workers copies of
+    the lock: the folder stayed locked after the study, for as long as the cluster lived
+    (a second study into it: "another roverimpact run is writing")."""
+    pytest.importorskip("dask.distributed")
+    from roverimpact.studies import executors
+    from roverimpact.studies.executors import LazyCluster
+
+    monkeypatch.setattr(executors, "worth_a_cluster", lambda *a, **k: True)
+    out = tmp_path / "r"
+    with LazyCluster(2) as cluster:
+        first = run_study(_study(chunk_size=4), out, cluster=cluster)
+        assert cluster.running
+        second = run_study(_study(chunk_size=4), out, cluster=cluster, overwrite=True)
+    assert json.loads((out / "manifest.json").read_text())["executor"].startswith("local")
+    pd.testing.assert_frame_equal(second.table, first.table)
+
+
+def test_a_manifest_of_another_program_does_not_make_a_study_folder(tmp_path):
+    """A folder with a manifest.json of its own (a web app's) was taken for a study's:
+    "already holds study results", and --overwrite deleted its report.html, figure.png,
+    results.csv and every .parquet file in its chunks/ folder. Now it is a folder of other
+    files (refused, untouched); and --overwrite of a real study folder removes only the
+    chunk files in chunks/."""
+    web = tmp_path / "web"
+    (web / "chunks").mkdir(parents=True)
+    mine = {"manifest.json": '{"short_name": "my app"}', "report.html": "<h1>mine</h1>",
+            "results.csv": "a,b\n1,2\n", "chunks/mine.parquet": "my data"}
+    for name, text in mine.items():
+        (web / name).write_text(text)
+    for kw in ({}, {"overwrite": True}, {"resume": True}):
+        with pytest.raises(ConfigError, match="holds files but no study results"):
+            run_study(_study(), web, evaluator=ScenarioEvaluator(), **kw)
+    for name, text in mine.items():
+        assert (web / name).read_text() == text, name
+    out = tmp_path / "r"
+    run_study(_study(chunk_size=4), out, evaluator=ScenarioEvaluator())
+    (out / "chunks" / "notes.parquet").write_text("mine")
+    (out / "chunks" / ".draft.tmp").write_text("mine")  # not a temporary of roverimpact
+    res = run_study(_study(chunk_size=4), out, evaluator=ScenarioEvaluator(), overwrite=True)
+    assert res.n_computed == 18
+    assert (out / "chunks" / "notes.parquet").read_text() == "mine"
+    assert (out / "chunks" / ".draft.tmp").read_text() == "mine"
+
+
 def test_a_study_reads_its_base_scenarios_terrain_relative_to_that_file(tmp_path,
                                                                         monkeypatch):
     """A base scenario's relative ``terrain.function`` (and ``terrain.file``) was read

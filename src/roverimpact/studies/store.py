@@ -17,6 +17,7 @@ from __future__ import annotations
 import functools
 import json
 import os
+import re
 import uuid
 from contextlib import contextmanager
 from pathlib import Path
@@ -40,6 +41,8 @@ __all__ = [
     "check_out_dir",
     "chunk_path",
     "finished_chunks",
+    "folder_lock",
+    "is_study_manifest",
     "load_results",
     "read_results_table",
     "remove_stale_temporaries",
@@ -62,6 +65,9 @@ DERIVED = (RESULTS, "results.csv", "stats.json", "report.html", "figure.png", "f
 
 
 def check_out_dir(out_dir: Path) -> None:
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ConfigError(f"output folder {out_dir} is a file, not a folder; choose another "
+                          "folder with -o")
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         probe = out_dir / f".write-test-{uuid.uuid4().hex}"
@@ -188,12 +194,82 @@ def atomic_parquet(df: pd.DataFrame, path: Path) -> None:
     _atomic(path, lambda tmp: df.to_parquet(tmp, index=False, **PARQUET_WRITE))
 
 
+#: The name of a temporary file of :func:`_atomic` (and of a results table being
+#: written): ``.<name>.<32 hex digits>.tmp``
+_TEMPORARY = re.compile(r"\..+\.[0-9a-f]{32}\.tmp")
+
+
 def remove_stale_temporaries(out_dir: Path) -> None:
-    """Delete temp files that an interrupted run left behind (never a finished file)."""
+    """Delete temp files that an interrupted run left behind (never a finished file, nor
+    a hidden ``.tmp`` file of another program: only the names :func:`_atomic` makes)."""
     for folder in (out_dir, out_dir / CHUNKS):
         if folder.is_dir():
             for f in folder.glob(".*.tmp"):
-                f.unlink(missing_ok=True)
+                if _TEMPORARY.fullmatch(f.name):
+                    f.unlink(missing_ok=True)
+
+
+def is_study_manifest(data) -> bool:
+    """Whether ``data`` (a parsed ``manifest.json``) is a study's manifest, as
+    :func:`roverimpact.studies.sweep.run_study` writes it: a ``manifest.json`` of another
+    program (a web app's) or of a traverse does not make a folder a study's."""
+    return isinstance(data, dict) and isinstance(data.get("fingerprint"), str)
+
+
+#: Folder descriptors locked by :func:`folder_lock` in this process. A forked process (a
+#: local Dask worker, started while a study holds its folder) closes its copies at once:
+#: a flock belongs to every copy of the descriptor, and the worker's copy kept the folder
+#: locked after the study ended, for as long as a shared cluster lived.
+_LOCKED: set[int] = set()
+
+
+def _close_locked_in_child() -> None:
+    for fd in _LOCKED:
+        try:
+            os.close(fd)
+        except OSError:  # pragma: no cover
+            pass
+    _LOCKED.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_close_locked_in_child)
+
+
+@contextmanager
+def folder_lock(out_dir: Path):
+    """Hold an exclusive lock on the folder ``out_dir`` while a study writes it; a second
+    run into the same folder meanwhile is a ConfigError instead of a second writer. Two
+    runs in one folder deleted each other's chunks (a ``FileNotFoundError`` traceback) or,
+    with the same case indices, wrote a results table holding the other study's rows.
+
+    An advisory ``flock`` on the folder itself (no file is created); the system releases
+    it when the process ends, however it ends (SIGKILL included). Where locks are not
+    available (Windows, a file system without them) the run goes on unlocked."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    try:
+        fd = os.open(out_dir, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:  # pragma: no cover - the folder was checked just before
+        yield
+        return
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ConfigError(
+                f"{out_dir}: another roverimpact run is writing to this folder; wait for it "
+                "to end, or choose another folder with -o") from None
+        except OSError:  # pragma: no cover - no locks on this file system
+            pass
+        _LOCKED.add(fd)
+        yield
+    finally:
+        _LOCKED.discard(fd)
+        os.close(fd)
 
 
 def write_manifest(out_dir: Path, manifest: dict) -> Path:

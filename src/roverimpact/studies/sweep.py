@@ -53,6 +53,8 @@ from .store import (
     check_out_dir,
     chunk_path,
     finished_chunks,
+    folder_lock,
+    is_study_manifest,
     load_results,
     read_results_table,
     remove_stale_temporaries,
@@ -302,6 +304,15 @@ def run_study(
         need_dask()
     out_dir = Path(out_dir)
     check_out_dir(out_dir)
+    with folder_lock(out_dir):  # one run at a time in a folder
+        return _run_in_folder(prep, out_dir, resume=resume, overwrite=overwrite, csv=csv,
+                              workers=workers, scheduler=scheduler, progress=progress,
+                              retries=retries, cluster=cluster, note=note, t0=t0)
+
+
+def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv, workers,
+                   scheduler, progress, retries, cluster, note, t0) -> StudyResult:
+    """:func:`run_study` once the study is checked and the folder is this run's."""
     _open_folder(prep, out_dir, resume=resume, overwrite=overwrite)
 
     cs = prep.chunk_size
@@ -403,11 +414,17 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
     """Refuse a folder holding other results; on resume take the old chunk size; clear
     what an interrupted run left half-written, and the chunks on overwrite."""
     manifest_path = out_dir / MANIFEST
+    old = None
     if manifest_path.is_file():
         try:
             old = json.loads(manifest_path.read_text())
         except (OSError, ValueError):
             old = {}
+    # a manifest.json of another program (a web app's, a traverse's) is not a study's:
+    # its folder is one of other files (an unreadable one is still taken as a study's, as
+    # a run killed while writing it could leave one)
+    ours = old is not None and (old == {} or is_study_manifest(old))
+    if ours:
         if resume:
             fp = prep.study.fingerprint()
             if old.get("fingerprint") != fp:
@@ -427,15 +444,15 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
         if entries:  # -o . beside the study file, a folder of the user's own files
             shown = ", ".join(entries[:4]) + (", ..." if len(entries) > 4 else "")
             raise ConfigError(
-                f"{out_dir} holds files but no study results (no {MANIFEST}: {shown}); "
+                f"{out_dir} holds files but no study results (no study {MANIFEST}: {shown}); "
                 "choose a new or empty folder (nothing was written)")
     chunk_dir = out_dir / CHUNKS
-    if overwrite and manifest_path.is_file():
+    if overwrite and ours:
         for name in DERIVED:
             (out_dir / name).unlink(missing_ok=True)
-    if overwrite and chunk_dir.is_dir():
-        for f in chunk_dir.glob("*.parquet"):
-            f.unlink()
+        if chunk_dir.is_dir():  # the chunk files only (chunk_path's names)
+            for f in chunk_dir.glob("chunk-*.parquet"):
+                f.unlink()
     chunk_dir.mkdir(exist_ok=True)
     remove_stale_temporaries(out_dir)
 
