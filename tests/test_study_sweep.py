@@ -266,6 +266,40 @@ def test_a_manifest_of_another_program_does_not_make_a_study_folder(tmp_path):
     assert (out / "chunks" / ".draft.tmp").read_text() == "mine"
 
 
+def test_resume_refuses_a_robot_file_changed_since_the_first_run(tmp_path):
+    """The fingerprint of a study holds the name of its robot file, not its contents: a
+    resume after the file changed kept the chunks of the old robot and computed the rest
+    with the new one (one table, m_total 24 kg in 8 rows and 64 kg in 8). Now it is
+    refused, naming the file; --overwrite recomputes every case. The masses: the MJCF's
+    own (chassis 20 kg -> 60 kg, two wheels of 2 kg)."""
+    import shutil
+
+    from roverimpact.studies.store import chunk_path
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    for name in ("mjcf_rover.xml", "mjcf_rover_beta.toml"):
+        shutil.copy(ex / name, tmp_path / name)
+    (tmp_path / "st.toml").write_text(
+        'name = "mjcf"\nbase = "mjcf_rover_beta.toml"\nchunk_size = 2\n'
+        '[grid]\n"obstacle.beta_deg" = [20.0, 40.0, 60.0, 80.0]\n')
+    out = tmp_path / "out"
+    first = run_study(tmp_path / "st.toml", out).table
+    assert np.allclose(first["m_total"], 24.0)
+    chunk_path(out, 1).unlink()  # as if interrupted before the second chunk
+    xml = tmp_path / "mjcf_rover.xml"
+    text = xml.read_text()
+    assert text.count('mass="20"') == 1
+    xml.write_text(text.replace('mass="20"', 'mass="60"'))
+    with pytest.raises(ConfigError, match=r"mjcf_rover\.xml changed"):
+        run_study(tmp_path / "st.toml", out, resume=True)
+    res = run_study(tmp_path / "st.toml", out, overwrite=True)
+    assert np.allclose(res.table["m_total"], 64.0)
+    chunk_path(out, 1).unlink()
+    again = run_study(tmp_path / "st.toml", out, resume=True)  # unchanged: resumed
+    assert again.n_reused == 2 and again.n_computed == 2
+    pd.testing.assert_frame_equal(again.table, res.table)
+
+
 def test_a_study_reads_its_base_scenarios_terrain_relative_to_that_file(tmp_path,
                                                                         monkeypatch):
     """A base scenario's relative ``terrain.function`` (and ``terrain.file``) was read

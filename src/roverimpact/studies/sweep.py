@@ -11,6 +11,7 @@ so an interrupted study continues without recomputing or duplicating rows. Where
 from __future__ import annotations
 
 import functools
+import hashlib
 import json
 import math
 import time
@@ -26,6 +27,7 @@ from .config import (
     CaseSequence,
     Study,
     cases_of,
+    get_path,
     load_study,
     study_from_dict,
     validate_scenarios,
@@ -63,7 +65,8 @@ from .store import (
     write_results,
 )
 
-__all__ = ["StudyResult", "failed_simulations", "load_results", "prepare_study", "run_study"]
+__all__ = ["StudyResult", "failed_simulations", "input_files", "load_results", "prepare_study",
+           "run_study"]
 
 
 class StudyResult:
@@ -433,6 +436,13 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
                     f"fingerprint {old.get('fingerprint')}); --resume needs the same study "
                     "file. Use another folder, or --overwrite to discard them"
                 )
+            changed = [f for f, h in (old.get("input_files") or {}).items()
+                       if input_files(prep.study).get(f) != h]
+            if changed:
+                raise ConfigError(
+                    f"{changed[0]} changed (or is gone) since the results in {out_dir} were "
+                    "computed; --resume would put rows of both versions in one table. Use "
+                    "--overwrite to recompute every case, or another folder")
             prep.chunk_size = int(old.get("chunk_size", prep.chunk_size))
         elif not overwrite:
             raise ConfigError(
@@ -457,6 +467,23 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
     remove_stale_temporaries(out_dir)
 
 
+def input_files(study: Study) -> dict[str, str]:
+    """SHA-256 of each file the study's base scenario reads (``model.file``,
+    ``terrain.file``, a ``terrain.function``'s ``.py`` file), by its name as the study
+    gives it: the manifest keeps them, and ``--resume`` refuses to go on once one
+    changed (the fingerprint holds only the names). Files those files name in turn (a
+    robot's meshes) are not followed."""
+    names = [get_path(study.base, "model.file", None), get_path(study.base, "terrain.file", None)]
+    fn = get_path(study.base, "terrain.function", None)
+    if isinstance(fn, str) and fn.rpartition(":")[0].endswith(".py"):
+        names.append(fn.rpartition(":")[0])
+    out = {}
+    for name in names:
+        if isinstance(name, str) and Path(name).is_file():
+            out[name] = hashlib.sha256(Path(name).read_bytes()).hexdigest()
+    return out
+
+
 def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int) -> dict:
     """The study file next to the results and a manifest saying ``running``."""
     st = prep.study
@@ -478,6 +505,7 @@ def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int) -> dict:
         "simulate": st.simulate,
         "engines": list(st.engines()),
         "evaluator": getattr(prep.evaluator, "name", "?"),
+        "input_files": input_files(st),
         "versions": versions(),
         "status": "running",
     }
