@@ -486,6 +486,9 @@ CASES = [
      "full reproduction", "full"),
     ("reproduce-unwritable", ["reproduce", "--quick", "-o", "{ro}"], ["{ro}"], "not writable",
      None),
+    # a folder of the user's own files: its report.html was replaced
+    ("reproduce-foreign-folder", ["reproduce", "--quick", "-o", "{o}/exists"], ["{o}/exists"],
+     "keep.txt", "exists"),
     ("reproduce-workers-and-scheduler", ["reproduce", "--quick", "-o", "{o}/r", "--workers",
                                          "1", "--scheduler", "tcp://localhost:1"], ["{o}/r"],
      "not both", None),

@@ -27,7 +27,7 @@ from .._io import read_toml
 from ..exceptions import ConfigError, StudyInterrupted
 from .config import study_from_dict
 from .executors import LazyCluster
-from .store import MANIFEST
+from .store import MANIFEST, is_study_manifest
 from .sweep import run_study
 
 __all__ = ["BUILTIN_STUDIES", "QUICK_POINTS", "builtin_study_path", "run_builtin_studies"]
@@ -81,6 +81,27 @@ def _refuse_replacing(out_dir: Path, stem: str, full) -> None:
         )
 
 
+def _refuse_other_files(out_dir: Path) -> None:
+    """ConfigError if ``out_dir`` holds files but no reproduction (no built-in study's
+    folder with a study manifest): its ``report.html`` would be replaced (``-o .`` in a
+    folder of the user's own files). Hidden files do not count, as for a study's folder."""
+    if not out_dir.is_dir():
+        return
+    entries = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+    if not entries:
+        return
+    for stem in BUILTIN_STUDIES:
+        try:
+            old = json.loads((out_dir / stem / MANIFEST).read_text())
+        except (OSError, ValueError):
+            continue
+        if is_study_manifest(old):
+            return
+    shown = ", ".join(entries[:4]) + (", ..." if len(entries) > 4 else "")
+    raise ConfigError(f"{out_dir} holds files but no reproduction ({shown}); choose a new "
+                      "or empty folder with -o (nothing was written)")
+
+
 def run_builtin_studies(
     out_dir: str | Path = "roverimpact-results",
     *,
@@ -110,7 +131,8 @@ def run_builtin_studies(
         ``note(text)``: how a study ran when the cluster was not worth starting.
     overwrite : bool
         Let a ``quick`` run replace a full reproduction found in ``out_dir`` (refused
-        otherwise, before any work). A run of the same kind replaces its predecessor.
+        otherwise, before any work). A run of the same kind replaces its predecessor. A
+        folder of other files (no built-in study's results) is refused whatever the flags.
 
     Returns
     -------
@@ -121,6 +143,7 @@ def run_builtin_studies(
     out_dir = Path(out_dir)
     if workers is not None and scheduler is not None:
         raise ConfigError("give either --workers or --scheduler, not both")
+    _refuse_other_files(out_dir)
     studies = []
     for stem in BUILTIN_STUDIES:
         data = read_toml(builtin_study_path(stem))
