@@ -57,3 +57,52 @@ def test_reproduce_folder_missing_a_study_says_so(tmp_path, capsys):
     # a complete one, or a folder of other studies: no note
     assert main(["report", str(root / kept[0])]) == 0
     assert "Not in this report" not in capsys.readouterr().err
+
+
+def _forces(scenario):
+    """T_c^- and a peak force from the angle; the simulation "fails" at 30 and 60 deg."""
+    import math
+
+    beta = scenario["obstacle"]["beta_deg"]
+    t = math.sin(math.radians(beta)) ** 2
+    failed = beta in (30.0, 60.0)
+    return {"T_c_minus": t, "F_max": math.nan if failed else 900.0 * t ** 0.6 + beta,
+            "contact_whole_window": False, "sim_error": "SimulationError: boom" if failed
+            else ""}
+
+
+def test_report_says_which_cases_the_statistics_leave_out(tmp_path, capsys):
+    """Failed simulations (F_max NaN) left the statistics without a word: "cases 10,
+    n 8, excl. 0"; and a study of 2 simulated cases said "the compliant-contact simulator
+    gave no result" although both had F_max. Reference: scipy's Spearman of the rows with
+    F_max, read from the chunk files."""
+    import glob
+    import json
+
+    import pandas as pd
+    from scipy import stats
+
+    from roverimpact.studies import run_study
+
+    base = {"obstacle": {"beta_deg": 0.0}}
+    grid = {"obstacle.beta_deg": [10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0, 90.0]}
+    run_study({"name": "failing", "simulate": True, "chunk_size": 3, "base": base,
+               "grid": grid}, tmp_path / "f", evaluator=_forces)
+    capsys.readouterr()
+    assert main(["report", str(tmp_path / "f")]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "2 cases without F_max (the simulation failed" in out
+    t = pd.concat(pd.read_parquet(p) for p in sorted(glob.glob(str(tmp_path / "f/chunks/*"))))
+    ok = t["F_max"].notna()
+    ref = stats.spearmanr(t["T_c_minus"][ok], t["F_max"][ok]).statistic
+    s = json.loads((tmp_path / "f" / "stats.json").read_text())
+    assert s["n"] == 8 and abs(s["spearman"]["value"] - ref) < 1e-12
+    assert "2 cases without F_max" in (tmp_path / "f" / "report.html").read_text()
+
+    run_study({"name": "two", "simulate": True, "base": base,
+               "grid": {"obstacle.beta_deg": [20.0, 40.0]}}, tmp_path / "two",
+              evaluator=_forces)
+    assert main(["report", str(tmp_path / "two")]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "2 cases with F_max, at least 3 are needed" in out
+    assert "gave no result" not in (tmp_path / "two" / "report.html").read_text()

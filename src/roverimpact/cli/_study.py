@@ -60,6 +60,9 @@ def _print_stats(sections) -> None:
             tab.add_row(*first, name, _f(e.value), f"[{_f(e.low)}, {_f(e.high)}]",
                         end_section=i == len(_STATS) - 1)
     console.print(tab)
+    for s in sections:  # what the statistics leave out (failed simulations, too few cases)
+        if s.note and s.manifest.get("simulate"):
+            console.print(f"{_label(s)}: {s.note}", highlight=False)
     _print_indicators(sections)
 
 

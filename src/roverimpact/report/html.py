@@ -153,12 +153,14 @@ def _fmt(v: float) -> str:
     return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.3f}"
 
 
-def correlation_subtitle(a: Agreement | None, force: str | None, n_whole_window: int = 0
-                         ) -> str:
-    """One line of the agreement statistics (plain text; figures typeset it)."""
+def correlation_subtitle(a: Agreement | None, force: str | None, n_whole_window: int = 0,
+                         n_failed: int = 0) -> str:
+    """One line of the agreement statistics (plain text; figures typeset it).
+    ``n_failed``: cases without a peak force (failed simulations), left out."""
     if a is None:
         return "F_max unavailable (no simulation): correlation not computed"
     excl = f", {n_whole_window} whole-window excluded" if n_whole_window else ""
+    excl += f", {n_failed} without {force} (simulation failed)" if n_failed else ""
     return (f"Spearman {_fmt(a.spearman.value)}, Kendall {_fmt(a.kendall.value)}, "
             f"Pearson {_fmt(a.pearson.value)} (T_c^- vs {force}, n={a.n}{excl})")
 
@@ -197,16 +199,25 @@ def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> 
                                   force_label=f"{ENGINE_LABELS.get(engine, engine)}'s F_max")
         engines.append(EngineStats(engine, col, a, int(ww.sum()), comp,
                                    _ratios(table, col, engine, ww)))
-    if "F_max" in table and np.isfinite(kept["F_max"].to_numpy(float)).sum() >= 3:
+    n_with = (int(np.isfinite(table["F_max"].to_numpy(float)).sum()) if "F_max" in table
+              else 0)
+    n_failed = len(table) - n_with if n_with else 0
+    if n_with and np.isfinite(kept["F_max"].to_numpy(float)).sum() >= 3:
         agr = engines[0].agreement
-    elif "F_max" in table and np.isfinite(table["F_max"].to_numpy(float)).sum() >= 3:
+        if n_failed:
+            note = _failed_note(n_failed)
+    elif n_with >= 3:
         note = (f"F_max agreement not computed: fewer than 3 cases left once the "
                 f"{int(whole.sum())} whole-window cases are excluded.")
+    elif n_with:
+        note = (f"F_max agreement not computed: {n_with} case{'s' if n_with != 1 else ''} "
+                "with F_max, at least 3 are needed." + (" " + _failed_note(n_failed)
+                                                       if n_failed else ""))
     else:
         note = _no_force_note(manifest, fcol)
     name = manifest.get("name") or (study.name if study else folder.name)
     n_ww = int(whole.sum())
-    subtitle = correlation_subtitle(agr, "F_max", n_ww)
+    subtitle = correlation_subtitle(agr, "F_max", n_ww, n_failed)
     if len(engines) > 1:
         subtitle += "; " + "; ".join(
             f"{e.label}: Spearman {_fmt(e.agreement.spearman.value)} (n={e.agreement.n})"
@@ -301,13 +312,16 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
         engines.append(EngineStats(engine, col, a, summ.n_true.get(WHOLE_WINDOW + suffix,
                                                                    int(ww.sum())), comp))
     agr = engines[0].agreement if engines and engines[0].force == "F_max" else None
+    n_with = summ.n_finite.get("F_max", 0)
+    n_failed = summ.n - n_with if n_with else 0
     if agr is not None:
         note = (f"{summ.n:,} cases: the statistics are computed on {of}; the figure "
-                "summarizes every case.")
+                "summarizes every case." + (" " + _failed_note(n_failed) if n_failed
+                                            else ""))
     else:
         note = _no_force_note(manifest, fcol)
     name = manifest.get("name") or (study.name if study else folder.name)
-    subtitle = correlation_subtitle(agr, "F_max", n_ww)
+    subtitle = correlation_subtitle(agr, "F_max", n_ww, n_failed)
     if agr is not None:
         subtitle += f"; statistics on a random sample of {ns:,}"
     rng = np.random.default_rng(seed)
@@ -334,6 +348,13 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
 
 #: Dots drawn in the summary figure of a large study (a random subset of the sample).
 PLOT_SAMPLE = 3000
+
+
+def _failed_note(n_failed: int) -> str:
+    """The note of a study section where simulations failed."""
+    return (f"{n_failed:,} case{'s' if n_failed != 1 else ''} without F_max (the simulation "
+            "failed: see sim_error in the results) left out of the statistics and the "
+            "figure's force points.")
 
 
 def _no_force_note(manifest: dict, fcol: str | None) -> str:
