@@ -738,6 +738,33 @@ def test_local_cluster_workers_keep_glibc_adaptive_malloc(monkeypatch):
     assert env.get("OMP_NUM_THREADS") == "1"
 
 
+def test_a_local_cluster_says_nothing_when_dasks_default_port_is_taken():
+    """The scheduler's HTTP server wants port 8787; with any other Dask cluster on the
+    machine (a notebook's) every `sweep --workers` printed Dask's "Port 8787 is already
+    in use. Perhaps you already have a cluster running?" warning, a problem that is none:
+    the server takes another port."""
+    pytest.importorskip("dask.distributed")
+    import socket
+    import warnings
+
+    from roverimpact.studies.executors import local_cluster
+
+    taken = socket.socket()
+    try:
+        try:
+            taken.bind(("127.0.0.1", 8787))
+            taken.listen()
+        except OSError:  # taken already: the case to test
+            pass
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            with local_cluster(1):
+                pass
+    finally:
+        taken.close()
+    assert not [w for w in seen if "already in use" in str(w.message)], seen
+
+
 def _worker_state():
     """In a worker: its BLAS threads, and whether it has a module only its parent loaded."""
     import sys

@@ -15,6 +15,7 @@ import socket
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
@@ -215,7 +216,14 @@ def local_cluster(workers: int):
     method = worker_start_method()
     with dask.config.set({**WORKER_ENVIRON, **CLUSTER_CONFIG,
                           "distributed.worker.multiprocessing-method": method}), \
-            _one_blas_thread(method), _workers_ignore_ctrl_c(method) as ctrl_c:
+            _one_blas_thread(method), _workers_ignore_ctrl_c(method) as ctrl_c, \
+            warnings.catch_warnings():
+        # the scheduler's HTTP server (no dashboard here: health checks) takes another port
+        # when 8787 is in use, by any other Dask cluster on the machine: Dask's warning
+        # ("Port 8787 is already in use. Perhaps you already have a cluster running?") on
+        # every run then told the user of a problem that is none
+        warnings.filterwarnings("ignore", message=r"Port \d+ is already in use",
+                                category=UserWarning)
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                dashboard_address=None)
     if ctrl_c:  # while the workers started: the command's, now
