@@ -226,6 +226,19 @@ def bold(text) -> Text:
     return Text(str(text), style="bold")
 
 
+def print_paths(label: str, *paths, bold_path: bool = False) -> None:
+    """``label: path[, path ...]`` on stdout, the paths never broken: rich would wrap a
+    long path at the terminal's width in the middle of a name ("res" / "ults.parquet"),
+    and a path copied from two lines does not exist. The line is left to the terminal's
+    own soft wrap (as in a pipe, where it stays one line)."""
+    text = Text(f"{label}: ")
+    for i, p in enumerate(paths):
+        if i:
+            text.append(", ")
+        text.append(str(p), style="bold" if bold_path else "")
+    console.print(text, soft_wrap=True, highlight=False)
+
+
 def jsonable(obj):
     """``obj`` with numpy scalars/arrays, paths and tuples made JSON types; NaN and
     infinity become ``None`` (JSON ``null``: not available, or unbounded)."""

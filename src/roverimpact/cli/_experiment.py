@@ -16,6 +16,7 @@ from ._app import (
     new_table,
     print_csv,
     print_json,
+    print_paths,
 )
 
 #: What an experiment run writes, by exact name: a folder holding these and trials.csv +
@@ -137,6 +138,6 @@ def experiment_cmd(
         for f in result.failures:
             ft.add_row(str(f.trial), f.file, f.message)
         err_console.print(ft)
-    console.print(f"outputs in {outdir}: " + ", ".join(p.name for p in files.values()),
-                  highlight=False)
+    print_paths("outputs", outdir)
+    console.print("  " + ", ".join(p.name for p in files.values()), highlight=False)
     return 0

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, check_output, console, new_table, print_json
+from ._app import app, check_output, console, new_table, print_json, print_paths
 
 
 @app.command("optimize")
@@ -64,4 +64,4 @@ def optimize_cmd(
         console.print(f"simulated peak force at beta = {res.sim_betas_deg} deg: "
                       f"{res.F_sim_nominal:.4g} N -> {res.F_sim_best:.4g} N", highlight=False)
     for path in figures.values():
-        console.print(f"figure: {path}", highlight=False)
+        print_paths("figure", path)

@@ -12,13 +12,13 @@ import typer
 
 from ._app import (
     app,
-    bold,
     compile_ahead,
     compiles_here,
     console,
     err_console,
     new_table,
     print_json,
+    print_paths,
     progress_bar,
 )
 
@@ -183,9 +183,9 @@ def sweep_cmd(
     )
     if report:
         _print_stats(sections)
-        console.print("report:", bold(path))
+        print_paths("report", path, bold_path=True)
     for role, p in res.files.items():
-        console.print(f"{role}: {p}")
+        print_paths(role, p)
     return failed
 
 
@@ -220,8 +220,8 @@ def report_cmd(
         return
     _print_stats(sections)
     for s in sections:
-        console.print(f"figure: {s.figures.get('png')}")
-    console.print("report:", bold(path))
+        print_paths("figure", s.figures.get("png"))
+    print_paths("report", path, bold_path=True)
 
 
 @app.command("reproduce")
@@ -276,7 +276,7 @@ def reproduce_cmd(
     _print_stats(res.sections)
     for s in res.sections:
         fig = BUILTIN_STUDIES.get(s.folder.name, s.name)
-        console.print(f"{fig}: {s.figures.get('png')}, {s.figures.get('svg')}, "
-                      f"{s.folder / 'results.parquet'}")
-    console.print("report:", bold(res.report.resolve()))
+        print_paths(fig, s.figures.get("png"), s.figures.get("svg"),
+                    s.folder / "results.parquet")
+    print_paths("report", res.report.resolve(), bold_path=True)
     return failed

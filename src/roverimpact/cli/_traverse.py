@@ -13,7 +13,6 @@ import typer
 from .._io import staged_folder
 from ._app import (
     app,
-    bold,
     check_output,
     compile_ahead,
     compiles_here,
@@ -21,6 +20,7 @@ from ._app import (
     err_console,
     new_table,
     print_json,
+    print_paths,
     progress_bar,
 )
 
@@ -158,9 +158,9 @@ def traverse_cmd(
                   f"{res.elapsed:.1f} s")
     _print_summary(table)
     if path is not None:
-        console.print("report:", bold(path))
+        print_paths("report", path, bold_path=True)
     for role, p in res.files.items():
-        console.print(f"{role}: {p}")
+        print_paths(role, p)
 
 
 @app.command("traverse-report")
@@ -170,4 +170,4 @@ def traverse_report_cmd(
     """Redraw the map, the speed profile and report.html from saved traverse tables."""
     from ..report.traverse import traverse_report
 
-    console.print("report:", bold(traverse_report(folder)))
+    print_paths("report", traverse_report(folder), bold_path=True)

@@ -9,7 +9,15 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, console, new_table, print_csv, print_json, progress_bar
+from ._app import (
+    app,
+    console,
+    new_table,
+    print_csv,
+    print_json,
+    print_paths,
+    progress_bar,
+)
 
 
 def _floats(text: str | None, what: str) -> list[float] | None:
@@ -91,4 +99,4 @@ def trust_cmd(
     console.print(f"{n_sims} simulations in {res.elapsed:.1f} s")
     for role in ("trust", "results", "png", "svg"):
         if role in res.files:
-            console.print(f"{role}: {res.files[role]}", highlight=False)
+            print_paths(role, res.files[role])
