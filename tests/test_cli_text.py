@@ -24,6 +24,8 @@ import typer
 
 from roverimpact.cli import _app, app, main
 
+from .textlines import fitted_lines
+
 ROOT = Path(__file__).resolve().parents[1]
 EX = ROOT / "examples"
 CLI = ROOT / "src" / "roverimpact" / "cli"
@@ -200,18 +202,13 @@ def _run(capsys, argv, tmp_path, studies):
 def test_tables_read_at_80_columns(capsys, tmp_path, studies, name):
     argv, units, labels = TABLES[name]
     out, _ = _run(capsys, argv, tmp_path, studies)
-    lines = [ln for ln in out.splitlines() if not PATH_LINE.match(ln)]  # printed whole
-    assert max(len(line) for line in lines) <= WIDTH, name
+    lines = out.splitlines()
+    assert max(len(line) for line in fitted_lines(out)) <= WIDTH, name
     assert "…" not in out, f"{name}: a truncated cell"
     for u in units:
         assert u in out, f"{name}: unit {u} lost"
     for label in labels:  # on one line: not cut, not folded
         assert any(label in line for line in lines), f"{name}: row label {label!r} broken"
-
-
-#: a line naming output files, ``label: /a/path[, /another]``: never wrapped (a path
-#: broken over two lines cannot be copied), left to the terminal's own soft wrap
-PATH_LINE = re.compile(r"^[\w .^-]+: /")
 
 
 def test_paths_are_printed_whole(capsys, tmp_path, studies):
@@ -224,9 +221,9 @@ def test_paths_are_printed_whole(capsys, tmp_path, studies):
     assert f"report: {deep / 'report.html'}" in lines
     assert main(["sweep", str(EX / "study_rigid_body.toml"), "-o", str(deep.parent / "sw"),
                  "--no-report", "--overwrite"]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    assert f"results: {deep.parent / 'sw' / 'results.parquet'}" in lines, lines
-    assert all(len(ln) <= WIDTH for ln in lines if not PATH_LINE.match(ln))
+    out = capsys.readouterr().out
+    assert f"results: {deep.parent / 'sw' / 'results.parquet'}" in out.splitlines(), out
+    assert all(len(ln) <= WIDTH for ln in fitted_lines(out))
 
 
 def test_agreement_table_says_whole_window_cases_are_excluded(capsys, studies):

@@ -35,6 +35,7 @@ from roverimpact.studies.evaluate import evaluate_case
 from roverimpact.studies.reproduce import builtin_study_path
 
 from .test_engine_mujoco import slider
+from .textlines import fitted_lines
 
 HC = {"k": 1e7, "e": 0.5}
 
@@ -139,7 +140,7 @@ def test_simulate_cli_with_the_laws_in_mujoco(tmp_path, capsys):
                  "--engine", "mujoco_laws"]) == 0
     out = capsys.readouterr().out
     assert "the scenario's, applied as forces" in out
-    assert max(map(len, out.splitlines())) <= 80
+    assert max(map(len, fitted_lines(out))) <= 80
 
     out_dir = tmp_path / "refused"
     assert main(["simulate", str(example), "-o", str(out_dir), "--engine", "mujoco_laws"]) == 2

@@ -29,6 +29,8 @@ from scipy import stats as sps
 
 from roverimpact.cli import main
 
+from .textlines import fitted_lines
+
 ROOT = Path(__file__).resolve().parents[1]
 EX = ROOT / "examples"
 KV = {"name": "kelvin-voigt", "k": 1.0e6, "c": 2000.0}
@@ -112,7 +114,7 @@ def test_simulate_cli_mujoco_table_reads_at_80_columns(tmp_path, capsys):
     assert main(["simulate", str(scn), "-o", str(tmp_path / "o"), "--engine", "MuJoCo",
                  "--no-plot"]) == 0
     out = capsys.readouterr().out
-    assert max(map(len, out.splitlines())) <= 80 and "…" not in out
+    assert max(map(len, fitted_lines(out))) <= 80 and "…" not in out
     assert "MuJoCo, " in out and "(exact)" in out
 
 
@@ -381,7 +383,7 @@ def test_trust_cli_two_engines_at_80_columns(tmp_path, capsys):
     assert main(["trust", "--quick", "--k", "1e7", "--e", "0.5", "-o", str(tmp_path / "t"),
                  "--engine", "own,mujoco"]) == 0
     out = capsys.readouterr().out
-    assert max(map(len, out.splitlines())) <= 80 and "…" not in out
+    assert max(map(len, fitted_lines(out))) <= 80 and "…" not in out
     assert "own simulator" in out and "MuJoCo" in out and "hunt-crossley" in out
     assert "8 simulations" in out       # 4 configurations x 1 cell x 2 engines
 
