@@ -80,6 +80,20 @@ def test_python_m_runs_the_cli(tmp_path):
     assert rc == 0 and out.strip()
 
 
+def test_python_m_roverimpact_runs_the_cli(tmp_path):
+    """``python -m roverimpact`` is the command too (it was "No module named
+    roverimpact.__main__", exit 1); importing the module runs nothing."""
+    from roverimpact import __version__
+
+    rc, out = _run("import runpy, sys; sys.argv = ['roverimpact', '--version']; "
+                   "runpy.run_module('roverimpact', run_name='__main__', alter_sys=True)",
+                   tmp_path)
+    assert (rc, out.strip()) == (0, f"roverimpact {__version__}")
+    rc, out = _run("import sys; sys.argv = ['roverimpact', '--version']; "
+                   "import roverimpact.__main__", tmp_path)
+    assert (rc, out) == (0, "")
+
+
 def test_energy_compiles_the_partition_here_and_the_rows_in_the_background(compile_plan):
     """On a fresh install ``energy`` sends the row assembly (needed first, the shorter
     compile) to a second process and compiles the partition kernel itself meanwhile, after
