@@ -114,6 +114,16 @@ def test_every_unit_written_in_the_source_reaches_some_help(capsys):
     assert not lost, f"units lost in --help: {lost}"
 
 
+@pytest.mark.parametrize("path", ["simulate", "trust"])
+def test_engine_help_names_every_engine(capsys, path):
+    """``trust --help`` offered "own, mujoco or own,mujoco", but the command also runs
+    ``mujoco_laws`` (simulate.engines.ENGINE_NAMES is the list both commands accept)."""
+    from roverimpact.simulate.engines import ENGINE_NAMES
+
+    flat = _flat(_help(capsys, path))
+    assert [e for e in ENGINE_NAMES if e not in flat] == []
+
+
 def test_issue_13_examples_of_lost_units(capsys):
     assert "Effective mass m_eff [kg]." in _flat(_help(capsys, "contact"))
     assert "Normal approach speed v_n [m/s]." in _flat(_help(capsys, "contact"))

@@ -47,7 +47,8 @@ def trust_cmd(
                                  "bar goes to stderr)."),
     as_csv: bool = typer.Option(False, "--csv", help="Print the table as CSV."),
     engine: str = typer.Option("own", "--engine", help="Simulator(s), comma-separated: own, "
-                               "mujoco or own,mujoco (one map per engine)."),
+                               "mujoco, mujoco_laws (MuJoCo with the cell's law; "
+                               "frictionless), e.g. own,mujoco (one map per engine)."),
 ) -> None:
     """Trust map: where the T_c^- ranking agrees with the simulated F_max ranking."""
     from ..report.trust import plot_trust_map
