@@ -29,6 +29,39 @@ def test_energy_table_and_peak_force(capsys):
     assert "T_c^-" in out and "m_eff" in out and "peak force" in out
 
 
+def test_horizontal_face_prints_zero_not_minus_zero(capsys, tmp_path):
+    """beta = 0: the rolling wheel does not approach the face (v_n = u sin 0 = 0). The
+    table and the "no impact" line said "v_n = -0 m/s" and the JSON -0.0 (v_n = -(a v) of
+    a v = +0.0); energy_of, sweep_energy and a study give +0.0."""
+    import numpy as np
+
+    from roverimpact.scenario import sweep_energy
+    from roverimpact.studies import run_study
+
+    f = tmp_path / "beta0.toml"
+    f.write_text((EX / "rover2d_beta45.toml").read_text().replace("beta_deg = 45.0",
+                                                                   "beta_deg = 0.0"))
+    assert main(["energy", str(f)]) == 0
+    out = capsys.readouterr().out
+    assert "-0 m/s" not in out and "v_n = 0 m/s" in out
+    assert main(["energy", str(f), "--json"]) == 0
+    v_n = json.loads(capsys.readouterr().out)["v_n"]
+    assert v_n == 0.0 and not np.signbit(v_n)
+    sc = load_scenario(f)
+    assert not np.signbit(float(energy_of(sc).v_n))
+    assert not np.signbit(sweep_energy(sc, [0.0]).v_n).any()
+    study = {"name": "flat face", "base": sc.model_dump(exclude_none=True),
+             "grid": {"obstacle.beta_deg": [0.0, 30.0]}}
+    table = run_study(study, tmp_path / "out").table
+    assert not np.signbit(table["v_n"].to_numpy()).any()
+    rb = {"name": "rocker-bogie block", "base": {
+        "model": {"name": "rocker_bogie"}, "velocity": {"u": 0.2},
+        "obstacle": {"wheel": "left_front", "beta_deg": 0.0}},     # model-changing block
+        "grid": {"model.params.chassis_com_above_pivot": [0.05, 0.1, 0.15]}}
+    table = run_study(rb, tmp_path / "rb").table
+    assert (table["v_n"] == 0.0).all() and not np.signbit(table["v_n"].to_numpy()).any()
+
+
 def test_draw_writes_png(tmp_path):
     for name in ("rover2d_beta45", "rocker_bogie_beta30"):
         out = tmp_path / f"{name}.png"

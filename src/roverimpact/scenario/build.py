@@ -1108,7 +1108,7 @@ def _energy(M, A, v, obstacle_row: int) -> ImpactEnergy:
     """T, T_c^-, m_eff (others held, and free), v_n; ``A`` may carry a leading batch axis."""
     p = partition(M, A, v, want_velocities=False)
     a = A[..., obstacle_row, :]
-    v_n = -(a @ v)
+    v_n = 0.0 - (a @ v)  # +0.0, not -0.0, where the contact does not move along n
     others = np.delete(A, obstacle_row, axis=-2)
     m_eff, m_eff_free = row_masses(M, a, others)
 

@@ -28,7 +28,7 @@ def _energy_sweep(M, A, v, obstacle_row: int, keep) -> ImpactEnergy:
     Ak = A * keep[..., None]  # inactive rows: zero
     p = partition(M, Ak, v, want_velocities=False)
     rows = A[:, obstacle_row, :]
-    v_n = -(rows @ v)
+    v_n = 0.0 - (rows @ v)  # +0.0, not -0.0 (build._energy)
     m_eff, m_eff_free = row_masses(M, rows, np.delete(Ak, obstacle_row, axis=1))
     T_c, T_a = no_approach(p.T_c, p.T_a, p.T, v_n)
     return ImpactEnergy(T=p.T, T_c_minus=T_c, T_a=T_a, m_eff=m_eff,

@@ -493,7 +493,7 @@ class _OwnCases:
         a = A[:, obstacle_row, :]
         others = np.delete(A, obstacle_row, axis=1)
         m_eff, m_eff_free = row_masses(M, a, others)
-        v_n = -np.einsum("kn,kn->k", a, v)
+        v_n = 0.0 - np.einsum("kn,kn->k", a, v)  # +0.0, not -0.0 (build._energy)
         T, me, mf, vn = self.out
         T[idx], me[idx], mf[idx], vn[idx] = np.where(v_n > 0.0, p.T_c, 0.0), m_eff, \
             m_eff_free, v_n  # no approach, no impact (build.no_approach)
