@@ -27,6 +27,9 @@ def test_energy_table_and_peak_force(capsys):
     assert main(["energy", str(EX / "rover2d_beta45.toml")]) == 0
     out = capsys.readouterr().out
     assert "T_c^-" in out and "m_eff" in out and "peak force" in out
+    # the file says name = "hunt_crossley"; the table names the law as the registry does
+    # (it printed the file's spelling, "peak force (hunt_crossley)")
+    assert "peak force (hunt-crossley)" in out
 
 
 def test_horizontal_face_prints_zero_not_minus_zero(capsys, tmp_path):

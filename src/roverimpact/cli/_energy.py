@@ -59,7 +59,10 @@ def energy_cmd(
     t.add_row("m_eff along n (obstacle row alone)", f"{e.m_eff_free:.6g} kg")
     t.add_row("v_n (normal approach speed)", f"{e.v_n:.6g} m/s")
     if f_max is not None:
-        t.add_row(f"peak force ({sc.contact_law.name})", f"{f_max:.6g} N")
+        from ..contact import law_class
+
+        # the registry's name: a file's "hunt_crossley" or "Hunt-Crossley" is hunt-crossley
+        t.add_row(f"peak force ({law_class(sc.contact_law.name).name})", f"{f_max:.6g} N")
     t.add_row("active rows / rank", f"{len(setup.labels)} / {e.rank}")
     console.print(t)
     if not e.v_n > 0:
