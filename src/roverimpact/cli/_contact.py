@@ -46,6 +46,7 @@ def contact_cmd(
 ) -> None:
     """Predict peak force, maximum indentation, contact duration and rebound of an impact."""
     from ..contact import LAWS, get_law, impact_1dof, predict
+    from ..contact.hertz import hertz_scales
 
     if list_laws:
         laws = [{"name": name, "law": cls.equation,
@@ -77,7 +78,12 @@ def contact_cmd(
               "gives the kinetic energy T_c^- = 1/2 m_eff v_n^2", "J")
     the_law = get_law(law, k=k, e=e, n=n, c=c, m_eff=mass)  # m_eff: used if the law needs it
     p = predict(the_law, mass, speed)
-    r = impact_1dof(the_law, mass, speed) if (check or plot) else None
+    # integrate for as long as the closed form says the contact lasts (twice, at least
+    # impact_1dof's 1e4 Hertz times): gonthier at e = 1e-8 lasts 8e4 Hertz times
+    d_H, _ = hertz_scales(mass, speed, the_law.k, the_law.n)
+    horizon = 2.0 * float(p.duration) * speed / float(d_H)
+    horizon = horizon if math.isfinite(horizon) and horizon > 1e4 else 1e4
+    r = impact_1dof(the_law, mass, speed, max_duration=horizon) if (check or plot) else None
     rows = [("peak force [N]", "peak_force", 1.0), ("max indentation [mm]", "max_indentation",
             1e3), ("contact duration [ms]", "duration", 1e3),
             ("achieved restitution e*", "restitution_achieved", 1.0),
@@ -112,7 +118,7 @@ def contact_cmd(
     if plot is not None:
         from ..report.contact import plot_hysteresis_loops
 
-        plot_hysteresis_loops([the_law], mass, speed, plot)
+        plot_hysteresis_loops([the_law], mass, speed, plot, max_duration=horizon)
     if as_json:
         print_json(out | ({"plot": plot} if plot is not None else {}))
         return

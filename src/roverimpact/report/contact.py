@@ -25,17 +25,19 @@ def default_laws(k: float, e: float, n: float = 1.5, m_eff: float = 1.0, names=N
     return out
 
 
-def plot_hysteresis_loops(laws, m_eff: float, v_n: float, path=None, *, title=None):
+def plot_hysteresis_loops(laws, m_eff: float, v_n: float, path=None, *, title=None,
+                          max_duration: float = 1e4):
     """Force–indentation loops of ``laws`` for one impact (m_eff [kg], v_n [m/s]).
 
     Lengths in mm, forces in N. Returns the figure; saves it to ``path`` if given.
+    ``max_duration``: as in :func:`~roverimpact.contact.impact_1dof` (Hertz times).
     """
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(7.5, 5.0), layout="constrained")
     ax = fig.subplots()
     for law in laws:
-        r = impact_1dof(law, m_eff, v_n)
+        r = impact_1dof(law, m_eff, v_n, max_duration=max_duration)
         label = f"{law.name} (e* = {r.restitution_achieved:.2f})"
         ax.plot(1e3 * r.delta, r.force, label=label, lw=1.4)
     ax.set_xlabel("indentation δ [mm]")
