@@ -45,6 +45,40 @@ def test_cli_writes_table_summary_and_plot(tmp_path, capsys):
     assert (tmp_path / "history.csv").is_file()
 
 
+def test_cli_names_which_effective_mass_it_prints(tmp_path, capsys):
+    """The table said "m_eff (obstacle normal) 14.2446 kg" beside T_c^- = 0.505938 J and
+    v_n = 0.259808 m/s, and SimulationResult.m_eff's docstring "with the same
+    constraints"; but 1/2 m v_n^2 of that mass is 0.481 J: it is the obstacle row's mass
+    alone (others free), as `energy` labels it. Reference: numpy, 1 / (a M^-1 a^T) and
+    2 T_c^- / v_n^2 from M and the rows at the simulator's pre-impact state."""
+    from roverimpact.scenario import ImpactSetup, load_scenario
+    from roverimpact.scenario.schema import ObstacleSpec
+    from roverimpact.simulate import simulate_impact
+
+    assert main(["simulate", str(EXAMPLE), "-o", str(tmp_path / "o"), "--no-plot"]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert f"m_eff along n (obstacle row alone) {summary['m_eff']:.6g} kg" in " ".join(
+        out.split())
+    sc = load_scenario(EXAMPLE)
+    mbm, cfg = make_model(sc.model), SimulationConfig.from_scenario(sc)
+    r = simulate_impact(mbm, cfg)
+    b = np.radians(sc.obstacle.beta_deg)
+    n = (-np.sin(b), 0.0, np.cos(b))
+    setup = ImpactSetup.from_state(mbm, r.q_minus, r.v_minus,
+                                   obstacle=ObstacleSpec(wheel="front", normal=n),
+                                   contacts=cfg.contacts.model_copy(
+                                       update={"ground_wheels": ["rear"]}),
+                                   constraints=cfg.constraints)
+    assert list(setup.labels) == list(r.A_rows)
+    a = setup.A[setup.obstacle_row]
+    m_free = 1.0 / (a @ np.linalg.solve(setup.M, a))
+    assert r.m_eff == pytest.approx(m_free, rel=1e-9)
+    assert r.m_eff == pytest.approx(summary["m_eff"], rel=1e-6)
+    m_held = 2.0 * r.T_c_minus / r.v_n**2
+    assert abs(m_held / m_free - 1) > 0.03          # the two differ here (14.99 vs 14.24)
+
+
 def test_cli_bad_value_is_one_line_exit_2(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text(EXAMPLE.read_text().replace("k = 1.0e7               # N/m^1.5",

@@ -94,7 +94,7 @@ def simulate_cmd(
               "yes" if result.separated else "no: whole window")
     t.add_row("normal approach speed v_n", f"{result.v_n:.6g} m/s")
     t.add_row("T_c^- (effective kinetic energy)", f"{result.T_c_minus:.6g} J")
-    t.add_row("m_eff (obstacle normal)", f"{result.m_eff:.6g} kg")
+    t.add_row("m_eff along n (obstacle row alone)", f"{result.m_eff:.6g} kg")
     t.add_row("T before / after", f"{result.T_minus:.6g} / {result.T_plus:.6g} J")
     st = result.stats
     if in_mujoco:

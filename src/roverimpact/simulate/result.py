@@ -46,7 +46,9 @@ class SimulationResult:
     T_c_minus : float
         Effective kinetic energy of ``(q_minus, v_minus)`` [J].
     m_eff : float
-        Effective mass along the obstacle normal with the same constraints [kg].
+        Effective mass along the obstacle normal, the obstacle row alone (the other rows
+        of ``T_c_minus`` free: ``m_eff_free`` of :func:`~roverimpact.energy_of`), [kg].
+        With the other rows held, ``2 T_c_minus / v_n**2``.
     v_n : float
         Normal approach speed of the first obstacle contact [m/s].
     contact_wheel : str
