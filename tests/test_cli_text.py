@@ -124,6 +124,16 @@ def test_engine_help_names_every_engine(capsys, path):
     assert [e for e in ENGINE_NAMES if e not in flat] == []
 
 
+def test_command_list_breaks_no_summary_mid_sentence(capsys):
+    """`roverimpact --help` shows each command's first docstring paragraph with its line
+    breaks kept: traverse's, written over two source lines, read "... its T_c^- at the" /
+    "reference speed, ..." in the list. Each summary is one source line."""
+    for path, cmd in _commands(typer.main.get_command(app)):
+        if path:
+            first = (cmd.help or "").strip().split("\n\n")[0]
+            assert "\n" not in first, f"{' '.join(path)}: {first!r}"
+
+
 def test_issue_13_examples_of_lost_units(capsys):
     assert "Effective mass m_eff [kg]." in _flat(_help(capsys, "contact"))
     assert "Normal approach speed v_n [m/s]." in _flat(_help(capsys, "contact"))

@@ -128,10 +128,10 @@ def traverse_cmd(
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON (the "
                                  "progress bar goes to stderr)."),
 ) -> None:
-    """Place the rover along each path, find every wheel's next impact, its T_c^- at the
-    reference speed, the predicted peak force and the speed limit.
+    """Along each path: every wheel's next impact, T_c^-, predicted peak force, speed limit.
 
-    Writes poses.parquet (one row per station), wheels.parquet (per station and wheel),
+    The rover is placed at every station; T_c^- is at the reference speed. Writes
+    poses.parquet (one row per station), wheels.parquet (per station and wheel),
     segments.parquet, map.png, speed.png and report.html in the output folder.
     """
     from ..report.traverse import summary, traverse_report
