@@ -208,6 +208,38 @@ def test_cli_partition_example(capsys):
     assert data["energy_lost"] == pytest.approx(0.75 * 0.390625, rel=1e-12)
 
 
+def test_cli_partition_holds_the_persistent_rows(tmp_path, capsys):
+    """A file's ``persistent`` rows (held through the impact) were left out of the
+    partition but used by the impact map beside it: for two coupled masses with the second
+    held (B v- = 0) and e = 0 the table said T_c = 0.75 J and "energy lost 1 J", though a
+    plastic impact removes exactly T_c^- (theory.md, section 3). Reference: numpy,
+    T_c^- = 1/2 (J v)^T (J M^-1 J^T)^-1 (J v) with J = [A; B], and v+ = v_a."""
+    import json
+
+    M = np.array([[2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 1.0]])
+    A, B, v = np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]), np.array([-1.0, 0, 0.5])
+    f = tmp_path / "held.toml"
+    f.write_text(f"M = {M.tolist()}\nA = {A.tolist()}\nv = {v.tolist()}\n"
+                 f"restitution = 0.0\npersistent = {B.tolist()}\n")
+    J = np.vstack([A, B])
+    T_c = 0.5 * (J @ v) @ np.linalg.solve(J @ np.linalg.solve(M, J.T), J @ v)
+    assert T_c == pytest.approx(1.0) and T_c != pytest.approx(   # A alone: 0.75 J
+        0.5 * (A @ v) @ np.linalg.solve(A @ np.linalg.solve(M, A.T), A @ v))
+    assert main(["partition", str(f), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["T_c"] == pytest.approx(T_c, rel=1e-12)
+    assert out["energy_lost"] == pytest.approx(T_c, rel=1e-12)
+    np.testing.assert_allclose(out["v_plus"], out["v_a"], atol=1e-12)
+    assert out["rank"] == 2
+    assert main(["partition", str(f)]) == 0
+    assert "rank of A and persistent" in capsys.readouterr().out
+    f.write_text(f"M = {M.tolist()}\nA = {A.tolist()}\nv = {v.tolist()}\n"
+                 "persistent = [[0.0, 1.0]]\n")
+    assert main(["partition", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert "persistent has 2 columns, A has 3" in err and "Traceback" not in err
+
+
 def test_cli_version(capsys):
     assert main(["--version"]) == 0
     assert ri.__version__ in capsys.readouterr().out

@@ -19,21 +19,32 @@ def partition_cmd(
 ) -> None:
     """Split the kinetic energy of (M, A, v) into T_c and T_a and show the impact map.
 
-    If the file gives a ``restitution``, the impulsive impact of the rows of A is shown too.
+    Rows ``persistent`` (held through the impact) join A in the partition. If the file
+    gives a ``restitution``, the impulsive impact of the rows of A is shown too.
     """
     from .._io import load_system
     from ..energy import partition
+    from ..exceptions import InputError
     from ..impulse import impulsive_impact
 
     data = load_system(file)
-    p = partition(data["M"], data["A"], data["v"])
+    B = data.get("persistent")
+    if (np.ndim(data["M"]) > 2 or np.ndim(data["A"]) > 2 or np.ndim(data["v"]) > 1
+            or np.ndim(B) > 2):
+        raise typer.BadParameter("partition FILE takes one system, not a batch", param_hint="FILE")
+    held = data["A"]           # the rows of the partition
+    if B is not None and np.size(B):
+        # T_c^- is the energy in the subspace of every row held at the impact (theory.md,
+        # section 3): with B v- = 0 and e = 0 the impact removes exactly this T_c
+        A2, B2 = np.atleast_2d(data["A"]), np.atleast_2d(B)
+        if A2.shape[-1] != B2.shape[-1]:
+            raise InputError(f"persistent has {B2.shape[-1]} columns, A has {A2.shape[-1]}: "
+                             "each row takes one entry per coordinate of v")
+        held = np.concatenate([A2, B2])
+    p = partition(data["M"], held, data["v"])
     imp = None
     if "restitution" in data:
-        imp = impulsive_impact(
-            data["M"], data["A"], data["v"], data["restitution"], data.get("persistent")
-        )
-    if np.ndim(p.T) != 0:
-        raise typer.BadParameter("partition FILE takes one system, not a batch", param_hint="FILE")
+        imp = impulsive_impact(data["M"], data["A"], data["v"], data["restitution"], B)
     names = data.get("names") or [f"q{i}" for i in range(len(p.v_c))]
     if as_json:
         out = {
@@ -58,7 +69,9 @@ def partition_cmd(
     summary.add_row("T (total)", f"{p.T:.6g} J", share(p.T))
     summary.add_row("T_c (constrained, effective)", f"{p.T_c:.6g} J", share(p.T_c))
     summary.add_row("T_a (admissible)", f"{p.T_a:.6g} J", share(p.T_a))
-    summary.add_row("rank of A", f"{p.rank} of {np.atleast_2d(data['A']).shape[0]} rows", "")
+    n_rows = np.atleast_2d(held).shape[0]
+    summary.add_row("rank of A" if held is data["A"] else "rank of A and persistent",
+                    f"{p.rank} of {n_rows} rows", "")
     if imp is not None:
         summary.add_row("energy lost in impact", f"{imp.energy_lost:.6g} J",
                         share(imp.energy_lost))
