@@ -299,6 +299,17 @@ CASES = [
     ("partition-no-file", [P], [], "Missing argument", None),
     ("partition-names", [P, "{d}/names.toml", "--csv"], [], "names must be a list of 2",
      None),
+    # --json and --csv together: the JSON was printed and --csv ignored
+    ("partition-json-csv", [P, "{ex}/rod_on_ledge.toml", "--json", "--csv"], [],
+     "not both", None),
+    ("experiment-json-csv", ["experiment", "{ex}/experiment/trials.toml", "-o", "{o}/e",
+                             "--json", "--csv"], ["{o}/e"], "not both", None),
+    ("safety-regions-json-csv", ["safety", "regions", "--json", "--csv"], [], "not both",
+     None),
+    ("safety-arm-json-csv", ["safety", "arm", "erd:panda", "--json", "--csv"], [],
+     "not both", None),
+    ("trust-json-csv", ["trust", "--quick", "-o", "{o}/t", "--json", "--csv"], ["{o}/t"],
+     "not both", None),
     # energy
     ("energy-missing", ["energy", "{d}/nope.toml"], [], "no such file", None),
     ("energy-folder", ["energy", "{d}"], [], "a folder, not a file", None),
@@ -619,6 +630,27 @@ def test_bad_input_one_line_exit_2_nothing_written(name, argv, outputs, word, se
     assert out == "", f"stdout: {out!r}"
     for p, b in zip(watched, before, strict=True):
         assert _snapshot(p) == b, f"{p} was created or changed"
+
+
+def test_every_command_with_json_and_csv_refuses_both():
+    """The cases above cover each command that prints its table either way (sweep's and
+    traverse's --csv writes files beside what --json prints: both are fine there)."""
+    import typer
+
+    from roverimpact.cli import app
+
+    def walk(group, path=()):
+        for name, cmd in getattr(group, "commands", {}).items():
+            yield from walk(cmd, (*path, name))
+        prints = {o for p in getattr(group, "params", []) for o in getattr(p, "opts", [])
+                  if (p.help or "").startswith("Print")}
+        if {"--json", "--csv"} <= prints:
+            yield " ".join(path)
+
+    both = set(walk(typer.main.get_command(app)))
+    covered = {" ".join(a for a in argv if not a.startswith(("{", "-", "erd:")))
+               for name, argv, *_ in CASES if name.endswith("json-csv")}
+    assert both and both == covered
 
 
 def test_there_are_at_least_60_cases_over_every_command():

@@ -272,6 +272,12 @@ def print_json(obj) -> None:
     console.out(json_text(obj), highlight=False)
 
 
+def one_format(as_json: bool, as_csv: bool) -> None:
+    """``--json`` and ``--csv`` are two ways to print the same table: one of them."""
+    if as_json and as_csv:
+        raise typer.BadParameter("give --json or --csv, not both")
+
+
 def print_csv(header: list[str], rows) -> None:
     """Print ``rows`` (sequences of numbers and strings) as CSV on stdout, numbers at full
     precision; NaN is an empty field."""

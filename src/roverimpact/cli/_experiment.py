@@ -14,6 +14,7 @@ from ._app import (
     console,
     err_console,
     new_table,
+    one_format,
     print_csv,
     print_json,
     print_paths,
@@ -51,6 +52,7 @@ def experiment_cmd(
     Exit code 0 if at least one trial ran (failures are listed), 2 if none did (then
     nothing is written).
     """
+    one_format(as_json, as_csv)
     from ..experiments import (
         compare_with_model,
         load_trials,

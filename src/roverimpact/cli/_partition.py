@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from ._app import app, bold, console, new_table, print_csv, print_json
+from ._app import app, bold, console, new_table, one_format, print_csv, print_json
 
 
 @app.command("partition")
@@ -22,6 +22,7 @@ def partition_cmd(
     Rows ``persistent`` (held through the impact) join A in the partition. If the file
     gives a ``restitution``, the impulsive impact of the rows of A is shown too.
     """
+    one_format(as_json, as_csv)
     from .._io import load_system
     from ..energy import partition
     from ..exceptions import InputError

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import typer
 
-from ._app import _Typer, app, console, new_table, print_csv, print_json
+from ._app import _Typer, app, console, new_table, one_format, print_csv, print_json
 
 safety_app = _Typer(help="ISO/TS 15066 transient contact: body regions, speed limits, arms.",
                          no_args_is_help=True)
@@ -45,6 +45,7 @@ def regions_cmd(
     as_csv: bool = typer.Option(False, "--csv", help="Print the table as CSV (SI units)."),
 ) -> None:
     """The standard's body regions (m_H, K, force limits) and optional speed limits."""
+    one_format(as_json, as_csv)
     from ..exceptions import InputError
     from ..safety import (
         BODY_REGIONS,
@@ -106,6 +107,7 @@ def arm_cmd(
     as_csv: bool = typer.Option(False, "--csv", help="Print the table as CSV."),
 ) -> None:
     """Per link: the standard's m_R = M/2 + m_L vs the exact effective mass, and v_max."""
+    one_format(as_json, as_csv)
     import pinocchio as pin
 
     from ..exceptions import InputError

@@ -13,6 +13,7 @@ from ._app import (
     app,
     console,
     new_table,
+    one_format,
     print_csv,
     print_json,
     print_paths,
@@ -51,6 +52,7 @@ def trust_cmd(
                                "frictionless), e.g. own,mujoco (one map per engine)."),
 ) -> None:
     """Trust map: where the T_c^- ranking agrees with the simulated F_max ranking."""
+    one_format(as_json, as_csv)
     from ..report.trust import plot_trust_map
     from ..studies.trust import FIGURE_STEM, grid_from_options, trust_map
 
