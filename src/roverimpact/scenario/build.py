@@ -537,13 +537,15 @@ def _base_quaternions(base: BaseSpec, quat: np.ndarray) -> np.ndarray:
     import pinocchio as pin
 
     given = (base.roll_deg, base.pitch_deg, base.yaw_deg)
-    flat = np.asarray(quat, dtype=float).reshape(-1, 4)
+    # once per distinct nominal orientation: a model family's k cases mostly share one
+    flat, back = np.unique(np.asarray(quat, dtype=float).reshape(-1, 4), axis=0,
+                           return_inverse=True)
     out = np.empty_like(flat)
     for i, xyzw in enumerate(flat):
         rpy = pin.rpy.matrixToRpy(pin.Quaternion(xyzw).normalized().toRotationMatrix())
         rpy = [np.deg2rad(g) if g is not None else r for g, r in zip(given, rpy, strict=True)]
         out[i] = pin.Quaternion(pin.rpy.rpyToMatrix(*rpy)).coeffs()
-    return out.reshape(np.shape(quat))
+    return out[back.reshape(-1)].reshape(np.shape(quat))
 
 
 def base_slices(mbm):
