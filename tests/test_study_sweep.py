@@ -155,6 +155,36 @@ def test_interrupted_then_resumed_equals_serial(tmp_path):
         run_study(other, tmp_path / "r", evaluator=ev3, resume=True)
 
 
+def test_resume_says_what_it_keeps_from_the_first_run(tmp_path):
+    """--resume keeps the first run's chunk size whatever --chunk-size says (the finished
+    chunks are cases k*size ...), and a first run of another roverimpact version leaves
+    rows of both in the table: each was done without a word; now ``note`` says so."""
+    import json
+
+    def stop_after_one_chunk(done, total):
+        if done >= 4:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study(_study(), tmp_path / "r", evaluator=CountingRigidBody(), chunk_size=4,
+                  progress=stop_after_one_chunk)
+    manifest = tmp_path / "r" / "manifest.json"
+    data = json.loads(manifest.read_text())
+    data["versions"]["roverimpact"] = "0.0.1"
+    manifest.write_text(json.dumps(data))
+    notes: list[str] = []
+    res = run_study(_study(), tmp_path / "r", evaluator=CountingRigidBody(), chunk_size=5,
+                    resume=True, note=notes.append)
+    assert res.n_reused == 4 and res.n_cases == 18
+    assert any("keeps the first run's chunk size, 4 cases a chunk (not 5)" in t
+               for t in notes), notes
+    assert any("begun by roverimpact 0.0.1" in t for t in notes), notes
+    notes.clear()  # the same size and version: nothing to say
+    run_study(_study(), tmp_path / "r", evaluator=CountingRigidBody(), chunk_size=4,
+              resume=True, note=notes.append)
+    assert not any("chunk size" in t or "begun by" in t for t in notes), notes
+
+
 def test_a_folder_of_other_files_is_refused_and_overwrite_leaves_no_stale_table(tmp_path):
     """A folder holding files but no study (``-o .`` beside the study file) is refused
     before any work, whatever the flags: the study file there was replaced by its

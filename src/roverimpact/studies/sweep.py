@@ -316,7 +316,7 @@ def run_study(
 def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv, workers,
                    scheduler, progress, retries, cluster, note, t0) -> StudyResult:
     """:func:`run_study` once the study is checked and the folder is this run's."""
-    _open_folder(prep, out_dir, resume=resume, overwrite=overwrite)
+    _open_folder(prep, out_dir, resume=resume, overwrite=overwrite, note=note)
 
     cs = prep.chunk_size
     chunks = Chunks(prep.cases, cs)
@@ -413,9 +413,11 @@ def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: La
     return f"local Dask cluster of {cluster.workers} workers"
 
 
-def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite: bool) -> None:
-    """Refuse a folder holding other results; on resume take the old chunk size; clear
-    what an interrupted run left half-written, and the chunks on overwrite."""
+def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite: bool,
+                 note: Callable[[str], None] | None = None) -> None:
+    """Refuse a folder holding other results; on resume take the old chunk size (``note``
+    says so if it differs, and names another version of roverimpact that began them);
+    clear what an interrupted run left half-written, and the chunks on overwrite."""
     manifest_path = out_dir / MANIFEST
     old = None
     if manifest_path.is_file():
@@ -443,7 +445,17 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
                     f"{changed[0]} changed (or is gone) since the results in {out_dir} were "
                     "computed; --resume would put rows of both versions in one table. Use "
                     "--overwrite to recompute every case, or another folder")
-            prep.chunk_size = int(old.get("chunk_size", prep.chunk_size))
+            first = int(old.get("chunk_size", prep.chunk_size))
+            if note is not None and first != prep.chunk_size:
+                note(f"--resume keeps the first run's chunk size, {first} cases a chunk "
+                     f"(not {prep.chunk_size}): the finished chunks are reused as they are")
+            prep.chunk_size = first
+            began = (old.get("versions") or {}).get("roverimpact")
+            now = versions()["roverimpact"]
+            if note is not None and began not in (None, now):
+                note(f"the results in {out_dir} were begun by roverimpact {began}, this is "
+                     f"{now}: the table will hold rows of both; --overwrite recomputes "
+                     "every case")
         elif not overwrite:
             raise ConfigError(
                 f"{out_dir} already holds study results; pass --resume to continue them "
