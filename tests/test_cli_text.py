@@ -246,6 +246,17 @@ def test_paths_are_printed_whole(capsys, tmp_path, studies):
     assert all(len(ln) <= WIDTH for ln in fitted_lines(out))
 
 
+def test_a_table_title_that_fits_the_terminal_is_one_line(capsys):
+    """contact's table (two narrow columns) wrapped its title at the table's width, inside
+    "v_n = 0.5 m/s"; a table now widens to its title, up to the terminal's width."""
+    assert main(["contact", "--k", "1e6", "--e", "0.8", "--mass", "12", "--speed",
+                 "0.5"]) == 0
+    out = capsys.readouterr().out
+    assert any(ln.startswith("hunt-crossley: m_eff = 12 kg, v_n = 0.5 m/s, T_c^- = 1.5 J")
+               for ln in out.splitlines()), out
+    assert max(map(len, out.splitlines())) <= WIDTH
+
+
 def test_agreement_table_says_whole_window_cases_are_excluded(capsys, studies):
     assert main(["report", str(studies / "repro"), "--n-boot", "100"]) == 0
     out = capsys.readouterr().out

@@ -211,10 +211,12 @@ def new_table(title: str, *columns: str, left: tuple[str, ...] = (),
 
     ``columns`` are the headers (printed as given: units in brackets stay); the first
     column (unless named in ``right``) and those named in ``left`` are left-aligned text,
-    the others right-aligned numbers.
+    the others right-aligned numbers. A table narrower than its title widens to it (up to
+    the terminal's width): rich wraps the title at the table's width, which broke
+    ``contact``'s "v_n = 0.5 m/s" over two lines.
     """
     t = _Table(title=title, box=box.SIMPLE_HEAD, show_edge=False, padding=(0, 1),
-               title_justify="left", caption_justify="left")
+               title_justify="left", caption_justify="left", min_width=len(title))
     for i, col in enumerate(columns):
         text = (i == 0 and col not in right) or col in left
         t.add_column(col, justify="left" if text else "right", overflow="fold")
