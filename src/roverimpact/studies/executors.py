@@ -214,29 +214,54 @@ def local_cluster(workers: int):
     from dask.distributed import LocalCluster
 
     method = worker_start_method()
-    with dask.config.set({**WORKER_ENVIRON, **CLUSTER_CONFIG,
-                          "distributed.worker.multiprocessing-method": method}), \
-            _one_blas_thread(method), _workers_ignore_ctrl_c(method) as ctrl_c, \
-            warnings.catch_warnings():
-        # the scheduler's HTTP server (no dashboard here: health checks) takes another port
-        # when 8787 is in use, by any other Dask cluster on the machine: Dask's warning
-        # ("Port 8787 is already in use. Perhaps you already have a cluster running?") on
-        # every run then told the user of a problem that is none
-        warnings.filterwarnings("ignore", message=r"Port \d+ is already in use",
-                                category=UserWarning)
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-    if ctrl_c:  # while the workers started: the command's, now
-        _close(cluster, quiet=True)
-        raise KeyboardInterrupt
-    interrupted = False
+    with _dask_logs_at_warning():
+        with dask.config.set({**WORKER_ENVIRON, **CLUSTER_CONFIG,
+                              "distributed.worker.multiprocessing-method": method}), \
+                _one_blas_thread(method), _workers_ignore_ctrl_c(method) as ctrl_c, \
+                warnings.catch_warnings():
+            # the scheduler's HTTP server (no dashboard here: health checks) takes another
+            # port when 8787 is in use, by any other Dask cluster on the machine: Dask's
+            # warning ("Port 8787 is already in use. Perhaps you already have a cluster
+            # running?") on every run then told the user of a problem that is none
+            warnings.filterwarnings("ignore", message=r"Port \d+ is already in use",
+                                    category=UserWarning)
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+        if ctrl_c:  # while the workers started: the command's, now
+            _close(cluster, quiet=True)
+            raise KeyboardInterrupt
+        interrupted = False
+        try:
+            yield cluster.scheduler_address
+        except KeyboardInterrupt:
+            interrupted = True
+            raise
+        finally:
+            _close(cluster, quiet=interrupted)
+
+
+@contextmanager
+def _dask_logs_at_warning():
+    """Dask's ``distributed`` loggers at WARNING (at least) while a local cluster lives.
+
+    Its workers are forked (:func:`worker_start_method`) by one of Dask's threads while
+    another, the event loop's, logs the cluster's start at INFO ("Register worker ...").
+    Dask's own handler drops those records (``silence_logs``), but a handler of the
+    process's root logger writes them (pytest's, an application's ``basicConfig``): a
+    fork while that thread held the stream's lock left the worker a copy of the lock held
+    for ever, and the worker hung at its first log line of its own, with the command
+    waiting for it (12 cluster starts in a row under pytest hung at the 12th). Records
+    below WARNING are now not made at all, in the command or in the workers (a forked
+    process keeps its parent's logger levels), so nothing writes while a worker forks;
+    the level is restored afterwards."""
+    log = logging.getLogger("distributed")
+    level = log.level
+    if log.getEffectiveLevel() < logging.WARNING:
+        log.setLevel(logging.WARNING)
     try:
-        yield cluster.scheduler_address
-    except KeyboardInterrupt:
-        interrupted = True
-        raise
+        yield
     finally:
-        _close(cluster, quiet=interrupted)
+        log.setLevel(level)
 
 
 def _close(cluster, *, quiet: bool) -> None:
