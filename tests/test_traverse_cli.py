@@ -477,3 +477,33 @@ def test_traverse_compile_plan(tmp_path, monkeypatch, compile_plan, model, worke
     with pytest.raises(ConfigError):
         _traverse._compile_plan(bad, None, None)
     assert got == []
+
+
+@pytest.mark.parametrize("end, n_seg, last", [(1.7, 2, (1.0, 1.7)), (2.0, 2, (1.0, 2.0)),
+                                              (0.6, 1, (0.0, 0.6))])
+def test_segments_end_at_the_end_of_the_path(end, n_seg, last):
+    """The last segment ends where the path does: a 1.7 m path has the segments [0, 1] and
+    [1, 1.7] (the last was [1, 2], past the end, and the speed figure drew its limit there),
+    and the station at the very end of a 2 m path belongs to [1, 2] (it made a segment
+    [2, 3] of its own)."""
+    import tomllib
+
+    from roverimpact.traverse.run import segments_table
+
+    raw = traverse_from_dict(tomllib.loads(SHORT.replace("[[0.5, 0.0], [3.0, 0.3], [5.5, 0.0]]",
+                                           f"[[0.5, 0.0], [{0.5 + end}, 0.0]]")))
+    st = stations([[0.5, 0.0], [0.5 + end, 0.0]], 0.1)
+    assert st.s[-1] == pytest.approx(end)
+    k = len(st)
+    v = np.full(k, 0.3)
+    v[-1] = 0.05                                     # the end station limits its segment
+    P = pd.DataFrame({"path": "a", "station": np.arange(k), "s": st.s, "status": "ok",
+                      "v_lim": v})
+    W = pd.DataFrame({"path": "a", "station": np.arange(k), "s": st.s, "wheel": "left_front",
+                      "T_c_minus": 0.0, "beta_deg": np.nan})
+    S = segments_table(raw, P, W)
+    assert len(S) == n_seg
+    assert (S["s0"].iloc[-1], S["s1"].iloc[-1]) == pytest.approx(last)
+    assert S["s1"].max() == pytest.approx(end)
+    assert S["stations"].sum() == k
+    assert S["v_lim"].iloc[-1] == 0.05

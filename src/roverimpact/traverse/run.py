@@ -377,17 +377,24 @@ def _pose_columns(mbm, q) -> dict:
 def segments_table(cfg: TraverseConfig, poses: pd.DataFrame, wheels: pd.DataFrame
                    ) -> pd.DataFrame:
     """One row per ``drive.segment`` metres of each path: the speed limit (the least of
-    its stations'), the worst impact (wheel, T_c^-, beta range of that wheel's impacts)."""
+    its stations'), the worst impact (wheel, T_c^-, beta range of that wheel's impacts).
+    The last segment ends at the end of the path (shorter than ``drive.segment`` where the
+    path's length is not a multiple of it) and holds a station at the very end."""
     rows = []
     L = cfg.drive.segment
+    length = {p.name: float(np.hypot(*np.diff(np.asarray(p.points(), float), axis=0).T).sum())
+              for p in cfg.all_paths()}
     for name, P in poses.groupby("path", sort=False):
         W = wheels[wheels["path"] == name]
-        seg = np.floor(P["s"].to_numpy() / L + 1e-9).astype(int)
-        wseg = np.floor(W["s"].to_numpy() / L + 1e-9).astype(int)
+        end = length.get(name, float(P["s"].max()))
+        last = max(math.ceil(end / L - 1e-9) - 1, 0)
+        seg = np.minimum(np.floor(P["s"].to_numpy() / L + 1e-9).astype(int), last)
+        wseg = np.minimum(np.floor(W["s"].to_numpy() / L + 1e-9).astype(int), last)
         for g in np.unique(seg):
             p = P[seg == g]
             w = W[(wseg == g) & (W["T_c_minus"].to_numpy() > 0)]
-            row = {"path": name, "segment": int(g), "s0": g * L, "s1": (g + 1) * L,
+            row = {"path": name, "segment": int(g), "s0": g * L,
+                   "s1": min((g + 1) * L, end) if g == last else (g + 1) * L,
                    "stations": len(p), "failed": int((p["status"] != "ok").sum()),
                    "v_lim": float(p["v_lim"].min()) if p["v_lim"].notna().any() else math.nan,
                    "n_impacts": len(w)}
