@@ -507,3 +507,18 @@ def test_segments_end_at_the_end_of_the_path(end, n_seg, last):
     assert S["s1"].max() == pytest.approx(end)
     assert S["stations"].sum() == k
     assert S["v_lim"].iloc[-1] == 0.05
+
+
+def test_summary_lowest_limit_without_any_pose_is_not_infinite():
+    """A path where no station found a pose has no known limit: the summary said "inf" (no
+    impact, drive at any speed) while its segments' v_lim was NaN; it is now NaN (n/a).
+    A path whose stations with a pose meet no impact keeps inf."""
+    from roverimpact.report.traverse import summary
+
+    P = pd.DataFrame({"path": ["a"] * 3 + ["b"] * 3, "s": [0.0, 0.1, 0.2] * 2,
+                      "status": ["stalled"] * 3 + ["ok", "stalled", "ok"],
+                      "v_lim": [np.nan] * 3 + [np.inf, np.nan, np.inf]})
+    W = pd.DataFrame({"path": ["a", "b"], "s": [0.0, 0.0], "T_c_minus": [np.nan, 0.0]})
+    S = summary(P, W).set_index("path")
+    assert np.isnan(S.loc["a", "lowest limit [m/s]"]) and S.loc["a", "failed poses"] == 3
+    assert S.loc["b", "lowest limit [m/s]"] == np.inf

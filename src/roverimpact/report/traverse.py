@@ -245,7 +245,10 @@ def summary(poses: pd.DataFrame, wheels: pd.DataFrame) -> pd.DataFrame:
         for c in ("F_pred", "F_model"):
             if c in W:
                 row[f"max {c} [N]"] = float(hit[c].max()) if len(hit) else 0.0
-        row["lowest limit [m/s]"] = float(v[i]) if i is not None else math.inf
+        # no finite limit: inf where every station with a pose is free of impacts, NaN
+        # (n/a) where no station has a pose (as the segments' v_lim)
+        row["lowest limit [m/s]"] = float(v[i]) if i is not None else (
+            math.inf if np.isinf(v).any() else math.nan)
         row["at s [m]"] = float(P["s"].iloc[i]) if i is not None else math.nan
         rows.append(row)
     return pd.DataFrame(rows)
