@@ -522,3 +522,26 @@ def test_summary_lowest_limit_without_any_pose_is_not_infinite():
     S = summary(P, W).set_index("path")
     assert np.isnan(S.loc["a", "lowest limit [m/s]"]) and S.loc["a", "failed poses"] == 3
     assert S.loc["b", "lowest limit [m/s]"] == np.inf
+
+
+def test_speed_figure_does_not_draw_stations_without_pose_as_unlimited():
+    """A station without a pose (v_lim NaN) was drawn at the top speed, as a station with no
+    impact (inf): the figure read "any speed" where nothing is known. It is now left out of
+    the limits and marked "no pose found"; a segment without any pose is a gap."""
+    from roverimpact.report.traverse import plot_speed
+
+    P = pd.DataFrame({"path": "a", "station": [0, 1, 2, 3], "s": [0.0, 0.5, 1.0, 1.5], "status":
+                      ["ok", "stalled", "ok", "stalled"],
+                      "v_lim": [0.05, np.nan, np.inf, np.nan]})
+    S = pd.DataFrame({"path": "a", "s0": [0.0, 1.0], "s1": [1.0, 1.5],
+                      "v_lim": [0.05, np.nan]})
+    W = pd.DataFrame({"path": "a", "s": [0.0], "station": [0], "wheel": ["w"],
+                      "T_c_minus": [0.01], "F_pred": [10.0]})
+    fig = plot_speed(P, S, W, v_ref=0.1, v_max=0.3)
+    ax = fig.axes[0]
+    y = ax.lines[0].get_ydata()
+    assert y[0] == 0.05 and y[2] == 0.3
+    assert np.isnan(y[1]) and np.isnan(y[3])
+    assert any("no pose found (2)" in t.get_text() for t in ax.get_legend().get_texts())
+    stairs = [p for p in ax.patches if p.get_label() == "limit per segment"]
+    assert np.isnan(stairs[0].get_data().values[1])

@@ -183,16 +183,22 @@ def plot_speed(poses: pd.DataFrame, segments: pd.DataFrame, wheels: pd.DataFrame
             top = max(top, min(float(np.percentile(finite, 95)) * 1.1, 4 * v_ref))
     fig = Figure(figsize=(11, 6.2), layout="constrained")
     ax, ax2 = fig.subplots(2, 1, sharex=True, height_ratios=[3, 2])
-    shown = np.where(np.isfinite(v), np.minimum(v, top), top)
+    # no impact (inf): drawn at the top; no pose (NaN): no limit known, marked apart
+    shown = np.where(np.isfinite(v), np.minimum(v, top), np.where(np.isinf(v), top, np.nan))
     ax.plot(s, shown, ".", ms=2.5, color="0.55", label="limit at each station")
+    nopose = np.isnan(v)
+    if nopose.any():
+        ax.plot(s[nopose], np.zeros(int(nopose.sum())), "x", ms=4, color="tab:blue",
+                clip_on=False, label=f"no pose found ({int(nopose.sum())})")
     if "v_lim_band" in P:
         vb = P["v_lim_band"].to_numpy(float)
-        ax.plot(s, np.where(np.isfinite(vb), np.minimum(vb, top), top), ".", ms=2,
+        ax.plot(s, np.where(np.isfinite(vb), np.minimum(vb, top),
+                            np.where(np.isinf(vb), top, np.nan)), ".", ms=2,
                 color="tab:orange", alpha=0.6, label="limit over the k, e band (lowest)")
     if len(S):
         edges = np.r_[S["s0"].to_numpy(), S["s1"].to_numpy()[-1]]
         vs = S["v_lim"].to_numpy(float)
-        vs = np.where(np.isfinite(vs), np.minimum(vs, top), top)
+        vs = np.where(np.isfinite(vs), np.minimum(vs, top), np.where(np.isinf(vs), top, np.nan))
         ax.stairs(vs, edges, baseline=None, color="tab:red", lw=2.0, label="limit per segment")
     ax.axhline(v_ref, color="tab:blue", ls="--", lw=1, label=f"reference speed {v_ref:g} m/s")
     if v_max:
