@@ -300,3 +300,82 @@ def test_contact_duration_is_the_closed_form():
     dmax = (2.5 * m[:2] * v[:2] ** 2 / (2 * 1e6)) ** 0.4
     np.testing.assert_allclose(d[:2], 2.9432 * dmax / v[:2], rtol=1e-4)
     assert np.isnan(d[2:]).all()
+
+
+def test_rigid_planar_rover_before_a_ramp_against_hand_and_scipy(tmp_path):
+    """The whole chain for the rigid ``rover2d`` (24 kg, wheels 0.15 m at x = +-0.3 m, COM
+    at mid-wheelbase, h = 0.35 m) on level ground before a 30 degree ramp, against a
+    derivation of its own: a planar rigid body (x, z, pitch; the wheel spins drop out, every
+    normal passes through a wheel centre) with M = diag(m, m, I_G).
+
+    * the feature row n^T (v_G + omega x p) at the front wheel centre, n = (-sin 30,
+      cos 30): m_eff = 1 / (a M^-1 a^T), v_n = u sin 30, T_c^- = 1/2 m_eff v_n^2 (the rear
+      support releases: its impulse with both rows held is negative);
+    * Hertz: F = k^(2/5) (5/4 m_eff v_n^2)^(3/5), u_lim = u (F_allow / F)^(5/6);
+    * the weight model: the same body on two preloaded Hunt-Crossley supports
+      (k = 1e7, z = 3(1 - e)/2 with e = 0.2, v_i = 0.1 m/s, m g / 2 each) meeting the ramp's
+      plane (Hertz), integrated by scipy's LSODA: the peak within 0.05 s at u, and
+      F_allow at the reported limit.
+    """
+    from scipy.integrate import solve_ivp
+
+    from roverimpact.traverse.run import run_traverse
+
+    dx, gamma = 0.005, np.radians(30.0)
+    x = -1.0 + dx * np.arange(801)
+    z = np.tile(np.clip((x - 1.0) * np.tan(gamma), 0.0, 0.05), (401, 1))
+    np.save(tmp_path / "ramp.npy", z)
+    u, F_allow, k = 0.1, 150.0, 1.0e7
+    cfg = {"terrain": {"kind": "file", "file": str(tmp_path / "ramp.npy"), "spacing": dx,
+                       "origin": [-1.0, -1.0]},
+           "path": {"name": "p", "waypoints": [[0.62, 0.0], [0.63, 0.0]], "spacing": 0.02},
+           "model": {"name": "rover2d"},
+           "drive": {"speed": u, "v_max": 1.0, "look_ahead": 0.1},
+           "limits": {"F_allow": F_allow}, "contact_law": {"name": "hertz", "k": k}}
+    W = run_traverse(cfg).wheels
+    hit = W[W["T_c_minus"] > 0]
+    assert len(hit) == 1 and hit["wheel"].iloc[0] == "front"
+    r = hit.iloc[0]
+    assert r["beta_deg"] == pytest.approx(30.0, abs=1e-4)
+
+    m_c, m_w, rw, h, g = 19.0, 2.5, 0.15, 0.35, 9.81
+    m = m_c + 2 * m_w
+    z_c = (m * h - 2 * m_w * rw) / m_c
+    I_G = (m_c * (0.7**2 + 0.15**2) / 12 + m_c * (z_c - h) ** 2
+           + 2 * m_w * (0.3**2 + (rw - h) ** 2))
+    Minv = np.diag([1 / m, 1 / m, 1 / I_G])
+
+    def row(p, n):            # n . velocity of the point p (from G): (xd + thd pz, zd - thd px)
+        return np.array([n[0], n[1], n[0] * p[1] - n[1] * p[0]])
+
+    nf = (-np.sin(gamma), np.cos(gamma))
+    a = row((0.3, rw - h), nf)
+    rows = np.array([row((-0.3, -h), (0, 1)), row((0.3, -h), (0, 1)), a])
+    m_eff = 1.0 / (a @ Minv @ a)
+    v_n = u * np.sin(gamma)
+    G2 = rows[[0, 2]] @ Minv @ rows[[0, 2]].T        # rear + feature, both held
+    assert np.linalg.solve(G2, [0.0, v_n])[0] < 0    # the rear would pull: it releases
+    assert r["m_eff"] == pytest.approx(m_eff, rel=1e-6)
+    assert r["v_n"] == pytest.approx(v_n, rel=1e-6)
+    assert r["T_c_minus"] == pytest.approx(0.5 * m_eff * v_n**2, rel=1e-6)
+    F = k**0.4 * (1.25 * m_eff * v_n**2) ** 0.6
+    assert r["F_pred"] == pytest.approx(F, rel=1e-6)
+    assert r["v_lim_closed"] == pytest.approx(u * (F_allow / F) ** (5 / 6), rel=1e-6)
+
+    zeta, d0 = 1.5 * (1 - 0.2), (m * g / 2 / k) ** (2 / 3)
+
+    def peak(speed):
+        def rhs(t, y):
+            d, rate = y[3:], -rows @ y[:3]
+            f = np.zeros(3)
+            f[:2] = np.where(d[:2] > 0, k * np.clip(d[:2], 0, None) ** 1.5
+                             * (1 + zeta * rate[:2] / 0.1), 0.0).clip(min=0.0)
+            f[2] = k * max(d[2], 0.0) ** 1.5
+            return np.r_[Minv @ (rows.T @ f + [0.0, -m * g, 0.0]), rate]
+        sol = solve_ivp(rhs, (0.0, 0.05), [speed, 0, 0, d0, d0, 0.0], method="LSODA",
+                        rtol=1e-10, atol=1e-13, max_step=2e-5, dense_output=True)
+        d = sol.sol(np.linspace(0.0, 0.05, 20001))[5]
+        return k * np.clip(d, 0, None).max() ** 1.5
+
+    assert r["F_model"] == pytest.approx(peak(u), rel=2e-4)          # 163.3 N
+    assert peak(r["v_lim"]) == pytest.approx(F_allow, rel=3e-3)      # at 0.0907 m/s
