@@ -545,3 +545,22 @@ def test_speed_figure_does_not_draw_stations_without_pose_as_unlimited():
     assert any("no pose found (2)" in t.get_text() for t in ax.get_legend().get_texts())
     stairs = [p for p in ax.patches if p.get_label() == "limit per segment"]
     assert np.isnan(stairs[0].get_data().values[1])
+
+
+def test_summary_length_is_the_path_length(tmp_path, capfd):
+    """The summary's "length [m]" was the last station's s: 0.3 m for a 0.33 m path at
+    0.1 m spacing (the segments end at 0.33 m). It is the polyline's length."""
+    np.save(tmp_path / "flat.npy", np.zeros((201, 301)))
+    f = tmp_path / "t.toml"
+    f.write_text('[terrain]\nkind = "file"\nfile = "flat.npy"\nspacing = 0.01\n'
+                 'origin = [-1.0, -1.0]\n[path]\nname = "p"\n'
+                 'waypoints = [[0.0, 0.0], [0.33, 0.0]]\nspacing = 0.1\n'
+                 '[model]\nname = "rover2d"\n[drive]\nspeed = 0.1\n[limits]\nT_allow = 0.01\n')
+    capfd.readouterr()
+    assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json"]) == 0
+    out = json.loads(capfd.readouterr().out)
+    row = out["summary"][0]
+    assert row["stations"] == 4 and row["length [m]"] == pytest.approx(0.33)
+    assert row["lowest limit [m/s]"] is None and row["impacts"] == 0   # inf: no impact
+    S = pd.read_parquet(tmp_path / "out" / "segments.parquet")
+    assert S["s1"].iloc[-1] == pytest.approx(0.33)

@@ -382,8 +382,7 @@ def segments_table(cfg: TraverseConfig, poses: pd.DataFrame, wheels: pd.DataFram
     path's length is not a multiple of it) and holds a station at the very end."""
     rows = []
     L = cfg.drive.segment
-    length = {p.name: float(np.hypot(*np.diff(np.asarray(p.points(), float), axis=0).T).sum())
-              for p in cfg.all_paths()}
+    length = {p.name: p.length for p in cfg.all_paths()}
     for name, P in poses.groupby("path", sort=False):
         W = wheels[wheels["path"] == name]
         end = length.get(name, float(P["s"].max()))

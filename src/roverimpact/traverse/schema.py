@@ -234,6 +234,11 @@ class PathSpec(StrictModel):
     def points(self) -> list[Pair]:
         return list(self.waypoints) if self.waypoints is not None else [self.start, self.end]
 
+    @property
+    def length(self) -> float:
+        """Length of the polyline [m] (its last station is at or before it)."""
+        return float(sum(math.dist(a, b) for a, b in itertools.pairwise(self.points())))
+
 
 class TraverseContactsSpec(StrictModel):
     """``[contacts]``: how the supporting wheels meet the terrain through an impact, as a
