@@ -564,3 +564,8 @@ def test_summary_length_is_the_path_length(tmp_path, capfd):
     assert row["lowest limit [m/s]"] is None and row["impacts"] == 0   # inf: no impact
     S = pd.read_parquet(tmp_path / "out" / "segments.parquet")
     assert S["s1"].iloc[-1] == pytest.approx(0.33)
+    # with a top speed every station's limit is it: no station to name (it said s = 0)
+    f.write_text(f.read_text().replace("speed = 0.1\n", "speed = 0.1\nv_max = 0.3\n"))
+    assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json"]) == 0
+    row = json.loads(capfd.readouterr().out)["summary"][0]
+    assert row["lowest limit [m/s]"] == 0.3 and row["at s [m]"] is None

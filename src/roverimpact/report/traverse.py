@@ -236,11 +236,12 @@ def _table(df: pd.DataFrame, max_rows: int = 60) -> str:
                                      float_format=lambda v: f"{v:.4g}") + more
 
 
-def summary(poses: pd.DataFrame, wheels: pd.DataFrame, lengths: dict | None = None
-            ) -> pd.DataFrame:
+def summary(poses: pd.DataFrame, wheels: pd.DataFrame, lengths: dict | None = None,
+            v_max: float | None = None) -> pd.DataFrame:
     """One row per path: length (``lengths[path]``, the polyline's; without it the last
     station's ``s``), stations, failed poses, impacts, worst T_c^- (and F_pred), the lowest
-    speed limit and where."""
+    speed limit and where (NaN where it is the top speed ``v_max`` at every station: no
+    impact limits the speed below it, there is no "where")."""
     rows = []
     for name, P in poses.groupby("path", sort=False):
         W = wheels[wheels["path"] == name]
@@ -258,7 +259,8 @@ def summary(poses: pd.DataFrame, wheels: pd.DataFrame, lengths: dict | None = No
         # (n/a) where no station has a pose (as the segments' v_lim)
         row["lowest limit [m/s]"] = float(v[i]) if i is not None else (
             math.inf if np.isinf(v).any() else math.nan)
-        row["at s [m]"] = float(P["s"].iloc[i]) if i is not None else math.nan
+        capped = i is not None and v_max is not None and v[i] >= v_max
+        row["at s [m]"] = float(P["s"].iloc[i]) if i is not None and not capped else math.nan
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -363,7 +365,8 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
         f"{man.get('elapsed_s', float('nan')):.1f} s ({html.escape(str(man.get('executor', '')))})."
         "</p>")
     lengths = {p.name: p.length for p in config.all_paths()}
-    parts.append("<h2>Summary</h2>" + _table(summary(poses, wheels, lengths)))
+    parts.append("<h2>Summary</h2>" + _table(summary(poses, wheels, lengths,
+                                                      config.drive.v_max)))
     for name, m, s in figs:
         parts.append(f"<h2>{html.escape(name)}</h2>")
         parts.append(_img(m["png"], f"{name}: map"))
