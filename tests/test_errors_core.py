@@ -90,6 +90,54 @@ def test_impact_rejects_bad_restitution():
         ri.impulsive_impact(M2, A2, v2, 0.5, persistent=np.ones((1, 3)))
 
 
+def _restitution_calls():
+    from roverimpact.frictional import frictional_impact
+
+    M, v, N = np.diag([1.0, 2.0, 3.0]), np.array([1.0, -1.0, 0.5]), np.eye(3)[[1, 0]]
+    return {
+        "impulsive_impact": lambda e: ri.impulsive_impact(M, N, v, e),
+        "unilateral_impact": lambda e: ri.unilateral_impact(M, v, N, e),
+        "frictional_impact": lambda e: frictional_impact(M, v, N, None, 0.5, e),
+    }
+
+
+@pytest.mark.parametrize("fn", ["impulsive_impact", "unilateral_impact", "frictional_impact"])
+def test_bad_restitution_names_its_row_and_batch_index(fn):
+    """A per-row restitution (..., m): its last axis is the row, not a batch axis. A NaN in
+    row 1 of an unbatched e was reported at 'batch index 1', one in row 1 of item 2 of a
+    (4, 2) e at 'batch index (2, 1)' (a batch of shape (4,) has no such index), and a value
+    outside [0, 1] at no index at all."""
+    call = _restitution_calls()[fn]
+    row = "contact" if fn == "frictional_impact" else "row"
+    with pytest.raises(ri.InputError, match=rf"contains NaN or inf \({row} 1\)$"):
+        call([0.2, np.nan])
+    e = np.full((4, 2), 0.2)
+    e[2, 1] = np.nan
+    with pytest.raises(ri.InputError, match=rf"\({row} 1, batch index 2\)$"):
+        call(e)
+    e[2, 1] = 0.2
+    e[3, 0] = 1.5
+    with pytest.raises(ri.InputError,
+                       match=rf"must lie in \[0, 1\], got 1.5 \({row} 0, batch index 3\)$"):
+        call(e)
+    with pytest.raises(ri.InputError, match=r"must lie in \[0, 1\], got -0.5$"):
+        call(-0.5)  # a scalar has no row
+
+
+def test_bad_mu_names_its_contact_and_batch_index():
+    from roverimpact.frictional import frictional_impact
+
+    mu = np.full((4, 2), 0.5)
+    mu[1, 1] = np.nan
+    args = (np.eye(3), [1.0, -1.0, 0.5], np.eye(3)[[1, 0]], None)
+    with pytest.raises(ri.InputError, match=r"mu contains NaN \(contact 1, batch index 1\)$"):
+        frictional_impact(*args, mu)
+    mu[1, 1] = -0.1
+    with pytest.raises(ri.InputError,
+                       match=r"mu must be >= 0, got -0.1 \(contact 1, batch index 1\)$"):
+        frictional_impact(*args, mu)
+
+
 def test_effective_mass_zero_row():
     with pytest.raises(ri.InputError, match="zero row"):
         ri.effective_mass(M2, [0.0, 0.0])

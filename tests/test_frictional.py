@@ -673,7 +673,7 @@ def test_docstring_example():
         ({"mu": -0.1}, "mu must be >= 0"),
         ({"mu": np.nan}, "mu contains NaN"),
         ({"mu": [0.1, 0.2, 0.3]}, "mu must be a scalar or have k = 1"),
-        ({"restitution": 1.2}, "restitution must be"),
+        ({"restitution": 1.2}, r"restitution must lie in \[0, 1\], got 1.2"),
         ({"tangent": [[[np.nan, 1.0]]]}, "tangent contains NaN"),
         ({"tangent": np.ones((1, 1, 3))}, "k = 1 contacts and n = 2 columns"),
         ({"tangent": [[1.0, 0.0], [0.0, 1.0]]}, "one entry per contact"),

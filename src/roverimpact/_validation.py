@@ -58,6 +58,33 @@ def check_finite(arr: np.ndarray, name: str, core_ndim: int) -> None:
         raise InputError(f"{name} contains NaN or inf ({fmt_index(idx)})")
 
 
+def check_coefficients(a: np.ndarray, name: str, *, low: float, high: float | None = None,
+                       allow_inf: bool = False, item: str = "row") -> None:
+    """Raise one InputError for the first entry of a coefficient array ``a`` (a scalar, or
+    one value per ``item`` with optional leading batch axes, ``(..., k)``) that is NaN,
+    inf (unless ``allow_inf``) or outside ``[low, high]``, naming the ``item`` and the
+    batch index (the last axis is the ``item``, not a batch axis)."""
+    with np.errstate(invalid="ignore"):
+        ok = ~np.isnan(a) & (a >= low)
+        if high is not None:
+            ok &= a <= high
+        if not allow_inf:
+            ok &= np.isfinite(a)
+    if ok.all():
+        return
+    first = tuple(int(i) for i in np.argwhere(~ok)[0]) if a.ndim else ()
+    value = float(a[first])
+    where = ""
+    if first:
+        parts = [f"{item} {first[-1]}"] + ([fmt_index(first[:-1])] if len(first) > 1 else [])
+        where = f" ({', '.join(parts)})"
+    if np.isnan(value) or (np.isinf(value) and not allow_inf):
+        what = "NaN" if allow_inf else "NaN or inf"
+        raise InputError(f"{name} contains {what}{where}")
+    rng = f"lie in [{low:g}, {high:g}]" if high is not None else f"be >= {low:g}"
+    raise InputError(f"{name} must {rng}, got {value:g}{where}")
+
+
 def broadcast_batch(**shapes: tuple[int, ...]) -> tuple[int, ...]:
     """Broadcast batch shapes, with an error naming the inputs when they do not fit."""
     values = tuple(shapes.values())

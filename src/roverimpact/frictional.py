@@ -200,24 +200,17 @@ class FrictionalImpactResult:
 
 def _per_contact(x, name, k, *, low=None, high=None, allow_inf=False):
     """Scalar or (..., k) coefficient array, checked."""
-    if isinstance(x, (int, float)) and not isinstance(x, bool):
-        a = np.full(k, float(x))
-    else:
-        a = as_array(x, name)
-        if a.ndim == 0:
-            a = np.full(k, float(a))
-        elif a.shape[-1] not in (1, k):
-            raise InputError(f"{name} must be a scalar or have k = {k} values (one per "
-                             f"contact), got shape {a.shape}")
-        else:
-            a = np.broadcast_to(a, (*a.shape[:-1], k))
-    if np.isnan(a).any() or (not allow_inf and not np.isfinite(a).all()):
-        what = "NaN" if allow_inf else "NaN or inf"
-        raise InputError(f"{name} contains {what}")
-    if (low is not None and (a < low).any()) or (high is not None and (a > high).any()):
-        rng = f"[{low:g}, {high:g}]" if high is not None else f">= {low:g}"
-        raise InputError(f"{name} must be {rng}, got values in [{a.min():g}, {a.max():g}]")
-    return a
+    if (isinstance(x, (int, float)) and not isinstance(x, bool) and x >= low
+            and (x <= high if high is not None else True) and (allow_inf or math.isfinite(x))):
+        return np.full(k, float(x))
+    a = as_array(x, name)
+    if a.ndim and a.shape[-1] not in (1, k):
+        raise InputError(f"{name} must be a scalar or have k = {k} values (one per "
+                         f"contact), got shape {a.shape}")
+    # checked as given: the last axis is the contact, the others are batch axes
+    _validation.check_coefficients(a, name, low=low, high=high, allow_inf=allow_inf,
+                                   item="contact")
+    return np.full(k, float(a)) if a.ndim == 0 else np.broadcast_to(a, (*a.shape[:-1], k))
 
 
 def _tangent_rows(tangent, k, n):

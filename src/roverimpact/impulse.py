@@ -81,9 +81,8 @@ class ImpactResult:
 
 def _restitution(e, name="restitution"):
     e = as_array(e, name)
-    _validation.check_finite(e, name, 0)
-    if np.any((e < 0) | (e > 1)):
-        raise InputError(f"{name} must lie in [0, 1], got values in [{e.min():g}, {e.max():g}]")
+    # (..., m): the last axis is the row, not a batch axis
+    _validation.check_coefficients(e, name, low=0.0, high=1.0)
     return e
 
 

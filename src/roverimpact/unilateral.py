@@ -169,16 +169,12 @@ def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, w
     B = np.zeros((0, n)) if bilateral is None else check_rows(bilateral, "bilateral", n)
     if isinstance(restitution, (int, float)) and math.isfinite(restitution):
         if not 0.0 <= restitution <= 1.0:
-            raise InputError(f"restitution must lie in [0, 1], got values in "
-                             f"[{restitution:g}, {restitution:g}]")
+            raise InputError(f"restitution must lie in [0, 1], got {restitution:g}")
         e = np.full(k, float(restitution))
     else:
         e = as_array(restitution, "restitution")
-        _validation.check_finite(e, "restitution", 0)
-        if np.any((e < 0) | (e > 1)):
-            raise InputError(
-                f"restitution must lie in [0, 1], got values in [{e.min():g}, {e.max():g}]"
-            )
+        # (..., k): the last axis is the contact, not a batch axis
+        _validation.check_coefficients(e, "restitution", low=0.0, high=1.0)
         if e.ndim == 0:
             e = np.full(k, float(e))
         if e.shape[-1] not in (1, k):
