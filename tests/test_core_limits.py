@@ -60,3 +60,51 @@ def test_complex_arrays_are_refused(call):
         warnings.simplefilter("error")
         with pytest.raises(InputError, match="complex"):
             call()
+
+
+# Rows of any finite scale: T_c and v+ do not depend on the scale of the rows of A
+# (P_c = M^-1 A^T (A M^-1 A^T)^+ A), and the impulse along a row s a is 1/s times the one
+# along a. Rows of entries about 1e-200 gave T_c = 0, rank 0 and v+ = v (the squared
+# whitened norms underflowed); about 1e200, the same by overflow.
+_RNG = np.random.default_rng(11)
+_X = _RNG.standard_normal((5, 5))
+M5 = _X @ _X.T + 5 * np.eye(5)
+A5 = _RNG.standard_normal((3, 5))
+A5[2] = A5[0] + A5[1]  # rank 2: dependent rows
+V5 = _RNG.standard_normal(5)
+
+
+def _reference_T_c(M, A, v):
+    """numpy/scipy, on rows of order 1: 1/2 (A v)^T (A M^-1 A^T)^+ (A v)."""
+    from scipy.linalg import pinvh
+
+    Av = A @ v
+    return 0.5 * Av @ pinvh(A @ np.linalg.solve(M, A.T)) @ Av
+
+
+@pytest.mark.parametrize("s", [1e-300, 1e-200, 1e-160, 1e160, 1e200, 1e300])
+@pytest.mark.parametrize("nb", [None, 3, 70])  # one system, the item kernel, the lanes
+def test_partition_of_rows_far_from_order_one(s, nb):
+    ref = _reference_T_c(M5, A5, V5)
+    if nb is None:
+        p = ri.partition(M5, s * A5, V5)
+        T_c, rank = np.array([p.T_c]), np.array([p.rank])
+    else:
+        A = np.repeat(A5[None], nb, axis=0)
+        A[1] *= s  # one item scaled among items of order 1
+        p = ri.partition(M5, A, V5)
+        T_c, rank = p.T_c, p.rank
+    np.testing.assert_allclose(T_c, ref, rtol=1e-12)
+    assert (rank == 2).all()
+
+
+@pytest.mark.parametrize("s", [1e-200, 1e200])
+def test_impulsive_impact_of_rows_far_from_order_one(s):
+    A = A5[:2]
+    G = A @ np.linalg.solve(M5, A.T)
+    p = np.linalg.solve(G, -(1 + 0.5) * (A @ V5))  # the impulses along A, e = 0.5
+    r = ri.impulsive_impact(M5, s * A, V5, 0.5)
+    np.testing.assert_allclose(r.v_plus, V5 + np.linalg.solve(M5, A.T @ p), rtol=1e-12,
+                               atol=1e-14)
+    np.testing.assert_allclose(r.impulse * s, p, rtol=1e-12)
+    assert r.T_c_minus == pytest.approx(_reference_T_c(M5, A, V5), rel=1e-12)

@@ -41,7 +41,8 @@ RTOL = 1e-9
 #: sweeps stay on the one-item kernel.
 LANES_MIN_BATCH = 64
 
-__all__ = ["RTOL", "T_LIMIT", "Partition", "effective_mass", "partition", "projector"]
+__all__ = ["ROW_SCALE_RANGE", "RTOL", "T_LIMIT", "Partition", "effective_mass", "partition",
+           "projector"]
 
 
 @dataclass(frozen=True)
@@ -98,6 +99,36 @@ def prepare(M, A, v=None):
         shapes["v"] = v.shape[:-1]
     batch = broadcast_batch(**shapes)
     return M, A, v, batch, n, A.shape[-2]
+
+
+#: Largest |entry| of an item's rows A outside which :func:`partition` and
+#: :func:`~roverimpact.impulsive_impact` scale them (as :mod:`roverimpact.frictional` does):
+#: far from where the squared whitened row norms under- or overflow float64.
+ROW_SCALE_RANGE = (1e-50, 1e50)
+
+
+def row_scale(A: np.ndarray) -> np.ndarray | None:
+    """One power of two per item of rows ``A (..., m, n)``, about its largest |entry|, or
+    None when every item's largest |entry| lies in :data:`ROW_SCALE_RANGE` (or is 0, NaN
+    or inf, which the checks name). ``A / scale[..., None, None]`` then has entries of
+    order 1: the same subspace and rank decision (one factor for all rows of an item keeps
+    their relative sizes, which ``rtol`` judges), computed exactly (a power of two). Rows
+    of entries about 1e-200 had whitened norms that underflowed to 0 (T_c = 0, rank 0),
+    about 1e160 ones that overflowed to inf."""
+    if A.size == 0:
+        return None
+    lo, hi = ROW_SCALE_RANGE
+    if A.ndim == 2:  # one item: two reductions, no temporary array
+        big = max(A.max(), -A.min())
+        if not (0 < big < lo or hi < big < math.inf):
+            return None
+        return np.ldexp(1.0, np.frexp(big)[1])
+    big = np.maximum(A.max(axis=(-1, -2)), -A.min(axis=(-1, -2)))
+    with np.errstate(invalid="ignore"):
+        out = (big > 0) & np.isfinite(big) & ((big < lo) | (big > hi))
+    if not out.any():
+        return None
+    return np.where(out, np.ldexp(1.0, np.frexp(np.where(out, big, 1.0))[1]), 1.0)
 
 
 def _size(shape: tuple[int, ...]) -> int:
@@ -206,6 +237,9 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     time in SIMD lanes (Gram-Schmidt twice in row order); an item with nearly dependent
     rows (a kept residual below 1e-4) is recomputed with a Householder QR with column
     pivoting, which smaller batches use throughout. Both give the same result to rounding.
+    Rows of any finite scale are taken: an item whose rows come out of rank 0 with nonzero
+    entries far from order 1 (beyond ``ROW_SCALE_RANGE``; their squared whitened norms
+    under- or overflowed) is recomputed with its rows divided by one power of two.
 
     Examples
     --------
@@ -233,11 +267,25 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
             single = _partition_single(M, A, v, rtol, want_velocities)
         except _NOT_ONE_SYSTEM:  # an argument numba refuses all the same
             single = None
-        if single is not None:
-            return single
+        if single is not None and (single.rank or row_scale(A) is None):
+            return single  # (rank 0: zero rows, or rows far from order 1, scaled below)
     if v is None:
         raise InputError("v is required: the generalized velocity (..., n)")
     M, A, v, batch, n, m = prepare(M, A, v)
+    p = _partition_batch(M, A, v, batch, n, m, float(rtol), bool(want_velocities))
+    if m and np.size(p.rank) and np.min(p.rank) == 0:
+        # Rank 0 with rows: zero rows, or rows far from order 1 whose squared whitened norms
+        # under- or overflowed (every row then counts as zero). Those are scaled, and only
+        # then: a check of every item's rows on every call costs more than the rare case.
+        scale = row_scale(A)
+        if scale is not None:
+            p = _partition_batch(M, A / scale[..., None, None], v, batch, n, m, float(rtol),
+                                 bool(want_velocities))
+    return p
+
+
+def _partition_batch(M, A, v, batch, n, m, rtol, want_velocities) -> Partition:
+    """:func:`partition` of checked arrays of broadcast batch shape ``batch``."""
     Mf = np.ascontiguousarray(M.reshape(_size(M.shape[:-2]), n, n))
     Af = np.ascontiguousarray(A.reshape(_size(A.shape[:-2]), m, n))
     vf = np.ascontiguousarray(v.reshape(_size(v.shape[:-1]), n))
@@ -246,14 +294,13 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     iv = flat_index(v.shape[:-1], batch)
     nb = iM.shape[0]
     if nb < LANES_MIN_BATCH:
-        return _partition_items(M, A, v, Mf, Af, vf, iM, iA, iv, batch, float(rtol),
-                                bool(want_velocities))
+        return _partition_items(M, A, v, Mf, Af, vf, iM, iA, iv, batch, rtol,
+                                want_velocities)
     T, Tc, Ta = np.empty((3, nb))
     rank = np.empty(nb, dtype=np.int64)
     status = np.zeros(nb, dtype=np.int64)
     vc = np.empty((nb, n)) if want_velocities else np.empty((0, n))
-    lanes_kernel()(Mf, Af, vf, iM, iA, iv, float(rtol), bool(want_velocities), T, Tc, Ta, vc,
-                   rank, status)
+    lanes_kernel()(Mf, Af, vf, iM, iA, iv, rtol, want_velocities, T, Tc, Ta, vc, rank, status)
     _check_items(status, T, Tc, M, A, v, iM, iA, iv, batch)
     if want_velocities:
         v_c = vc.reshape(*batch, n)

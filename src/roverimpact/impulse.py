@@ -37,7 +37,7 @@ import numpy as np
 
 from . import _validation
 from ._validation import InputError, as_array, broadcast_batch, fmt_index
-from .energy import RTOL, partition, prepare, scalarize, whitened
+from .energy import RTOL, partition, prepare, row_scale, scalarize, whitened
 
 __all__ = ["ImpactResult", "impulsive_impact"]
 
@@ -149,6 +149,11 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     J = np.concatenate(
         [np.broadcast_to(A, (*batch, m, n)), np.broadcast_to(B, (*batch, p, n))], axis=-2
     )
+    # rows far from order 1 (entries of 1e-200 gave v+ = v, T_c_minus = 0; of 1e160 NaN)
+    # divided by one power of two per item: exact, and the impulses scale back by it
+    rows_scale = row_scale(J)
+    if rows_scale is not None:
+        J = J / rows_scale[..., None, None]
     vb = np.broadcast_to(v, (*batch, n))
     E = np.concatenate([np.broadcast_to(e_rows, (*batch, m)), np.zeros((*batch, p))], axis=-1)
 
@@ -210,6 +215,8 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     T_plus = 0.5 * np.sum(u_plus**2, axis=-1)
     lost = 0.5 * np.sum(-du * (2 * u_minus + du), axis=-1)
     gen = np.einsum("...ji,...j->...i", J, imp)
+    if rows_scale is not None:
+        imp = imp / rows_scale[..., None]
     return ImpactResult(
         v_plus=v_plus,
         impulse=imp[..., :m],
