@@ -488,6 +488,15 @@ def _solve_lower(L, X):
     return np.linalg.solve(L, X)
 
 
+def _scaled_held(B):
+    """Held rows ``B (..., p, n)`` divided by :func:`row_scale`'s power of two per item when
+    they are far from order 1: the mobility they leave depends on their span alone, and
+    rows of entries about 1e-200 or 1e200 were ignored (their whitened norms under- or
+    overflowed: m_eff_free for m_eff) by the kernel and the SVD, not by :func:`partition`."""
+    scale = row_scale(B)
+    return B if scale is None else B / scale[..., None, None]
+
+
 def _held_complement(L, W, held, rtol):
     """Whitened rows ``W (..., n, m)`` minus their part in range(L^{-1} B^T), B = ``held``."""
     B = as_array(held, "held", min_ndim=1)
@@ -499,6 +508,7 @@ def _held_complement(L, W, held, rtol):
     _validation.check_finite(B, "held", 2)
     if B.shape[-2] == 0:
         return W
+    B = _scaled_held(B)
     # one basis per distinct B: an unbatched B (e.g. the other rows of a sweep over the
     # obstacle normal) with a shared M is factorised once for the whole batch
     WB = _solve_lower(L, np.swapaxes(B, -1, -2))
@@ -561,6 +571,7 @@ def row_masses(M, a, held=None, *, rtol: float = RTOL):
         if B.shape[-1] != n:
             raise InputError(f"held must have shape (..., p, n) with n = {n}, got {B.shape}")
         _validation.check_finite(B, "held", 2)
+        B = _scaled_held(B)
     batch = broadcast_batch(M=M.shape[:-2], A=a.shape[:-1], held=B.shape[:-2])
     grams = None
     if _size(batch) < LANES_MIN_BATCH:
