@@ -126,3 +126,15 @@ def test_held_rows_far_from_order_one(s):
     assert ri.effective_mass(M5, a[None], held=s * B)[0, 0] == pytest.approx(ref, rel=1e-12)
     m_eff, _ = row_masses(np.repeat(M5[None], 70, axis=0), a, s * B)
     np.testing.assert_allclose(m_eff, ref, rtol=1e-12)
+
+
+@pytest.mark.parametrize("s", [1e-200, 1e200])
+def test_projector_of_rows_far_from_order_one(s):
+    """P_c = M^-1 A^T (A M^-1 A^T)^+ A does not depend on the scale of A: rows of 1e-200
+    gave P_c = 0 (1e200: NaN), while partition (fixed alike) gave the full T_c."""
+    from scipy.linalg import pinvh
+
+    Mi = np.linalg.inv(M5)
+    ref = Mi @ A5.T @ pinvh(A5 @ Mi @ A5.T) @ A5
+    np.testing.assert_allclose(ri.projector(M5, s * A5), ref, atol=1e-12)
+    np.testing.assert_allclose(ri.projector(M5, np.stack([A5, s * A5])), [ref, ref], atol=1e-12)

@@ -467,6 +467,9 @@ def projector(M, A, *, rtol: float = RTOL) -> np.ndarray:
     """
     rtol = _validation.check_rtol(rtol)
     M, A, _, batch, n, m = prepare(M, A)
+    scale = row_scale(A)  # P_c depends on the span of the rows alone
+    if scale is not None:
+        A = A / scale[..., None, None]
     M = np.broadcast_to(M, (*batch, n, n))
     A = np.broadcast_to(A, (*batch, m, n))
     L, _, U, mask = whitened(M, A, rtol)
