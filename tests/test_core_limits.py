@@ -138,3 +138,19 @@ def test_projector_of_rows_far_from_order_one(s):
     ref = Mi @ A5.T @ pinvh(A5 @ Mi @ A5.T) @ A5
     np.testing.assert_allclose(ri.projector(M5, s * A5), ref, atol=1e-12)
     np.testing.assert_allclose(ri.projector(M5, np.stack([A5, s * A5])), [ref, ref], atol=1e-12)
+
+
+@pytest.mark.parametrize("s", [1e-200, 1e-160])
+@pytest.mark.parametrize("nb", [None, 70])
+def test_effective_mass_beyond_float64_is_refused(s, nb):
+    """m_eff = 1 / (a M^-1 a^T) = 1/s^2 kg of the row (s, 0, 0) on M = I is beyond float64
+    for s below 1e-154: a row of 1e-200 was called 'a zero row', one of 1e-160 returned
+    inf (with a RuntimeWarning). The row is not zero; its effective mass overflows."""
+    M = np.eye(3) if nb is None else np.repeat(np.eye(3)[None], nb, axis=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match=r"m_eff = 1 / \(a M\^-1 a\^T\) of row A overflows"):
+            ri.effective_mass(M, [s, 0.0, 0.0])
+    with pytest.raises(InputError, match="A is a zero row"):
+        ri.effective_mass(M, [0.0, 0.0, 0.0])
+    assert ri.effective_mass(np.eye(3), [1e-150, 0.0, 0.0]) == pytest.approx(1e300, rel=1e-12)

@@ -582,11 +582,18 @@ def row_masses(M, a, held=None, *, rtol: float = RTOL):
     if grams is None:
         grams = _row_grams_kernel(M, a, B, batch, n, rtol)
     g_free, g = grams
-    if not np.all(g_free > 0.0):
-        zero = np.flatnonzero(~(g_free > 0.0))[0]
-        idx = tuple(int(i) for i in np.unravel_index(zero, batch)) if batch else ()
-        raise InputError(f"A is a zero row ({fmt_index(idx)}): no direction to measure")
-    m_eff_free = 1.0 / g_free
+    with np.errstate(divide="ignore", over="ignore"):
+        m_eff_free = 1.0 / g_free
+    if not np.all(np.isfinite(m_eff_free) & (g_free > 0.0)):
+        bad = np.flatnonzero(~(np.isfinite(m_eff_free) & (g_free > 0.0)))[0]
+        idx = tuple(int(i) for i in np.unravel_index(bad, batch)) if batch else ()
+        row = np.broadcast_to(a, (*batch, n)).reshape(-1, n)[bad]
+        if not row.any():
+            raise InputError(f"A is a zero row ({fmt_index(idx)}): no direction to measure")
+        # a nonzero row whose a M^-1 a^T underflows: m_eff is beyond float64
+        raise InputError(f"m_eff = 1 / (a M^-1 a^T) of row A overflows float64 "
+                         f"({fmt_index(idx)}, max |a_i| = {np.abs(row).max():.3g}): check "
+                         "the units of M and A")
     if B.shape[-2] == 0:  # nothing held: the same number, not its rounding through T_a
         m_eff = m_eff_free
     else:
