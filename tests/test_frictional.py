@@ -895,3 +895,24 @@ def test_row_scale_changes_only_the_impulse_unit(s):
     hold_n, hold_t = frictional_active_set(np.eye(3), [0.3, -1.0, 0.0], [[0.0, s, 0.0]],
                                               [[[s, 0.0, 0.0]]], 0.1, bilateral=B)
     assert hold_n.tolist() == [True] and hold_t.tolist() == [[False]]
+
+
+@pytest.mark.parametrize("s", [1e-200, 1e200])
+def test_items_of_very_different_row_scales_in_one_batch(s):
+    """A 1 kg point hits the floor at 1 m/s with 0.6 m/s of slip, mu = 0.5: it slides,
+    v+ = (0.1, 0), normal impulse 1 N s, friction -0.5 N s (closed form: mu p opposes the
+    slip, 0.6 - 0.5 = 0.1 m/s left). The same contact with its rows times s has impulses
+    1/s as large. Alone each item was right; in one batch the rows were scaled by one
+    factor per contact over the batch, which left the item of 1e-200 rows unscaled beside
+    the item of order 1: ZeroDivisionError from the kernel."""
+    from roverimpact.frictional import frictional_impact
+
+    normal = np.array([[[0.0, 1.0]], [[0.0, s]]])
+    tangent = np.array([[[[1.0, 0.0]]], [[[s, 0.0]]]])
+    r = frictional_impact(np.eye(2), [0.6, -1.0], normal, tangent, 0.5)
+    np.testing.assert_allclose(r.v_plus, [[0.1, 0.0], [0.1, 0.0]], atol=1e-15)
+    np.testing.assert_allclose(r.impulse * [[1.0], [s]], 1.0, rtol=1e-14)
+    np.testing.assert_allclose(r.impulse_tangent[..., 0] * [[1.0], [s]], -0.5, rtol=1e-14)
+    assert r.state.tolist() == [["sliding"], ["sliding"]]
+    alone = frictional_impact(np.eye(2), [0.6, -1.0], normal[0], tangent[0], 0.5)
+    assert (r.v_plus[0] == alone.v_plus).all()  # the same bits alone as in the batch

@@ -337,23 +337,36 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
                                            *a.shape[a.ndim - c:]))
             for a, c in ((M, 2), (N, 2), (Tg, 3), (B, 2), (v, 1), (e, 1), (mu, 1))]
     # rows of tiny or huge entries (1e-155 gave NaN, 1e160 no impact: G = N M^-1 N^T under-
-    # or overflowed in the kernel) are scaled as in unilateral_impact: each contact's
-    # normal and tangent rows divided by one power of two, about the largest |entry| of its
-    # normal row over the batch, each bilateral row by its own. Exact: impulses scale by
+    # or overflowed in the kernel) are scaled as in unilateral_impact: in each item, each
+    # contact's normal and tangent rows divided by one power of two about the largest
+    # |entry| of its normal row, each bilateral row by its own. Exact: impulses scale by
     # 1/s and velocities along the rows by s (B v+ = 0 does not depend on B's scale). Only
-    # then: rows of ordinary size go to the kernel as given, so that an item gives the same
-    # bits alone as in a batch (the scale of a batch mixes with M's and B's in rounding)
-    big = np.max(np.abs(flat[1]), axis=(0, 2))
+    # the rows out of range, and by their own item's size: the other rows go to the kernel
+    # as given, so that an item gives the same bits alone as in a batch (the scale of a
+    # batch mixes with M's and B's in rounding). (One factor per contact over the whole
+    # batch left an item of 1e-200 rows beside one of order 1 unscaled: ZeroDivisionError.)
+    lo, hi = ROW_SCALE_RANGE
+    big = np.max(np.abs(flat[1]), axis=2)  # (items of N, k)
+    far = (big < lo) | (big > hi)
     s = np.ones(k)
+    if far.any():
+        if flat[1].shape[0] != 1 or flat[2].shape[0] != 1:
+            # one factor per item and contact for the normal and tangent rows together:
+            # both taken to the full batch
+            flat[1], flat[2] = flat[1][idx[1]], flat[2][idx[2]]
+            big, far = big[idx[1]], far[idx[1]]
+            idx[1] = idx[2] = np.arange(nb, dtype=np.int64)
+        s = np.where(far, np.ldexp(1.0, np.frexp(np.where(far, big, 1.0))[1]), 1.0)
+        if s.shape[0] == 1:
+            s = s[0]  # (k,): the rows are unbatched
+        flat[1] = flat[1] / s[..., None]
+        flat[2] = flat[2] / s[..., None, None]
     if pb:
         sB = np.max(np.abs(flat[3]), axis=-1, keepdims=True)
-    if ((big < ROW_SCALE_RANGE[0]) | (big > ROW_SCALE_RANGE[1])).any() or (
-            pb and ((sB < ROW_SCALE_RANGE[0]) | (sB > ROW_SCALE_RANGE[1])).any()):
-        s = np.ldexp(1.0, np.frexp(big)[1])
-        flat[1] = flat[1] / s[:, None]
-        flat[2] = flat[2] / s[:, None, None]
-        if pb:
-            flat[3] = flat[3] / np.ldexp(1.0, np.frexp(sB)[1])
+        farB = (sB < lo) | (sB > hi)
+        if farB.any():
+            flat[3] = flat[3] / np.where(farB, np.ldexp(1.0, np.frexp(np.where(farB, sB, 1.0))[1]),
+                                         1.0)
     out = {
         "P": np.zeros((nb, k)), "Pt": np.zeros((nb, k, tm)),
         "vplus": np.empty((nb, n) if want_vplus else (0, n)),
@@ -372,9 +385,9 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
     friction_kernel.get()(*flat, *idx, ntan, nd, coef, math.cos(math.pi / int(facets)),
                           float(rtol), float(tol), bool(want_vplus), *out.values())
     out["P"] /= s
-    out["Pt"] /= s[:, None]
+    out["Pt"] /= s[..., None]
     out["slack"] *= s
-    out["slip"] *= s[:, None]
+    out["slip"] *= s[..., None]
     _raise_status(out, M, idx[0], batch)
     if not np.isfinite(out["Tm"]).all():  # finite M and v, 1/2 v^T M v above float64
         raise_overflow(out["Tm"], M, v, idx[0], idx[4], batch)
