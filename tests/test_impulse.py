@@ -231,3 +231,57 @@ def test_a_row_partition_counts_as_zero_is_named():
     r = ri.impulsive_impact(M, A, [-1.0, -1.0], rtol=1e-12)  # a smaller rtol keeps it
     np.testing.assert_allclose(r.v_plus, [0.0, 0.0], atol=1e-12)
     assert float(r.energy_lost) == pytest.approx(2.5, rel=1e-12)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(2, 8), st.integers(1, 3), st.integers(0, 2), st.data())
+def test_the_same_impact_in_every_form(n, m, p, data):
+    """One impact given as one system, as an item of batches of 2 and 65 (the partition's
+    lane kernel from 64 items) with M shared, as lists, in permuted coordinates (P M P^T,
+    A P^T, P v) and with permuted, positively scaled rows gives the same v+, impulses,
+    T_c^- and rank; all against numpy's solve of G p = d, G = J M^-1 J^T, J = [A; B]
+    (J full rank: the impulses are unique), and M (v+ - v) = J^T p."""
+    assume(m + p <= n)
+    M = data.draw(spd_matrices(n, decades=2.0))
+    J = data.draw(full_rank_rows(m + p, n))
+    A, B = J[:m], J[m:]
+    v = data.draw(vectors(n))
+    e = data.draw(arrays(np.float64, m, elements=st.sampled_from([0.0, 0.3, 1.0])))
+    assume(np.abs(v).max() > 1e-3)
+    G = J @ np.linalg.solve(M, J.T)
+    imp = np.linalg.solve(G, -np.concatenate([(1 + e) * (A @ v), B @ v]))
+    v_plus = v + np.linalg.solve(M, J.T @ imp)
+    pers = B if p else None
+
+    def near(a, b, tol=1e-12):  # to tol of the largest velocity and impulse
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        assert a.shape == b.shape and (a.size == 0 or np.abs(a - b).max() <= tol * big), (a, b)
+
+    big = max(np.abs(v).max(), np.abs(v_plus).max(), np.abs(imp).max())
+    r = ri.impulsive_impact(M, A, v, e, pers)
+    near(r.v_plus, v_plus, 1e-9)
+    near(np.concatenate([r.impulse, r.impulse_persistent]), imp, 1e-9)
+    near(np.linalg.solve(M, r.generalized_impulse), r.v_plus - v, 1e-9)
+    assert r.rank == m + p
+
+    for nb in (2, 65):
+        b = ri.impulsive_impact(M, np.broadcast_to(A, (nb, m, n)), np.tile(v, (nb, 1)), e, pers)
+        for f in ("v_plus", "impulse", "impulse_persistent"):
+            near(getattr(b, f), np.broadcast_to(getattr(r, f), getattr(b, f).shape))
+        T = 0.5 * v @ M @ v
+        for f in ("T_c_minus", "energy_lost"):
+            assert np.abs(getattr(b, f) - getattr(r, f)).max() <= 1e-12 * T
+        assert (b.rank == r.rank).all()
+    lists = ri.impulsive_impact(M.tolist(), A.tolist(), v.tolist(), e.tolist(),
+                                None if pers is None else pers.tolist())
+    near(lists.v_plus, r.v_plus)
+
+    P = np.eye(n)[data.draw(st.permutations(range(n)))]
+    rows = np.array(data.draw(st.permutations(range(m))), dtype=int)
+    s = data.draw(arrays(np.float64, m, elements=st.floats(1e-3, 1e3)))
+    q = ri.impulsive_impact(P @ M @ P.T, (s[:, None] * A[rows]) @ P.T, P @ v, e[rows],
+                            None if pers is None else pers @ P.T)
+    near(P.T @ q.v_plus, r.v_plus, 1e-9)
+    near(q.impulse * s, r.impulse[rows], 1e-9)
+    assert abs(q.T_c_minus - r.T_c_minus) <= 1e-9 * (0.5 * v @ M @ v)
+    assert q.rank == r.rank
