@@ -595,3 +595,47 @@ def test_infeasible_status_of_a_solvable_problem_says_the_solver_broke_down(monk
     for e, B in (([0.2, 0.8], None), (0.5, [[1.0, 1.0]])):
         with pytest.raises(SolverError, match="no solution"):
             unilateral_impact(M, v, N, e, bilateral=B)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(2, 7), st.integers(1, 3), st.sampled_from([0.0, 0.5]),
+       st.sampled_from(["newton", "poisson"]), st.data())
+def test_the_same_unilateral_impact_in_every_form(n, k, e, law, data):
+    """One impact given as one system, as an item of a batch of 3 with M shared, as lists,
+    in permuted coordinates (P M P^T, N P^T, P v) and with permuted, positively scaled
+    contact rows gives the same v+, active set and T_c^-, with impulses 1/s for rows times
+    s; checked against the conditions themselves: p >= 0, M (v+ - v) = N^T p, and for
+    Newton 0 <= N v+ + e N v- perpendicular to p (independent rows: k <= n, one solution)."""
+    assume(k <= n)
+    M = data.draw(spd_matrices(n, decades=2.0))
+    N = data.draw(full_rank_rows(k, n))
+    v = data.draw(vectors(n))
+    assume(np.abs(v).max() > 1e-3)
+    r = unilateral_impact(M, v, N, e, law=law)
+    big = max(np.abs(v).max(), np.abs(r.impulse).max())
+
+    def near(a, b, tol=1e-9):
+        assert np.abs(np.asarray(a) - np.asarray(b)).max() <= tol * big, (a, b)
+
+    assert (r.impulse >= -1e-12 * big).all()
+    near(M @ (r.v_plus - v), N.T @ r.impulse)
+    if law == "newton":
+        w = N @ r.v_plus + e * (N @ v)
+        assert (w >= -1e-9 * big).all() and np.abs(w * r.impulse).max() <= 1e-9 * big * big
+
+    b = unilateral_impact(M, np.tile(v, (3, 1)), N, e, law=law)
+    near(b.v_plus, np.broadcast_to(r.v_plus, (3, n)), 1e-12)
+    assert (b.active == r.active).all()
+    near(unilateral_impact(M.tolist(), v.tolist(), N.tolist(), e, law=law).v_plus, r.v_plus,
+         1e-12)
+
+    P = np.eye(n)[data.draw(st.permutations(range(n)))]
+    rows = np.array(data.draw(st.permutations(range(k))), dtype=int)
+    s = np.array(data.draw(st.lists(st.floats(1e-3, 1e3), min_size=k, max_size=k)))
+    q = unilateral_impact(P @ M @ P.T, P @ v, (s[:, None] * N[rows]) @ P.T, e, law=law)
+    near(P.T @ q.v_plus, r.v_plus)
+    near(q.impulse * s, r.impulse[rows])
+    assert (q.active == r.active[rows]).all()
+    assert abs(q.T_c_minus - r.T_c_minus) <= 1e-9 * r.T_minus
+    assert (active_set(P @ M @ P.T, P @ v, (s[:, None] * N[rows]) @ P.T, restitution=e,
+                       law=law) == q.active).all()
