@@ -138,6 +138,16 @@ def test_bad_mu_names_its_contact_and_batch_index():
         frictional_impact(*args, mu)
 
 
+def test_effective_mass_held_of_another_batch_shape_is_named():
+    """Several rows with held rows whose batch shape does not broadcast against M's and
+    A's: numpy's 'operands could not be broadcast together with remapped shapes
+    [original->remapped]: (3,5,5)->(3,newaxis,newaxis) ...' from inside a solve."""
+    M = np.repeat(np.eye(3)[None], 3, axis=0)
+    with pytest.raises(ri.InputError, match=r"batch shapes do not broadcast: M and A batch "
+                                            r"shape \(3,\), held batch shape \(4,\)"):
+        ri.effective_mass(M, np.eye(3)[:2], held=np.ones((4, 1, 3)))
+
+
 def test_effective_mass_zero_row():
     with pytest.raises(ri.InputError, match="zero row"):
         ri.effective_mass(M2, [0.0, 0.0])

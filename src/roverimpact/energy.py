@@ -509,6 +509,7 @@ def _held_complement(L, W, held, rtol):
     if B.shape[-1] != n:
         raise InputError(f"held must have shape (..., p, n) with n = {n}, got {B.shape}")
     _validation.check_finite(B, "held", 2)
+    broadcast_batch(**{"M and A": W.shape[:-2], "held": B.shape[:-2]})
     if B.shape[-2] == 0:
         return W
     B = _scaled_held(B)
