@@ -148,6 +148,14 @@ def test_effective_mass_held_of_another_batch_shape_is_named():
         ri.effective_mass(M, np.eye(3)[:2], held=np.ones((4, 1, 3)))
 
 
+def test_impact_restitution_of_another_batch_shape_is_named():
+    """The error named a 'batch batch shape (3,)' (an internal name) beside restitution's."""
+    with pytest.raises(ri.InputError, match=r"batch shapes do not broadcast: M batch shape "
+                                            r"\(3,\), A batch shape \(\), v batch shape "
+                                            r"\(\), restitution batch shape \(4,\)$"):
+        ri.impulsive_impact(np.repeat(M2[None], 3, axis=0), A2, v2, np.full((4, 1), 0.2))
+
+
 def test_effective_mass_zero_row():
     with pytest.raises(ri.InputError, match="zero row"):
         ri.effective_mass(M2, [0.0, 0.0])

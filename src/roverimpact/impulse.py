@@ -141,7 +141,9 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     if e.ndim > 0 and e.shape[-1] not in (1, m):
         raise InputError(f"restitution must be a scalar or have m = {m} values, got {e.shape}")
     e_rows = np.broadcast_to(e if e.ndim else e[None], (*e.shape[:-1], m) if e.ndim else (m,))
-    batch = broadcast_batch(batch=batch, restitution=e_rows.shape[:-1])
+    batch = broadcast_batch(M=M.shape[:-2], A=A.shape[:-2], v=v.shape[:-1],
+                            **({"persistent": B.shape[:-2]} if persistent is not None else {}),
+                            restitution=e_rows.shape[:-1])
     _validation.check_finite(v, "v", 1)
     _validation.check_finite(B, "persistent", 2)
 
