@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -154,6 +156,34 @@ def test_impact_restitution_of_another_batch_shape_is_named():
                                             r"\(3,\), A batch shape \(\), v batch shape "
                                             r"\(\), restitution batch shape \(4,\)$"):
         ri.impulsive_impact(np.repeat(M2[None], 3, axis=0), A2, v2, np.full((4, 1), 0.2))
+
+
+@pytest.mark.parametrize("nb", [None, 70])
+def test_a_mass_matrix_filled_on_one_triangle_says_how_to_symmetrise_it(nb):
+    """Pinocchio's crba fills the upper triangle of data.M only; passed as it is, the error
+    said 'M is not symmetric' and no more. It now says which half is filled and how to
+    complete it (and the completed matrix is accepted)."""
+    full = np.array([[2.0, 1.0, 0.0], [1.0, 2.0, 1.0], [0.0, 1.0, 2.0]])
+    cases = ((np.triu(full), "np.triu(M) + np.triu(M, 1).T",
+              lambda M: np.triu(M) + np.triu(M, 1).T),
+             (np.tril(full), "np.tril(M) + np.tril(M, -1).T",
+              lambda M: np.tril(M) + np.tril(M, -1).T))
+    for half, fix, complete in cases:
+        M = half if nb is None else np.repeat(half[None], nb, axis=0)
+        with pytest.raises(ri.InputError, match=r"M is not symmetric .*Only its "
+                                                r"(upper|lower) triangle is filled.*"
+                                                + re.escape(fix)):
+            ri.partition(M, [1.0, 0.0, 0.0], [1.0, 1.0, 1.0])
+        completed = complete(half)
+        assert ri.partition(completed, [1.0, 0.0, 0.0], [1.0, 1.0, 1.0]).T_c == pytest.approx(
+            _tc(full), rel=1e-12)
+    with pytest.raises(ri.InputError, match=r"a mass matrix must be symmetric$"):
+        ri.partition(full + np.diag([0.5, 0.0], 1), [1.0, 0.0, 0.0], [1.0, 1.0, 1.0])
+
+
+def _tc(M):
+    """1/2 (a v)^2 / (a M^-1 a^T) for a = (1, 0, 0), v = (1, 1, 1)."""
+    return 0.5 / np.linalg.solve(M, [1.0, 0.0, 0.0])[0]
 
 
 def test_effective_mass_zero_row():

@@ -115,9 +115,17 @@ def mass_matrix_error(M: np.ndarray, flat_index: int, code: int, name: str = "M"
     if code == STATUS_ASYMMETRIC_M:
         asym = np.abs(item - item.T)
         i, j = np.unravel_index(int(np.argmax(asym)), asym.shape)
+        # a triangle of zeros: half a matrix, e.g. Pinocchio's data.M after crba
+        hint = ""
+        if not np.tril(item, -1).any():
+            hint = (". Only its upper triangle is filled (as Pinocchio's crba leaves it): "
+                    "symmetrise it, M = np.triu(M) + np.triu(M, 1).T")
+        elif not np.triu(item, 1).any():
+            hint = (". Only its lower triangle is filled: symmetrise it, "
+                    "M = np.tril(M) + np.tril(M, -1).T")
         return InputError(
             f"{name} is not symmetric ({where}): |{name}[{i},{j}] - {name}[{j},{i}]| = "
-            f"{asym[i, j]:.3g}; a mass matrix must be symmetric"
+            f"{asym[i, j]:.3g}; a mass matrix must be symmetric{hint}"
         )
     lam = smallest_eigenvalue(item)
     floor = pd_floor(item)
