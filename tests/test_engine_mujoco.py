@@ -408,6 +408,23 @@ def test_finite_obstacle_height_box_face():
         r_own.contact_duration, rel=0.01)
 
 
+@pytest.mark.parametrize("contact", ["soft", "laws"])
+def test_window_shorter_than_one_step_is_one_step_not_a_crash(contact):
+    """t_after under half the rule's step gave zero contact steps and a ValueError
+    (reshape of an empty force array); the window is now one step of length t_after, the
+    run ends inside the contact, as the own engine's does."""
+    mbm = slider(mass=4.0)
+    cfg = SimulationConfig(ground=False, speed=0.5, obstacle={"k": 1e7, "e": 0.5},
+                           t_after=0.05)
+    h = simulate_impact_mujoco(mbm, cfg, contact=contact).stats["timestep"]
+    short = cfg.model_copy(update={"t_after": 0.2 * h})
+    r = simulate_impact_mujoco(mbm, short, contact=contact)
+    own = simulate_impact(mbm, short)
+    assert not r.separated and not own.separated
+    assert r.contact_duration == pytest.approx(0.2 * h, rel=1e-9)
+    assert r.contact_duration == pytest.approx(own.contact_duration, rel=1e-6)
+
+
 def test_timestep_rule_is_converged():
     """Halving the rule's step changes F_max by less than 1 %."""
     mbm = rover2d(suspension="rocker")

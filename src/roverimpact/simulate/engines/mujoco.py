@@ -686,14 +686,15 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
                               v_n=v_n)
     f_obst = float(predict(KelvinVoigt(k=obst_map.k, c=obst_map.c), m_c, v_n).peak_force)
     h_rule, fric_scale = configure(q_minus, v_minus, obst_map, f_obst)
-    h = min(h_approach, h_rule) if timestep is None else float(timestep)
+    # a window shorter than the rule's step is one step of that length (never zero steps)
+    h = min(h_approach, h_rule, config.t_after) if timestep is None else float(timestep)
     m.opt.timestep = h
     if m.neq and h_rule > h:       # keep alpha h = 0.05 with the step actually used
         a_e = max(config.integrator.baumgarte, 0.05 / h)
         m.eq_solref[:] = (-a_e * a_e, -2.0 * a_e)
 
     # ---- contact phase: until no obstacle contact is left (every gap >= 0) or t_after
-    n_steps = math.ceil(config.t_after / h - 0.5)
+    n_steps = max(1, math.ceil(config.t_after / h - 0.5))
     if n_steps > _MAX_STEPS:
         raise SolverError(f"the impact would need {n_steps:.3g} MuJoCo steps of "
                           f"{h:.3g} s: shorten t_after or soften the contact")
