@@ -159,7 +159,12 @@ class ContactSystem:
         if self.euclidean:
             return v
         Jint = pin.dIntegrate(self.model, q_ref, dq, pin.ArgumentPosition.ARG1)
-        return np.linalg.solve(Jint, v)
+        try:
+            return np.linalg.solve(Jint, v)
+        except np.linalg.LinAlgError:
+            # only a trial stage far off the chart (|dq| ~ 2 pi; the run re-anchors at
+            # 0.5): a finite value the step's error estimate rejects, not an exception
+            return np.linalg.lstsq(Jint, v, rcond=None)[0]
 
     # ------------------------------------------------------------------ kinematics
     def wheel_kinematics(self, q, v=None):
