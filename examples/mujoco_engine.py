@@ -9,6 +9,9 @@ Prints every figure quoted in the section "MuJoCo as a second engine":
 3. the default Hunt-Crossley obstacle (k = 1e7, e = 0.5) through MuJoCo's equivalent
    Kelvin-Voigt (an approximation), and the law itself applied in MuJoCo (engine
    ``mujoco_laws``);
+3b. the rocker-bogie with the obstacle in front of one wheel (as `roverimpact simulate`
+   runs a scenario), Hunt-Crossley obstacle and ground, and a Kelvin-Voigt obstacle on
+   the Hunt-Crossley ground;
 4. friction mu = 0.3 (an approximation: capped viscous slope in MuJoCo's cone).
 
     python examples/mujoco_engine.py
@@ -79,6 +82,18 @@ def main():
             r_laws = simulate_impact_mujoco_laws(mbm, cfg, q0=q0, v0=v0)
             print(f"  {'':<26} MuJoCo with the law itself {r_laws.F_max_total:8.1f} N   "
                   f"{r_laws.F_max_total / r_own.F_max_total - 1:+.2%}")
+
+    print("3b. rocker-bogie, the obstacle in front of the left front wheel only (a scenario's"
+          " obstacle.wheel)")
+    rb = rocker_bogie()
+    for beta in (30.0, 45.0, 60.0, 90.0):
+        cfg = SimulationConfig(speed=0.3, beta_deg=beta, obstacle={"k": 1e7, "e": 0.5},
+                               obstacle_wheels=["left_front"], t_after=0.05)
+        row(f"rocker-bogie, beta = {beta:.0f}", *both(rb, cfg))
+    kv_obstacle = {"name": "kelvin-voigt", "k": 1e6, "c": 500.0, "e": None, "n": None}
+    cfg = SimulationConfig(speed=0.3, beta_deg=90.0, obstacle=kv_obstacle,
+                           obstacle_wheels=["left_front"], t_after=0.05)
+    row("same, KV obstacle, beta = 90", *both(rb, cfg))
 
     print("4. friction mu = 0.3, Kelvin-Voigt, beta = 45 and 90")
     for name, mbm in (("rover2d rocker", rover2d(suspension="rocker")),

@@ -1063,6 +1063,30 @@ def simulate_mujoco_hunt_crossley():
     return out
 
 
+@produces("sim.mj_hc_rb_one", "sim.mj_hc_rb_one_ground")
+def simulate_mujoco_hunt_crossley_one_wheel():
+    """examples/mujoco_engine.py, part 3b: the rocker-bogie with the obstacle in front of
+    the left front wheel only (what a scenario's obstacle.wheel gives), default
+    Hunt-Crossley obstacle and ground; and at beta = 90 the exact Kelvin-Voigt obstacle
+    (k = 1e6, c = 500) on the Hunt-Crossley ground (its tangent line in MuJoCo)."""
+    from roverimpact.models import rocker_bogie
+    from roverimpact.simulate import SimulationConfig
+
+    mbm = rocker_bogie()
+    diff = []
+    for beta in (30.0, 45.0, 60.0, 90.0):
+        cfg = SimulationConfig(speed=0.3, beta_deg=beta, obstacle={"k": 1e7, "e": 0.5},
+                               obstacle_wheels=["left_front"], t_after=0.05)
+        own, mj = _both_engines(mbm, cfg)
+        diff.append(mj.F_max_total / own.F_max_total - 1.0)
+    kv = {"name": "kelvin-voigt", "k": 1e6, "c": 500.0, "e": None, "n": None}
+    cfg = SimulationConfig(speed=0.3, beta_deg=90.0, obstacle=kv,
+                           obstacle_wheels=["left_front"], t_after=0.05)
+    own, mj = _both_engines(mbm, cfg)
+    return {"sim.mj_hc_rb_one": _span(diff),
+            "sim.mj_hc_rb_one_ground": f"{pct(mj.F_max_total / own.F_max_total - 1.0)} %"}
+
+
 @produces("sim.mj_fric_within", "sim.mj_fric_rv", "sim.mj_fric_rb", "sim.mj_fric_ratio",
           slow=True)
 def simulate_mujoco_friction():
