@@ -27,6 +27,12 @@ def test_cli_writes_table_summary_and_plot(tmp_path, capsys):
     assert main(["simulate", str(EXAMPLE), "-o", str(tmp_path), "--format", "csv"]) == 0
     out = capsys.readouterr().out
     assert "F_max" in out and "T_c^-" in out
+    # the closing line names every file the run wrote (config.json and scenario.toml
+    # were left out of it)
+    wrote = " ".join(out[out.index("wrote "):].split())
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        n for n in ("config.json", "force_vs_time.png", "history.csv", "scenario.toml",
+                    "summary.json") if n in wrote.replace(str(tmp_path), ""))
     table = pd.read_csv(tmp_path / "history.csv")
     summary = json.loads((tmp_path / "summary.json").read_text())
     # the summary peak is the refined maximum of the tabulated force (never below it)

@@ -118,5 +118,7 @@ def simulate_cmd(
                      "largest force in the window, not the peak of a finished impact.")
     t.caption = " ".join(notes) or None
     console.print(t)
-    console.print(f"wrote {table}, {outdir / 'summary.json'}"
-                  + (f", {outdir / 'force_vs_time.png'}" if plot else ""), highlight=False)
+    written = [table] + [outdir / n for n in ("summary.json", "config.json", "scenario.toml")]
+    if plot:
+        written.append(outdir / "force_vs_time.png")
+    console.print("wrote " + ", ".join(map(str, written)), highlight=False)
