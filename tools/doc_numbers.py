@@ -981,24 +981,30 @@ def _rovers():
             ("rocker-bogie", rocker_bogie(), {}))
 
 
-@produces("sim.mj_table", "sim.mj_example")
-def simulate_mujoco_agreement():
-    """examples/mujoco_engine.py, parts 1-2: Kelvin-Voigt contact, own engine vs MuJoCo."""
+def _slider():
+    """The 1-DoF slider of examples/mujoco_engine.py: 4 kg on an x slide, a 5 cm ball."""
     import numpy as np
     import pinocchio as pin
 
-    from roverimpact.contact import get_law, predict
     from roverimpact.models.base import MultibodyModel, Wheel
-    from roverimpact.simulate import SimulationConfig, simulate_impact
-    from roverimpact.simulate.engines import simulate_impact_mujoco
 
     model = pin.Model()
     j = model.addJoint(0, pin.JointModelPX(), pin.SE3.Identity(), "x")
     model.appendBodyToJoint(j, pin.Inertia(4.0, np.zeros(3), 0.01 * np.eye(3)),
                             pin.SE3.Identity())
     model.addFrame(pin.Frame("ball", j, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
-    slider = MultibodyModel(model=model, name="slider", wheels=[Wheel("ball", "ball", 0.05)],
-                            params={"q_nominal": [0.0]})
+    return MultibodyModel(model=model, name="slider", wheels=[Wheel("ball", "ball", 0.05)],
+                          params={"q_nominal": [0.0]})
+
+
+@produces("sim.mj_table", "sim.mj_example")
+def simulate_mujoco_agreement():
+    """examples/mujoco_engine.py, parts 1-2: Kelvin-Voigt contact, own engine vs MuJoCo."""
+    from roverimpact.contact import get_law, predict
+    from roverimpact.simulate import SimulationConfig, simulate_impact
+    from roverimpact.simulate.engines import simulate_impact_mujoco
+
+    slider = _slider()
     law = {"name": "kelvin-voigt", "k": 1e5, "c": 50.0, "e": None, "n": None}
     cfg = SimulationConfig(ground=False, speed=0.5, obstacle=law, t_after=0.05)
     own, mj = simulate_impact(slider, cfg), simulate_impact_mujoco(slider, cfg)
@@ -1061,6 +1067,25 @@ def simulate_mujoco_hunt_crossley():
             out["sim.mj_hc_rv"] = _span(list(diff.values()))
             out["sim.mj_laws_rv"] = _span(list(laws.values()), 2)
     return out
+
+
+@produces("sim.mj_equiv_duration")
+def simulate_mujoco_equivalent_duration():
+    """The equivalent Kelvin-Voigt keeps the law's peak force and restitution, not its
+    contact duration: the slider (4 kg at 0.5 m/s) into Hertz (k = 1e7) and Hunt-Crossley
+    (k = 1e7, e = 0.2, 0.5, 0.8) faces, duration in MuJoCo against the own engine."""
+    from roverimpact.simulate import SimulationConfig, simulate_impact
+    from roverimpact.simulate.engines import simulate_impact_mujoco
+
+    diff = []
+    for law in ({"name": "hertz", "k": 1e7}, *({"name": "hunt-crossley", "k": 1e7, "e": e}
+                                              for e in (0.2, 0.5, 0.8))):
+        cfg = SimulationConfig(ground=False, speed=0.5, obstacle=law, t_after=0.05)
+        own, mj = simulate_impact(_slider(), cfg), simulate_impact_mujoco(_slider(), cfg)
+        assert abs(mj.F_max_total / own.F_max_total - 1.0) < 0.01, law
+        diff.append(mj.contact_duration / own.contact_duration - 1.0)
+    return {"sim.mj_equiv_duration": f"{pct(-max(diff), 0, sign=False)}–"
+                                     f"{pct(-min(diff), 0, sign=False)} %"}
 
 
 @produces("sim.mj_hc_rb_one", "sim.mj_hc_rb_one_ground")
