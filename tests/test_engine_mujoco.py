@@ -54,6 +54,7 @@ from roverimpact.simulate.engines import (  # noqa: E402
     equivalent_kelvin_voigt,
     linear_contact,
     simulate_impact_mujoco,
+    simulate_impact_mujoco_laws,
 )
 from roverimpact.simulate.engines import mujoco as engine_module  # noqa: E402
 
@@ -394,6 +395,27 @@ def test_rocker_bogie_obstacle_in_front_of_one_wheel():
     r_mj = simulate_impact_mujoco(mbm, cfg, q0=q0, v0=v0)
     assert [k for k, f in r_mj.F_max.items() if f > 0] == ["obstacle_left_front"]
     assert r_mj.F_max_total == pytest.approx(r_own.F_max_total, rel=0.01)
+
+
+def test_weightless_rover_keeps_a_ground_in_mujoco():
+    """Without gravity the settled rocker-bogie sits at ~1e-17 m indentation, where the
+    Hunt-Crossley ground's tangent line was 0.08 N/m: in MuJoCo the wheels the hit pushes
+    down sank 2 mm through the ground with no force (peak 0 N; the own engine and MuJoCo
+    with the law itself: 322 N). An unloaded wheel (to rounding) is now linearised at
+    1e-4 m, as one at exactly 0 m was."""
+    mbm = rocker_bogie()
+    cfg = SimulationConfig(gravity="none", speed=0.3, beta_deg=90.0,
+                           obstacle={"k": 1e7, "e": 0.5}, t_after=0.05)
+    q0, v0 = initial_state(mbm, cfg)
+    runs = [simulate_impact(mbm, cfg, q0=q0, v0=v0),
+            simulate_impact_mujoco_laws(mbm, cfg, q0=q0, v0=v0),
+            simulate_impact_mujoco(mbm, cfg, q0=q0, v0=v0)]
+    ground = [r.history[[c for c in r.history if c.startswith("ground_")
+                         and c.endswith("_fn")]].to_numpy().max() for r in runs]
+    assert ground[0] > 100.0
+    assert ground[1] == pytest.approx(ground[0], rel=0.02)
+    assert ground[2] > 0.5 * ground[0]            # a tangent line, not the law: 0.70
+    assert min(runs[2].stats["mapping"]["ground_k"]) > 1e4
 
 
 def test_finite_obstacle_height_box_face():

@@ -384,13 +384,16 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
     if has_ground:
         gl = sys.planes[0].law
         mass = float(sum(i.mass for i in model.inertias))
+        W = mass * config.g / nw
+        d_ref = (optimize.brentq(lambda d: float(gl.force(d, 0.0, 1.0)) - W, 0.0, 1.0)
+                 if W > 0 and gl.spring_damper() is None else 1e-4)
         for w in range(nw):
             d0 = float(cs0.delta[0, w])
-            if d0 <= 0.0 and gl.spring_damper() is None:
-                # wheel not loaded at the start: linearise at its share of the weight
-                W = mass * config.g / nw
-                d0 = (optimize.brentq(lambda d, W=W: float(gl.force(d, 0.0, 1.0)) - W,
-                                      0.0, 1.0) if W > 0 else 1e-4)
+            if d0 <= 1e-6 * d_ref and gl.spring_damper() is None:
+                # wheel not loaded at the start (to rounding: a settled rover without
+                # gravity sits at 1e-17 m, where the tangent of k delta^n is ~0 N/m):
+                # linearise at its share of the weight
+                d0 = d_ref
             ground_map.append(linear_contact(gl, delta0=d0, v_i=config.ground_contact.v_ref))
     ol = obst.law
     if ol.spring_damper() is not None:
