@@ -117,13 +117,21 @@ def row_scale(A: np.ndarray) -> np.ndarray | None:
     about 1e160 ones that overflowed to inf."""
     if A.size == 0:
         return None
-    lo, hi = ROW_SCALE_RANGE
     if A.ndim == 2:  # one item: two reductions, no temporary array
+        lo, hi = ROW_SCALE_RANGE
         big = max(A.max(), -A.min())
         if not (0 < big < lo or hi < big < math.inf):
             return None
         return np.ldexp(1.0, np.frexp(big)[1])
-    big = np.maximum(A.max(axis=(-1, -2)), -A.min(axis=(-1, -2)))
+    return power_of_two_scale(np.maximum(A.max(axis=(-1, -2)), -A.min(axis=(-1, -2))))
+
+
+def power_of_two_scale(big: np.ndarray) -> np.ndarray | None:
+    """For each largest |entry| ``big`` (any shape) of a group of rows, the power of two
+    about it where it lies outside :data:`ROW_SCALE_RANGE` (and is nonzero and finite),
+    1.0 elsewhere; None when no entry needs scaling. Dividing the rows by it is exact.
+    :func:`row_scale` and :func:`roverimpact.frictional_impact` scale by it."""
+    lo, hi = ROW_SCALE_RANGE
     with np.errstate(invalid="ignore"):
         out = (big > 0) & np.isfinite(big) & ((big < lo) | (big > hi))
     if not out.any():

@@ -108,7 +108,7 @@ from . import _validation
 from ._kernels.friction import MU_INF, friction_kernel
 from ._kernels.lemke import STATUS_INFEASIBLE, STATUS_LOCKED, STATUS_MAXITER
 from ._validation import as_array, broadcast_batch, check_rows, fmt_index
-from .energy import RTOL, flat_index, raise_overflow, scalarize
+from .energy import RTOL, flat_index, power_of_two_scale, raise_overflow, scalarize
 from .exceptions import InputError, SolverError
 from .unilateral import TOL, check_residual
 
@@ -198,7 +198,7 @@ class FrictionalImpactResult:
     fallback: np.ndarray
 
 
-def _per_contact(x, name, k, *, low=None, high=None, allow_inf=False):
+def _per_contact(x, name, k, *, low, high=None, allow_inf=False):
     """Scalar or (..., k) coefficient array, checked."""
     if (isinstance(x, (int, float)) and not isinstance(x, bool) and x >= low
             and (x <= high if high is not None else True) and (allow_inf or math.isfinite(x))):
@@ -273,11 +273,6 @@ def _tangent_rows(tangent, k, n):
     return Tg, ntan
 
 
-#: Largest |entry| of the contact and bilateral rows outside which :func:`frictional_impact`
-#: scales them before the kernel (far from where G = N M^-1 N^T under- or overflows)
-ROW_SCALE_RANGE = (1e-50, 1e50)
-
-
 @functools.lru_cache(maxsize=64)
 def _directions(ntan: tuple[int, ...], facets: int):
     """Directions per contact and their coefficients on the tangent rows."""
@@ -345,28 +340,24 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
     # as given, so that an item gives the same bits alone as in a batch (the scale of a
     # batch mixes with M's and B's in rounding). (One factor per contact over the whole
     # batch left an item of 1e-200 rows beside one of order 1 unscaled: ZeroDivisionError.)
-    lo, hi = ROW_SCALE_RANGE
-    big = np.max(np.abs(flat[1]), axis=2)  # (items of N, k)
-    far = (big < lo) | (big > hi)
-    s = np.ones(k)
-    if far.any():
+    s = power_of_two_scale(np.max(np.abs(flat[1]), axis=2))  # (items of N, k)
+    if s is None:
+        s = np.ones(k)
+    else:
         if flat[1].shape[0] != 1 or flat[2].shape[0] != 1:
             # one factor per item and contact for the normal and tangent rows together:
             # both taken to the full batch
             flat[1], flat[2] = flat[1][idx[1]], flat[2][idx[2]]
-            big, far = big[idx[1]], far[idx[1]]
+            s = s[idx[1]]
             idx[1] = idx[2] = np.arange(nb, dtype=np.int64)
-        s = np.where(far, np.ldexp(1.0, np.frexp(np.where(far, big, 1.0))[1]), 1.0)
         if s.shape[0] == 1:
             s = s[0]  # (k,): the rows are unbatched
         flat[1] = flat[1] / s[..., None]
         flat[2] = flat[2] / s[..., None, None]
     if pb:
-        sB = np.max(np.abs(flat[3]), axis=-1, keepdims=True)
-        farB = (sB < lo) | (sB > hi)
-        if farB.any():
-            flat[3] = flat[3] / np.where(farB, np.ldexp(1.0, np.frexp(np.where(farB, sB, 1.0))[1]),
-                                         1.0)
+        sB = power_of_two_scale(np.max(np.abs(flat[3]), axis=-1, keepdims=True))
+        if sB is not None:
+            flat[3] = flat[3] / sB
     out = {
         "P": np.zeros((nb, k)), "Pt": np.zeros((nb, k, tm)),
         "vplus": np.empty((nb, n) if want_vplus else (0, n)),
