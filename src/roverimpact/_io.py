@@ -19,6 +19,19 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 
+def visible_entries(folder: Path) -> list[str]:
+    """The names in ``folder``, sorted, without hidden ones (``.name``): what a user put
+    there and an output folder's checks look at."""
+    return sorted(p.name for p in folder.iterdir() if not p.name.startswith("."))
+
+
+def some_names(names, k: int = 4) -> str:
+    """The first ``k`` of ``names`` (sorted), ``", ..."`` after them if there are more: a
+    folder's contents in one error line."""
+    names = sorted(names)
+    return ", ".join(names[:k]) + (", ..." if len(names) > k else "")
+
+
 def no_file(path: Path) -> str:
     """What is wrong with a path that is not a file: "no such file", or a folder."""
     return "a folder, not a file" if path.is_dir() else "no such file"
@@ -112,7 +125,7 @@ def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[
 
     out_dir = Path(out_dir)
     if out_dir.is_dir():
-        entries = [p.name for p in out_dir.iterdir() if not p.name.startswith(".")]
+        entries = visible_entries(out_dir)
         ours = entries and all((out_dir / f).exists() for f in signature)
         foreign = [e for e in entries
                    if not (ours and (out_dir / e).is_file()
@@ -122,14 +135,14 @@ def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[
                  and any(fnmatch.fnmatch(e, pat) for pat in owned)]
         if entries and missing and len(named) == len(entries):
             # names of our outputs, but without the signature: say that, not "foreign"
-            shown = ", ".join(sorted(named)[:4]) + (", ..." if len(named) > 4 else "")
+            shown = some_names(named)
             raise ConfigError(
                 f"{out_dir} has no {' or '.join(missing)}, so its files ({shown}) are not "
                 f"taken for the outputs of a previous {what} run and would not be replaced; "
                 "if they are (its summary deleted), delete the folder, or choose a new or "
                 "empty one (nothing was written)")
         if foreign:
-            shown = ", ".join(sorted(foreign)[:4]) + (", ..." if len(foreign) > 4 else "")
+            shown = some_names(foreign)
             raise ConfigError(
                 f"{out_dir} holds files that are not the outputs of a previous {what} run "
                 f"({shown}); choose a new or empty folder (nothing was written)")

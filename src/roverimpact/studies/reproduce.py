@@ -23,7 +23,7 @@ from contextlib import ExitStack
 from importlib import resources
 from pathlib import Path
 
-from .._io import read_toml
+from .._io import read_toml, some_names, visible_entries
 from ..exceptions import ConfigError, StudyInterrupted
 from .config import study_from_dict
 from .executors import LazyCluster
@@ -87,7 +87,7 @@ def _refuse_other_files(out_dir: Path) -> None:
     folder of the user's own files). Hidden files do not count, as for a study's folder."""
     if not out_dir.is_dir():
         return
-    entries = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+    entries = visible_entries(out_dir)
     if not entries:
         return
     for stem in BUILTIN_STUDIES:
@@ -97,9 +97,8 @@ def _refuse_other_files(out_dir: Path) -> None:
             continue
         if is_study_manifest(old):
             return
-    shown = ", ".join(entries[:4]) + (", ..." if len(entries) > 4 else "")
-    raise ConfigError(f"{out_dir} holds files but no reproduction ({shown}); choose a new "
-                      "or empty folder with -o (nothing was written)")
+    raise ConfigError(f"{out_dir} holds files but no reproduction ({some_names(entries)}); "
+                      "choose a new or empty folder with -o (nothing was written)")
 
 
 def run_builtin_studies(

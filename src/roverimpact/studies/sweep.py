@@ -22,6 +22,7 @@ from typing import Any
 
 import pandas as pd
 
+from .._io import some_names, visible_entries
 from ..exceptions import ConfigError, StudyInterrupted
 from .config import (
     CaseSequence,
@@ -462,11 +463,11 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
                 "or --overwrite to discard them, or choose another folder"
             )
     elif out_dir.is_dir():
-        entries = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+        entries = visible_entries(out_dir)
         if entries:  # -o . beside the study file, a folder of the user's own files
-            shown = ", ".join(entries[:4]) + (", ..." if len(entries) > 4 else "")
             raise ConfigError(
-                f"{out_dir} holds files but no study results (no study {MANIFEST}: {shown}); "
+                f"{out_dir} holds files but no study results (no study {MANIFEST}: "
+                f"{some_names(entries)}); "
                 "choose a new or empty folder (nothing was written)")
     chunk_dir = out_dir / CHUNKS
     if overwrite and ours:
