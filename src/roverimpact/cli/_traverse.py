@@ -149,8 +149,7 @@ def traverse_cmd(
         path = traverse_report(work, config=res.config) if report else None
     path = out / Path(path).name if path is not None else None
     res.files = {k: out / Path(p).name for k, p in res.files.items()}
-    table = summary(res.poses, res.wheels, {p.name: p.length for p in res.config.all_paths()},
-                    res.config.drive.v_max)
+    table = summary(res.poses, res.wheels, res.config)
     if as_json:
         print_json({"summary": table.to_dict(orient="records"), "elapsed_s": res.elapsed,
                     "timings": res.timings, "files": res.files, "report": path})

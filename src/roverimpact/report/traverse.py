@@ -236,19 +236,21 @@ def _table(df: pd.DataFrame, max_rows: int = 60) -> str:
                                      float_format=lambda v: f"{v:.4g}") + more
 
 
-def summary(poses: pd.DataFrame, wheels: pd.DataFrame, lengths: dict | None = None,
-            v_max: float | None = None) -> pd.DataFrame:
-    """One row per path: length (``lengths[path]``, the polyline's; without it the last
-    station's ``s``), stations, failed poses, impacts, worst T_c^- (and F_pred), the lowest
-    speed limit and where (NaN where it is the top speed ``v_max`` at every station: no
-    impact limits the speed below it, there is no "where")."""
+def summary(poses: pd.DataFrame, wheels: pd.DataFrame, config=None) -> pd.DataFrame:
+    """One row per path: length (the polyline's, from the traverse ``config``; without it
+    the last station's ``s``), stations, failed poses, impacts, worst T_c^- (and F_pred),
+    the lowest speed limit and where (NaN where it is the config's top speed
+    ``drive.v_max`` at every station: no impact limits the speed below it, there is no
+    "where")."""
+    lengths = {p.name: p.length for p in config.all_paths()} if config is not None else {}
+    v_max = config.drive.v_max if config is not None else None
     rows = []
     for name, P in poses.groupby("path", sort=False):
         W = wheels[wheels["path"] == name]
         hit = W[W["T_c_minus"].fillna(0) > 0]
         v = P["v_lim"].to_numpy(float)
         i = int(np.nanargmin(v)) if np.isfinite(v).any() else None
-        end = (lengths or {}).get(name, float(P["s"].max()))
+        end = lengths.get(name, float(P["s"].max()))
         row = {"path": name, "length [m]": end, "stations": len(P),
                "failed poses": int((P["status"] != "ok").sum()), "impacts": len(hit),
                "max T_c^- [J]": float(hit["T_c_minus"].max()) if len(hit) else 0.0}
@@ -364,9 +366,7 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
         f"<code>{config.contacts.ground}</code>. Computed in "
         f"{man.get('elapsed_s', float('nan')):.1f} s ({html.escape(str(man.get('executor', '')))})."
         "</p>")
-    lengths = {p.name: p.length for p in config.all_paths()}
-    parts.append("<h2>Summary</h2>" + _table(summary(poses, wheels, lengths,
-                                                      config.drive.v_max)))
+    parts.append("<h2>Summary</h2>" + _table(summary(poses, wheels, config)))
     for name, m, s in figs:
         parts.append(f"<h2>{html.escape(name)}</h2>")
         parts.append(_img(m["png"], f"{name}: map"))
