@@ -55,7 +55,7 @@ from .._io import check_writable
 from ..exceptions import ModelError
 from ._build import LinearLoopClosure
 from .base import MultibodyModel
-from .robot import fmt_floats, link_name
+from .robot import fmt_floats, joint_armature, link_name
 
 __all__ = ["MjcfLayout", "export_mjcf", "mjcf_element", "mujoco_qpos", "mujoco_velocity",
            "pinocchio_state"]
@@ -173,8 +173,7 @@ def mjcf_element(mbm: MultibodyModel, *, springs: dict | None = None,
 
     def armature(j) -> dict:
         """``{"armature": ...}`` of joint ``j`` (rotor inertia, on M's diagonal), if any."""
-        jm = model.joints[j]
-        arm = np.asarray(model.armature[jm.idx_v:jm.idx_v + jm.nv], dtype=float)
+        arm = joint_armature(model, j)
         if not np.any(arm != 0.0):
             return {}
         if np.any(arm != arm[0]):
@@ -187,8 +186,9 @@ def mjcf_element(mbm: MultibodyModel, *, springs: dict | None = None,
         layout.joints.append((name, kind))
         if kind == "free":
             layout.free_joint = name
-            if armature(j):
-                ET.SubElement(body_el, "joint", name=name, type="free", **armature(j))
+            arm = armature(j)
+            if arm:
+                ET.SubElement(body_el, "joint", name=name, type="free", **arm)
             else:
                 ET.SubElement(body_el, "freejoint", name=name)
             return

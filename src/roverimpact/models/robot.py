@@ -47,6 +47,13 @@ def joint_slices(model) -> dict[str, tuple[slice, slice]]:
     return out
 
 
+def joint_armature(model, j: int) -> np.ndarray:
+    """The rotor inertia of joint ``j`` of a Pinocchio ``model``, one value per DoF (its
+    slice of ``model.armature``, which CRBA adds to M's diagonal as ``mj_fullM`` does)."""
+    jm = model.joints[j]
+    return np.asarray(model.armature[jm.idx_v:jm.idx_v + jm.nv], dtype=float)
+
+
 def fmt_floats(x) -> str:
     """Numbers as an XML attribute: space-separated, round-trip precision (``%.17g``)."""
     return " ".join(f"{float(v):.17g}" for v in np.atleast_1d(x))
@@ -272,8 +279,7 @@ def export_urdf(mbm: MultibodyModel, path: str | Path) -> Path:
     for jn in mbm.lockable_joints:
         ET.SubElement(robot, "roverimpact_lockable", joint=jn)
     for j in range(1, model.njoints):  # URDF has no rotor inertia: MJCF's armature
-        jm = model.joints[j]
-        arm = np.asarray(model.armature[jm.idx_v:jm.idx_v + jm.nv], dtype=float)
+        arm = joint_armature(model, j)
         if np.any(arm != 0.0):  # the free-flyer root comes back as Pinocchio's root_joint
             ET.SubElement(robot, "roverimpact_armature",
                           joint="root_joint" if floating and j == 1 else model.names[j],
