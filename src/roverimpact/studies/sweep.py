@@ -439,8 +439,9 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
                     f"fingerprint {old.get('fingerprint')}); --resume needs the same study "
                     "file. Use another folder, or --overwrite to discard them"
                 )
+            now = input_files(prep.study)  # each file read and hashed once
             changed = [f for f, h in (old.get("input_files") or {}).items()
-                       if input_files(prep.study).get(f) != h]
+                       if now.get(f) != h]
             if changed:
                 raise ConfigError(
                     f"{changed[0]} changed (or is gone) since the results in {out_dir} were "
