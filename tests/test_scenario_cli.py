@@ -65,11 +65,15 @@ def test_horizontal_face_prints_zero_not_minus_zero(capsys, tmp_path):
     assert (table["v_n"] == 0.0).all() and not np.signbit(table["v_n"].to_numpy()).any()
 
 
-def test_draw_writes_png(tmp_path):
+def test_draw_writes_png(tmp_path, capsys):
+    deep = tmp_path / ("a_long_folder_name_" * 4)
+    deep.mkdir()
     for name in ("rover2d_beta45", "rocker_bogie_beta30"):
-        out = tmp_path / f"{name}.png"
+        out = deep / f"{name}.png"
         assert main(["draw", str(EX / f"{name}.toml"), "-o", str(out)]) == 0
         assert out.stat().st_size > 10_000
+        # the path on one line, never broken by the console's wrap
+        assert f"wrote: {out}" in capsys.readouterr().out.splitlines()
 
 
 @pytest.mark.parametrize("body,match", [

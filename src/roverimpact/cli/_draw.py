@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, check_output, console
+from ._app import app, check_output, print_paths
 
 #: Image types of ``draw -o`` (and of the other commands' figure options).
 IMAGE_TYPES = (".png", ".svg", ".pdf")
@@ -25,4 +25,4 @@ def draw_cmd(
     check_output(output, folder=False, suffixes=IMAGE_TYPES)
     setup = ImpactSetup.from_scenario(load_scenario(file))
     draw_setup(setup, output)
-    console.print(f"wrote {output}")
+    print_paths("wrote", output)

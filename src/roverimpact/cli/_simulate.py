@@ -8,7 +8,16 @@ from pathlib import Path
 import typer
 
 from .._io import staged_folder
-from ._app import app, check_output, compile_ahead, console, json_text, new_table, print_json
+from ._app import (
+    app,
+    check_output,
+    compile_ahead,
+    console,
+    json_text,
+    new_table,
+    print_json,
+    print_paths,
+)
 
 #: What a simulate run writes, by exact name (the scenario copied as scenario.toml, its
 #: path in summary.json): a folder holding these and summary.json + config.json is a
@@ -121,4 +130,4 @@ def simulate_cmd(
     written = [table] + [outdir / n for n in ("summary.json", "config.json", "scenario.toml")]
     if plot:
         written.append(outdir / "force_vs_time.png")
-    console.print("wrote " + ", ".join(map(str, written)), highlight=False)
+    print_paths("wrote", *written)
