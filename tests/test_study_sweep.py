@@ -296,7 +296,7 @@ def test_a_manifest_of_another_program_does_not_make_a_study_folder(tmp_path):
     assert (out / "chunks" / ".draft.tmp").read_text() == "mine"
 
 
-def test_resume_refuses_a_robot_file_changed_since_the_first_run(tmp_path):
+def test_resume_refuses_a_robot_file_changed_since_the_first_run(tmp_path, monkeypatch):
     """The fingerprint of a study holds the name of its robot file, not its contents: a
     resume after the file changed kept the chunks of the old robot and computed the rest
     with the new one (one table, m_total 24 kg in 8 rows and 64 kg in 8). Now it is
@@ -325,9 +325,16 @@ def test_resume_refuses_a_robot_file_changed_since_the_first_run(tmp_path):
     res = run_study(tmp_path / "st.toml", out, overwrite=True)
     assert np.allclose(res.table["m_total"], 64.0)
     chunk_path(out, 1).unlink()
+    from roverimpact.studies import sweep
+
+    hashed = []  # the files are read and hashed once a run (the check, the manifest)
+    monkeypatch.setattr(sweep, "input_files",
+                        lambda st, f=sweep.input_files: hashed.append(1) or f(st))
     again = run_study(tmp_path / "st.toml", out, resume=True)  # unchanged: resumed
-    assert again.n_reused == 2 and again.n_computed == 2
+    assert again.n_reused == 2 and again.n_computed == 2 and len(hashed) == 1
     pd.testing.assert_frame_equal(again.table, res.table)
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert [Path(f).name for f in manifest["input_files"]] == ["mjcf_rover.xml"]
 
 
 def test_a_study_reads_its_base_scenarios_terrain_relative_to_that_file(tmp_path,

@@ -317,13 +317,14 @@ def run_study(
 def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv, workers,
                    scheduler, progress, retries, cluster, note, t0) -> StudyResult:
     """:func:`run_study` once the study is checked and the folder is this run's."""
-    _open_folder(prep, out_dir, resume=resume, overwrite=overwrite, note=note)
+    hashes = input_files(prep.study)  # each file read and hashed once per run
+    _open_folder(prep, out_dir, hashes, resume=resume, overwrite=overwrite, note=note)
 
     cs = prep.chunk_size
     chunks = Chunks(prep.cases, cs)
     done = finished_chunks(out_dir, chunks) if resume else set()
     pending = [k for k in range(len(chunks)) if k not in done]
-    manifest = _write_inputs(prep, out_dir, len(chunks))
+    manifest = _write_inputs(prep, out_dir, len(chunks), hashes)
 
     total = len(prep.cases)
     n_done = sum(chunks.n_cases(k) for k in done)
@@ -414,9 +415,10 @@ def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: La
     return f"local Dask cluster of {cluster.workers} workers"
 
 
-def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite: bool,
-                 note: Callable[[str], None] | None = None) -> None:
-    """Refuse a folder holding other results; on resume take the old chunk size (``note``
+def _open_folder(prep: PreparedStudy, out_dir: Path, hashes: dict[str, str], *, resume: bool,
+                 overwrite: bool, note: Callable[[str], None] | None = None) -> None:
+    """Refuse a folder holding other results, and on resume one whose input files changed
+    (``hashes``: :func:`input_files` now); on resume take the old chunk size (``note``
     says so if it differs, and names another version of roverimpact that began them);
     clear what an interrupted run left half-written, and the chunks on overwrite."""
     manifest_path = out_dir / MANIFEST
@@ -439,9 +441,8 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, *, resume: bool, overwrite:
                     f"fingerprint {old.get('fingerprint')}); --resume needs the same study "
                     "file. Use another folder, or --overwrite to discard them"
                 )
-            now = input_files(prep.study)  # each file read and hashed once
             changed = [f for f, h in (old.get("input_files") or {}).items()
-                       if now.get(f) != h]
+                       if hashes.get(f) != h]
             if changed:
                 raise ConfigError(
                     f"{changed[0]} changed (or is gone) since the results in {out_dir} were "
@@ -498,8 +499,10 @@ def input_files(study: Study) -> dict[str, str]:
     return out
 
 
-def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int) -> dict:
-    """The study file next to the results and a manifest saying ``running``."""
+def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int,
+                  hashes: dict[str, str]) -> dict:
+    """The study file next to the results and a manifest saying ``running``, with the
+    input files' ``hashes`` the run was checked against."""
     st = prep.study
     if prep.text is not None:
         atomic_write_bytes(out_dir / STUDY_COPY, prep.text.encode("utf-8"))
@@ -519,7 +522,7 @@ def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int) -> dict:
         "simulate": st.simulate,
         "engines": list(st.engines()),
         "evaluator": getattr(prep.evaluator, "name", "?"),
-        "input_files": input_files(st),
+        "input_files": hashes,
         "versions": versions(),
         "status": "running",
     }
