@@ -12,8 +12,10 @@ import numpy as np
 import pytest
 
 import roverimpact as ri
+from roverimpact.contact import get_law
 from roverimpact.energy import T_LIMIT
 from roverimpact.exceptions import InputError
+from roverimpact.frictional import frictional_impact
 
 
 def test_limit_is_half_the_largest_float():
@@ -60,6 +62,26 @@ def test_complex_arrays_are_refused(call):
         warnings.simplefilter("error")
         with pytest.raises(InputError, match="complex"):
             call()
+
+
+@pytest.mark.parametrize("call", [
+    lambda: ri.partition(np.eye(2, dtype=bool), [[1.0, 0.0]], [1.0, 0.0]),
+    lambda: ri.partition(np.eye(2), [[True, False]], [1.0, 0.0]),
+    lambda: ri.effective_mass(np.eye(2), [True, False]),
+    lambda: ri.impulsive_impact(np.eye(2), [[0.0, 1.0]], [1.0, -1.0], restitution=True),
+    lambda: ri.unilateral_impact(np.eye(2), [[0.0, 1.0]], [1.0, -1.0], restitution=True),
+    lambda: frictional_impact(np.eye(2), [1.0, -1.0], [0.0, 1.0], [[[1.0, 0.0]]], True),
+    lambda: frictional_impact(np.eye(2), [1.0, -1.0], [0.0, 1.0], [[[1.0, 0.0]]], 0.5,
+                              restitution=[np.True_]),
+    lambda: get_law("hunt-crossley", k=True, e=0.5),
+    lambda: get_law("hunt-crossley", k=1e6, e=np.False_),
+])
+def test_true_and_false_are_not_numbers(call):
+    """``mu=True`` (friction "on") was friction coefficient 1 and ``restitution=True``
+    e = 1, with no error: numpy and float() read True as 1. A flag where a number
+    belongs is refused, naming the argument."""
+    with pytest.raises(InputError, match=r"True/False|real number"):
+        call()
 
 
 # Rows of any finite scale: T_c and v+ do not depend on the scale of the rows of A

@@ -19,8 +19,9 @@ def as_array(x, name: str, *, min_ndim: int = 0) -> np.ndarray:
     """Convert ``x`` to a float64 array with at least ``min_ndim`` dimensions."""
     try:
         arr = np.asarray(x)
-        if arr.dtype.kind == "c":
-            raise InputError(f"{name} holds complex numbers; it must be real")
+        if arr.dtype.kind in "bc":  # True/False is a flag mistaken for a number
+            kind = "complex numbers" if arr.dtype.kind == "c" else "True/False values"
+            raise InputError(f"{name} holds {kind}; it must be real numbers")
         arr = arr.astype(np.float64, copy=False)
     except (TypeError, ValueError) as exc:
         if isinstance(exc, InputError):

@@ -167,7 +167,8 @@ def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, w
     if k == 0:
         raise InputError("unilateral has no rows: give at least the obstacle contact row")
     B = np.zeros((0, n)) if bilateral is None else check_rows(bilateral, "bilateral", n)
-    if isinstance(restitution, (int, float)) and math.isfinite(restitution):
+    if (isinstance(restitution, (int, float)) and not isinstance(restitution, bool)
+            and math.isfinite(restitution)):
         if not 0.0 <= restitution <= 1.0:
             raise InputError(f"restitution must lie in [0, 1], got {restitution:g}")
         e = np.full(k, float(restitution))

@@ -56,21 +56,26 @@ __all__ = ["ContactLaw", "Fixed", "Parameter", "Prediction"]
 SPEC_PARAMETERS = ("k", "e", "n", "c")
 
 
-def check_positive(value, name: str, law: str) -> float:
+def real_number(value, name: str, law: str) -> float:
+    """``float(value)``; InputError for what is not a real number, True and False
+    included (a flag mistaken for a number: ``float(True)`` is 1)."""
     try:
-        x = float(value)
+        if isinstance(value, (bool, np.bool_)):
+            raise TypeError
+        return float(value)
     except (TypeError, ValueError):
         raise InputError(f"{law}: {name} must be a real number, got {value!r}") from None
+
+
+def check_positive(value, name: str, law: str) -> float:
+    x = real_number(value, name, law)
     if not math.isfinite(x) or x <= 0.0:
         raise InputError(f"{law}: {name} must be finite and > 0, got {value!r}")
     return x
 
 
 def check_restitution(e, law: str, *, allow_zero: bool) -> float:
-    try:
-        x = float(e)
-    except (TypeError, ValueError):
-        raise InputError(f"{law}: e must be a real number, got {e!r}") from None
+    x = real_number(e, "e", law)
     lo_ok = x >= 0.0 if allow_zero else x > 0.0
     if not (math.isfinite(x) and lo_ok and x <= 1.0):
         rng = "[0, 1]" if allow_zero else "(0, 1] (the law is undefined at e = 0)"
@@ -229,10 +234,7 @@ class ContactLaw(ABC):
         if fx is None:
             raise InputError(f"{cls.name} does not take the parameter {p} (it takes "
                              f"{takes}), got {p} = {value!r}")
-        try:
-            x = float(value)
-        except (TypeError, ValueError):
-            raise InputError(f"{cls.name}: {p} must be a real number, got {value!r}") from None
+        x = real_number(value, p, cls.name)
         if x != fx.value:
             raise InputError(f"{cls.name} is {fx.reason}: {p} must be {fx.value:g} (or "
                              f"omitted), got {p} = {value!r}" + (f"; {fx.hint}" if fx.hint
