@@ -166,9 +166,16 @@ def test_cli(tmp_path, capsys):
                  'obstacle = { wheel = "front", beta_deg = 45 }\n[optimize]\n'
                  'variables = { h = [0.3, 0.45] }\nbeta_deg = [30, 90]\nn_beta = 4\n'
                  'n_starts = 2\nstability_margin = 0.2\n')
-    assert main(["optimize", str(f), "--no-simulate", "--plot", str(tmp_path / "p")]) == 0
+    assert main(["optimize", str(f), "--no-simulate", "--plot", str(tmp_path / "p.v2")]) == 0
     out = capsys.readouterr().out
-    assert "optimum" in out and "reduced by" in out and (tmp_path / "p.png").is_file()
+    assert "optimum" in out and "reduced by" in out
+    # a name without an image suffix: PATH.png and PATH.svg, its dot kept (p.v2 gave p.png)
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["opt.toml", "p.v2.png", "p.v2.svg"]
+    # an image file's name: that file (p.pdf gave p.png and p.svg, and no PDF)
+    assert main(["optimize", str(f), "--no-simulate", "--plot", str(tmp_path / "p.pdf")]) == 0
+    assert f"figure: {tmp_path / 'p.pdf'}" in capsys.readouterr().out.splitlines()
+    assert (tmp_path / "p.pdf").read_bytes()[:5] == b"%PDF-"
+    assert not (tmp_path / "p.png").exists() and not (tmp_path / "p.svg").exists()
     f.write_text("[optimize]\nvariables = { h = [0.3, 0.45] }\n")
     assert main(["optimize", str(f)]) == 2
     err = capsys.readouterr().err

@@ -273,9 +273,10 @@ def test_schema_refusals():
 
 
 def test_path_names_with_a_slash(tmp_path, capfd):
-    """Two [[paths]] named "route 1/a" and "route 1/b": the figures are map-route_1_a.png
-    ..., the tables keep the names, and traverse-report redraws them (the traverse failed
-    writing "map-route 1/a.png" after all its work, keeping nothing)."""
+    """Two [[paths]] named "route 1/a" and "route 1.5": the figures are map-route_1_a.png
+    and map-route_1.5.png ..., the tables keep the names, and traverse-report redraws them
+    (the traverse failed writing "map-route 1/a.png" after all its work, keeping nothing;
+    "route 1.5" was drawn to map-route_1.png, and routes 1.5 and 1.7 to the same file)."""
     import tomllib
 
     raw = tomllib.loads(SHORT)
@@ -283,7 +284,7 @@ def test_path_names_with_a_slash(tmp_path, capfd):
     raw["limits"] = {"T_allow": 0.01}
     raw["paths"] = [{"name": "route 1/a", "start": [0.5, 0.0], "end": [1.0, 0.0],
                      "spacing": 0.1},
-                    {"name": "route 1/b", "start": [0.5, 0.5], "end": [1.0, 0.5],
+                    {"name": "route 1.5", "start": [0.5, 0.5], "end": [1.0, 0.5],
                      "spacing": 0.1}]
     f = tmp_path / "t.toml"
     from roverimpact.traverse.run import _toml
@@ -291,13 +292,14 @@ def test_path_names_with_a_slash(tmp_path, capfd):
     f.write_text(_toml(raw))
     out = tmp_path / "out"
     assert main(["traverse", str(f), "-o", str(out)]) == 0
-    for stem in ("map-route_1_a", "map-route_1_b", "speed-route_1_a", "speed-route_1_b"):
-        assert (out / f"{stem}.png").is_file() and (out / f"{stem}.svg").is_file(), stem
-    assert set(pd.read_parquet(out / "poses.parquet")["path"]) == {"route 1/a", "route 1/b"}
+    stems = ("map-route_1_a", "map-route_1.5", "speed-route_1_a", "speed-route_1.5")
+    assert sorted(f.name for f in out.glob("*.svg")) == sorted(f"{s}.svg" for s in stems)
+    assert sorted(f.name for f in out.glob("*.png")) == sorted(f"{s}.png" for s in stems)
+    assert set(pd.read_parquet(out / "poses.parquet")["path"]) == {"route 1/a", "route 1.5"}
     assert "route 1/a" in (out / "report.html").read_text()
     assert main(["traverse", str(f), "-o", str(tmp_path / "n"), "--no-report"]) == 0
     assert main(["traverse-report", str(tmp_path / "n")]) == 0
-    assert (tmp_path / "n" / "map-route_1_b.png").is_file()
+    assert (tmp_path / "n" / "map-route_1.5.png").is_file()
 
 
 def test_summary_table_at_80_columns():

@@ -17,16 +17,17 @@ def optimize_cmd(
     file: Path = typer.Argument(..., help="Optimisation file (TOML): [scenario], [optimize]."),
     simulate: bool = typer.Option(True, "--simulate/--no-simulate",
                                   help="Confirm nominal and optimum with the simulator."),
-    plot: Path = typer.Option(None, "--plot", help="Write T_c^- vs beta to PATH.png/.svg."),
+    plot: Path = typer.Option(None, "--plot", help="Write T_c^- vs beta to PATH (.png, .svg, "
+                              ".pdf), or to PATH.png and PATH.svg."),
     as_json: bool = typer.Option(False, "--json", help="Print nominal and optimum as JSON."),
 ) -> None:
     """Suspension reconfiguration: minimise the worst-case (or mean) T_c^- over beta."""
+    from ..report.plots import figure_files
     from ..report.reconfiguration import plot_reconfiguration
     from ..studies.optimize import optimize_setting
 
-    if plot is not None:
-        for ext in (".png", ".svg"):
-            check_output(plot.with_suffix(ext), folder=False, option="--plot")
+    for path in figure_files(plot) if plot is not None else ():
+        check_output(path, folder=False, option="--plot")
     res = optimize_setting(file, simulate=simulate)
     spec = res.problem.spec
     figures = plot_reconfiguration(res, plot) if plot is not None else {}

@@ -189,15 +189,38 @@ def _from_zero(ax, values) -> None:
         ax.set_ylim(0.0, 1.05 * float(v.max()))
 
 
+#: Suffixes of the image files a figure can be written to.
+FIGURE_TYPES = (".png", ".svg", ".pdf")
+
+
 def save_figure(fig, stem: str | Path, dpi: float | None = None) -> dict[str, Path]:
-    """Write ``stem.png`` and ``stem.svg``; return the paths."""
-    stem = Path(stem)
+    """Write ``<stem>.png`` and ``<stem>.svg``; return the paths. The suffixes are added
+    to the whole name: a stem holding a dot (``map-route_1.5``) keeps it (replacing its
+    "suffix" wrote the maps of routes 1.5 and 1.7 both to ``map-route_1.png``)."""
     out = {}
     for ext in ("png", "svg"):
-        path = stem.with_suffix(f".{ext}")
+        path = Path(f"{stem}.{ext}")
         fig.savefig(path, dpi=dpi or "figure")
         out[ext] = path
     return out
+
+
+def figure_files(target: str | Path) -> list[Path]:
+    """The files :func:`save_figure_to` writes for ``target``."""
+    target = Path(target)
+    if target.suffix.lower() in FIGURE_TYPES:
+        return [target]
+    return [Path(f"{target}.png"), Path(f"{target}.svg")]
+
+
+def save_figure_to(fig, target: str | Path, dpi: float | None = None) -> dict[str, Path]:
+    """Write ``target`` if it names an image file (``.png``, ``.svg``, ``.pdf``), else
+    ``<target>.png`` and ``<target>.svg``; return the paths by type."""
+    files = figure_files(target)
+    if len(files) > 1:
+        return save_figure(fig, target, dpi)
+    fig.savefig(files[0], dpi=dpi or "figure")
+    return {files[0].suffix.lower()[1:]: files[0]}
 
 
 def plot_study_summary(summary, x: str, *, title: str = "", subtitle: str = "",

@@ -4,16 +4,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .plots import save_figure
+from .plots import save_figure_to
 
 __all__ = ["plot_reconfiguration"]
 
 
-def plot_reconfiguration(result, stem: str | Path) -> dict[str, Path]:
-    """T_c^- against beta at the nominal and at the optimal setting (PNG and SVG)."""
+def plot_reconfiguration(result, target: str | Path) -> dict[str, Path]:
+    """T_c^- against beta at the nominal and at the optimal setting, written to
+    ``target`` if it names an image file (``.png``, ``.svg``, ``.pdf``), else to
+    ``<target>.png`` and ``<target>.svg``; returns the paths by type."""
     from matplotlib.figure import Figure
 
-    stem = Path(stem)
     fig = Figure(figsize=(6.0, 3.8), layout="constrained")
     ax = fig.subplots()
     b = result.betas_deg
@@ -28,4 +29,4 @@ def plot_reconfiguration(result, stem: str | Path) -> dict[str, Path]:
                  f"{100 * result.reduction:.1f} %")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    return save_figure(fig, stem, dpi=120)
+    return save_figure_to(fig, target, dpi=120)
