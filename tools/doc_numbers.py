@@ -185,6 +185,43 @@ def active_all_held():
     return {"active.rover_mass": f"{m:.0f}", "active.all_held_T": f"{T[0]:.3g}"}
 
 
+@produces("active.rear_holds_to", "active.front_holds_from", "active.steep_T",
+          "active.obstacle_only_90")
+def active_auto_rows():
+    """Which ground contact holds in examples/active_set_beta.py (rigid rover2d, both
+    wheels' ground rows candidates): the rear one at shallow faces, the front (obstacle)
+    wheel's own from a steep face on, where T_c^- stays constant; the obstacle-only value at
+    90 deg (tests/test_activeset_mujoco.py checks the held set against MuJoCo)."""
+    import numpy as np
+
+    import roverimpact as ri
+
+    sc = ri.Scenario.model_validate({
+        "model": {"name": "rover2d", "params": {"suspension": "rigid"}},
+        "velocity": {"u": 0.5}, "constraints": "auto",
+        "contacts": {"ground_wheels": ["rear", "front"], "ground": "normal"},
+        "obstacle": {"wheel": "front", "beta_deg": 45.0}})
+    rear, front, T = [], [], []
+    for b in range(10, 91):
+        obs = sc.obstacle.model_copy(update={"beta_deg": float(b)})
+        s = ri.ImpactSetup.from_scenario(sc.model_copy(update={"obstacle": obs}))
+        rear.append("ground:rear:normal" in s.labels)
+        front.append("ground:front:normal" in s.labels)
+        T.append(float(s.partition().T_c_minus))
+    rear, front, T = np.array(rear), np.array(front), np.array(T)
+    betas = np.arange(10, 91)
+    to, fr = int(betas[rear].max()), int(betas[front].min())
+    assert rear[: to - 9].all() and not rear[to - 9:].any(), "rear holds on one interval"
+    assert front[fr - 10:].all() and not front[: fr - 10].any(), "front holds from fr on"
+    assert np.ptp(T[fr - 10:]) <= 1e-9 * T[-1], "T_c^- not constant where the front holds"
+    only = ri.energy_of(sc.model_copy(update={
+        "constraints": ["obstacle:front:normal"],
+        "obstacle": sc.obstacle.model_copy(update={"beta_deg": 90.0})}))
+    return {"active.rear_holds_to": f"{to}", "active.front_holds_from": f"{fr}",
+            "active.steep_T": f"{T[-1]:.2f}",
+            "active.obstacle_only_90": f"{float(only.T_c_minus):.2f}"}
+
+
 # =========================================================================== contact.md
 @produces("active.mujoco_ground_table")
 def active_default_ground_mujoco():
