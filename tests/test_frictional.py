@@ -36,6 +36,8 @@ from roverimpact.frictional import (
 from roverimpact.scenario.build import holding_rows
 from roverimpact.scenario.sweep import _obstacle_basis
 
+from .reference.systems import compass_gait
+
 EXAMPLES = int(os.environ.get("RI_FRICTION_EXAMPLES", "80"))
 PROPS = settings(max_examples=EXAMPLES, deadline=None,
                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
@@ -916,3 +918,16 @@ def test_items_of_very_different_row_scales_in_one_batch(s):
     assert r.state.tolist() == [["sliding"], ["sliding"]]
     alone = frictional_impact(np.eye(2), [0.6, -1.0], normal[0], tangent[0], 0.5)
     assert (r.v_plus[0] == alone.v_plus).all()  # the same bits alone as in the batch
+
+
+@pytest.mark.parametrize("mu", [np.inf, 50.0])
+def test_compass_gait_heel_strike_matches_momentum_conservation(mu):
+    """The landing foot sticks, the trailing foot leaves the ground, and v+ is the textbook
+    compass-gait impact map (angular momentum about the new stance foot and of the trailing
+    leg about the hip conserved: tests/reference/systems.compass_gait)."""
+    c = compass_gait()
+    r = frictional_impact(c.M, c.v, c.normal, c.tangent, mu=mu)
+    assert list(r.state) == ["separating", "sticking"]
+    np.testing.assert_allclose(r.v_plus, c.v_plus, rtol=0, atol=1e-12)
+    assert r.energy_lost == pytest.approx(c.energy_lost, rel=1e-12)
+    assert r.T_c_minus == pytest.approx(c.energy_lost, rel=1e-12)  # e = 0, no sliding

@@ -164,3 +164,81 @@ def random_spd(rng: np.random.Generator, n: int, spread: float = 2.0) -> np.ndar
     X = rng.standard_normal((n, n))
     D = np.diag(10.0 ** rng.uniform(-spread / 2, spread / 2, n))
     return D @ (X @ X.T + n * np.eye(n)) @ D
+
+
+@dataclass(frozen=True)
+class CompassGait:
+    M: np.ndarray
+    normal: np.ndarray    # (2, 4): z velocity of the trailing foot, of the landing foot
+    tangent: np.ndarray   # (2, 1, 4): their x velocities
+    v: np.ndarray
+    # closed-form answers
+    v_plus: np.ndarray
+    energy_lost: float
+
+
+def compass_gait(m_H=10.0, m=5.0, a=0.5, b=0.5, alpha_deg=20.0, w1=-1.2, w2=-0.3
+                 ) -> CompassGait:
+    r"""Heel strike of the compass-gait biped (Goswami, Espiau & Keramane 1997; Spong).
+
+    ::
+
+                 o hip (m_H)
+                / \       legs: point mass m at distance b from the hip,
+               o   o      a from the foot (l = a + b)
+              /     \
+        ---- 1 ----- 2 ----  foot 1 trailing (stance), foot 2 landing
+
+    Coordinates ``(x_h, z_h, phi_1, phi_2)``: hip position and the absolute angle of each
+    leg from the downward vertical, foot i at ``hip + l (sin phi_i, -cos phi_i)``. Both feet
+    on the ground at ``phi = (-alpha, alpha)``; before the impact foot 1 is pinned
+    (``hip' = -l w1 (cos phi_1, sin phi_1)``) and foot 2 descends.
+
+    Plastic impact, foot 2 sticks, foot 1 leaves the ground (as it does here: its velocity
+    after is upward). Its impulse is then zero, so (i) the angular momentum of the whole
+    system about foot 2 and (ii) that of leg 1 about the hip (a frictionless pin) are
+    conserved, and (iii) foot 2 is at rest after: four linear equations for ``v+``, the
+    textbook derivation of the compass-gait impact map.
+    """
+    l = a + b
+    alpha = np.radians(alpha_deg)
+    q = np.array([0.0, l * np.cos(alpha), -alpha, alpha])
+    hip = q[:2]
+
+    def e(p):
+        return np.array([np.cos(p), np.sin(p)])
+
+    M = np.zeros((4, 4))
+    M[:2, :2] = (m_H + 2 * m) * np.eye(2)
+    for i in (2, 3):
+        M[:2, i] = M[i, :2] = m * b * e(q[i])
+        M[i, i] = m * b * b
+    feet = []
+    for i in (2, 3):
+        J = np.zeros((2, 4))
+        J[:, :2] = np.eye(2)
+        J[:, i] = l * e(q[i])
+        feet.append(J)
+    v = np.array([*(-l * w1 * e(q[2])), w1, w2])
+
+    def momentum(vv, about, legs, hip_mass):
+        """Angular momentum (y-component, x-z plane) of the point masses about a point."""
+        pts = [(hip, vv[:2], m_H)] if hip_mass else []
+        for i in legs:
+            p = q[2 + i]
+            pts.append((hip + b * np.array([np.sin(p), -np.cos(p)]),
+                        vv[:2] + b * vv[2 + i] * e(p), m))
+        return sum(mass * ((r - about)[0] * u[1] - (r - about)[1] * u[0])
+                   for r, u, mass in pts)
+
+    foot2 = hip + l * np.array([np.sin(q[3]), -np.cos(q[3])])
+    E = np.eye(4)
+    eqs = [lambda vv: momentum(vv, foot2, (0, 1), True),
+           lambda vv: momentum(vv, hip, (0,), False)]
+    rows = [[f(E[k]) for k in range(4)] for f in eqs] + list(feet[1])
+    rhs = [f(v) for f in eqs] + [0.0, 0.0]
+    v_plus = np.linalg.solve(np.array(rows), np.array(rhs))
+    return CompassGait(
+        M=M, normal=np.array([feet[0][1], feet[1][1]]),
+        tangent=np.array([feet[0][:1], feet[1][:1]]), v=v, v_plus=v_plus,
+        energy_lost=0.5 * v @ M @ v - 0.5 * v_plus @ M @ v_plus)
