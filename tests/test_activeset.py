@@ -524,6 +524,30 @@ def test_cli_energy_prints_holding_and_released(tmp_path, capsys):
     assert "release" in out and "ground:front:normal" in out.split("release")[-1]
 
 
+def test_cli_energy_says_a_sliding_contact_slides(tmp_path, capsys):
+    """With Coulomb friction the rear wheel holds and slides (its normal row is held, its
+    no-slip row is not): the text lists it as sliding, not among the contacts that release
+    (it listed ground:rear:long there)."""
+    import json
+
+    from roverimpact.cli import main
+
+    f = tmp_path / "s.toml"
+    f.write_text('[model]\nname = "rover2d"\n[velocity]\nu = 0.5\n[contacts]\n'
+                 'ground_wheels = ["rear", "front"]\nground = "coulomb"\nmu = 0.1\n'
+                 '[obstacle]\nwheel = "front"\nbeta_deg = 10.0\n')
+    assert main(["energy", str(f)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    release = next(ln for ln in lines if ln.startswith("contacts that release"))
+    slide = next(ln for ln in lines if ln.startswith("contacts that hold and slide"))
+    assert "ground:rear" not in release and "ground:front:normal" in release
+    assert slide.endswith(": ground:rear")
+    assert main(["energy", str(f), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["sliding"] == ["ground:rear:long"]
+    assert "ground:rear:long" in out["released"]  # every row not held, as before
+
+
 @settings(max_examples=40, deadline=None)
 @given(system=_impacts(), e=st.floats(0.0, 1.0),
        scale=st.sampled_from([1e-280, 1e-150, 1e-20, 1e20, 1e150]))

@@ -46,6 +46,11 @@ def energy_cmd(
         "constraints": sc.constraints if isinstance(sc.constraints, str) else "list",
         "released": [lab for lab in setup.candidate_labels if lab not in setup.labels],
     }
+    # a contact whose normal row holds but whose no-slip rows do not slides: it has not
+    # released (contacts.ground = "coulomb")
+    held_normal = {lab.rpartition(":")[0] for lab in setup.labels if lab.endswith(":normal")}
+    out["sliding"] = [lab for lab in out["released"]
+                      if lab.endswith((":long", ":lat")) and lab.rpartition(":")[0] in held_normal]
     if as_json:
         print_json(out)
         return
@@ -72,5 +77,10 @@ def energy_cmd(
     if sc.constraints == "auto":
         console.print("contacts that hold through the impact (auto): "
                       + ", ".join(setup.labels), highlight=False)
-        console.print("contacts that release: " + (", ".join(out["released"]) or "none"),
+        released = [lab for lab in out["released"] if lab not in out["sliding"]]
+        console.print("contacts that release: " + (", ".join(released) or "none"),
                       highlight=False)
+        if out["sliding"]:
+            sliding = dict.fromkeys(lab.rpartition(":")[0] for lab in out["sliding"])
+            console.print("contacts that hold and slide (no-slip rows not held): "
+                          + ", ".join(sliding), highlight=False)
