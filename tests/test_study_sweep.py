@@ -667,8 +667,13 @@ def test_interrupt_marks_the_manifest_and_says_how_to_resume(tmp_path):
     assert res.n_reused == 8 and len(res.table) == 18
 
 
-def test_cli_sigint_exits_130_with_the_resume_hint(tmp_path):
-    """A real Ctrl-C (SIGINT) in the middle of `roverimpact sweep`."""
+@pytest.mark.parametrize("sig, code, word", [(signal.SIGINT, 130, "interrupted"),
+                                              (signal.SIGTERM, 143, "terminated")])
+def test_cli_signal_exits_with_the_resume_hint(tmp_path, sig, code, word):
+    """A real Ctrl-C (SIGINT), or a SIGTERM (`kill`, a job scheduler's time limit), in the
+    middle of `roverimpact sweep`: the manifest says "interrupted" (a SIGTERM left it at
+    "running" for ever, exit -15, nothing said), the message says to resume, and
+    --resume finishes the table of an uninterrupted run."""
     import subprocess
     import textwrap
 
@@ -684,7 +689,7 @@ def test_cli_sigint_exits_130_with_the_resume_hint(tmp_path):
         seed = 1
         params = { "model.params.mass" = { low = 1.0, high = 50.0 } }
     """))
-    code = textwrap.dedent(f"""
+    code_text = textwrap.dedent(f"""
         import signal, sys, time
         # Ctrl-C as a terminal delivers it, also when the tests run as a background job
         # (whose shell starts it with SIGINT ignored)
@@ -699,17 +704,71 @@ def test_cli_sigint_exits_130_with_the_resume_hint(tmp_path):
         sys.exit(main(["sweep", {str(study)!r}, "-o", {str(tmp_path / 'o')!r},
                        "--chunk-size", "10", "--no-report"]))
     """)
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+    proc = subprocess.Popen([sys.executable, "-c", code_text], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     manifest = tmp_path / "o" / "manifest.json"
     t_end = time.time() + 60
     while time.time() < t_end and not any((tmp_path / "o" / "chunks").glob("*.parquet")):
         time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     _out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
-    assert "interrupted" in err and "--resume" in err and "Traceback" not in err
-    assert '"status": "interrupted"' in manifest.read_text()
+    assert proc.returncode == code, err
+    assert word in err and "--resume" in err and "Traceback" not in err
+    saved = json.loads(manifest.read_text())
+    assert saved["status"] == "interrupted"
+    # the count said is what is kept
+    kept = sum(len(pd.read_parquet(f)) for f in (tmp_path / "o" / "chunks").glob("*.parquet"))
+    assert saved["n_done"] == kept and f"after {kept} of 400 cases" in err
+    res = run_study(study, tmp_path / "o", resume=True)
+    assert res.n_reused == kept
+    pd.testing.assert_frame_equal(res.table, run_study(study, tmp_path / "whole").table)
+
+
+def test_interrupt_while_writing_the_table_is_resumed(tmp_path, monkeypatch):
+    """Ctrl-C once every chunk is done, while results.parquet is written: the manifest
+    said "running" and the message was a bare "interrupted"; it says "interrupted", the
+    message says how to finish, and --resume writes the table (nothing recomputed)."""
+    from roverimpact.exceptions import StudyInterrupted
+    from roverimpact.studies import sweep
+
+    real = sweep.write_results
+
+    def interrupted(*a, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sweep, "write_results", interrupted)
+    with pytest.raises(StudyInterrupted, match=r"all 18 cases .*--resume"):
+        run_study(_study(chunk_size=4), tmp_path / "r")
+    manifest = json.loads((tmp_path / "r" / "manifest.json").read_text())
+    assert manifest["status"] == "interrupted" and manifest["n_done"] == 18
+    assert not (tmp_path / "r" / "results.parquet").exists()
+    monkeypatch.setattr(sweep, "write_results", real)
+    ev = CountingRigidBody()
+    res = run_study(_study(chunk_size=4), tmp_path / "r", resume=True, evaluator=ev)
+    assert ev.n == 0 and res.n_reused == 18
+    pd.testing.assert_frame_equal(res.table, run_study(_study(), tmp_path / "whole").table)
+
+
+def test_a_case_that_cannot_be_posed_is_named_and_the_manifest_says_failed(tmp_path):
+    """A combination of parameters that no model has (each value alone is fine, so the
+    checks before the work pass): the study stopped with the model's message alone,
+    naming no case, and its manifest said "running"; the message names the case and its
+    values and what was kept, the manifest says "failed" with the error."""
+    from roverimpact.exceptions import InputError
+
+    study = {"name": "bad", "base": {
+        "model": {"name": "rover2d", "params": {"suspension": "rigid", "h": 0.35}},
+        "velocity": {"u": 0.5}, "contacts": {"ground": "normal"},
+        "obstacle": {"wheel": "front", "beta_deg": 60.0}},
+        "grid": {"model.params.h": [0.35, 0.2, 0.1],
+                 "model.params.wheel_mass": [1.0, 10.0, 40.0]}}
+    with pytest.raises(InputError, match=r"^case 8 \(model\.params\.h = 0\.1, "
+                       r"model\.params\.wheel_mass = 40\.0\): .*too small.* after 8 of 9 "
+                       r"cases .*--overwrite"):
+        run_study(study, tmp_path / "r", chunk_size=4)
+    manifest = json.loads((tmp_path / "r" / "manifest.json").read_text())
+    assert manifest["status"] == "failed" and manifest["n_done"] == 8
+    assert "too small" in manifest["error"]
 
 
 def test_a_full_disk_names_the_file_and_leaves_no_temporary(tmp_path, monkeypatch):

@@ -55,57 +55,90 @@ def _usage_message(exc) -> str:
     return exc.format_message() + hint
 
 
+#: What stopped the command, noted by :func:`_signals_noted` (``"SIGINT"``, ``"SIGTERM"``)
+_SEEN: list = []
+
+
+def _stopped() -> tuple[str, int]:
+    """The word and the exit code of a command stopped by a signal: ``terminated``, 143
+    (128 + SIGTERM, as the shell reports a process it killed) after a SIGTERM, else
+    ``interrupted``, 130."""
+    return ("terminated", 143) if "SIGTERM" in _SEEN else ("interrupted", 130)
+
+
 def _print_interrupted(word: str, exc: BaseException | None) -> None:
     """``interrupted`` (or ``aborted``), with what was kept and how to go on if known."""
+    if word == "interrupted":
+        word = _stopped()[0]
     detail = str(exc) if exc is not None else ""
     err_console.print(Text.assemble((word, "red"), (": " + detail) if detail else ""),
                       highlight=False)
 
 
 @contextlib.contextmanager
-def _ctrl_c_noted(seen: list):
-    """Note every Ctrl-C in ``seen``, including one that arrives while numba's compiler is
-    in a C callback: Python reports that KeyboardInterrupt as "Exception ignored" and
-    numba then fails with "no compiled object yet" (a RuntimeError traceback at 10-16 s of
-    a first run). Such a failure after a Ctrl-C is the interruption (exit 130)."""
+def _signals_noted(seen: list):
+    """Note every Ctrl-C (SIGINT) and SIGTERM in ``seen``, and turn both into
+    ``KeyboardInterrupt`` in this process.
+
+    SIGTERM (``kill PID``, a job scheduler's time limit, ``timeout``) killed the command
+    where it stood: a study's manifest said ``running`` for ever, and a command's staging
+    folder (``.out.partial-*``) stayed beside its output folder. As an interruption, the
+    command cleans up as after a Ctrl-C (the manifest says ``interrupted``, the staging
+    folder goes) and exits with 143. A process forked from this one (a local Dask worker)
+    inherits the handler; a SIGTERM ends it at once, as it did before.
+
+    A Ctrl-C that arrives while numba's compiler is in a C callback is noted too: Python
+    reports that KeyboardInterrupt as "Exception ignored" and numba then fails with "no
+    compiled object yet" (a RuntimeError traceback at 10-16 s of a first run). Such a
+    failure after a Ctrl-C is the interruption (exit 130)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous, hook = signal.getsignal(signal.SIGINT), sys.unraisablehook
-    if previous is not signal.default_int_handler:  # ignored, or someone else's handler
-        yield
-        return
+    hook, pid = sys.unraisablehook, os.getpid()
+    previous = {}
 
-    def on_sigint(signum, frame):
-        seen.append(True)
+    def on_signal(signum, frame):
+        if signum == signal.SIGTERM and os.getpid() != pid:  # a forked child: as before
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+            return
+        seen.append(signal.Signals(signum).name)
         raise KeyboardInterrupt
 
     def unraisable(u):
         if isinstance(u.exc_value, KeyboardInterrupt):
-            seen.append(True)  # reported as the command's interruption below
+            seen.append("SIGINT")  # reported as the command's interruption below
         else:
             hook(u)
 
-    signal.signal(signal.SIGINT, on_sigint)
-    sys.unraisablehook = unraisable
+    # a signal ignored, or handled by someone else (an application calling main()), is
+    # left as it is
+    for sig, default in ((signal.SIGINT, signal.default_int_handler),
+                         (signal.SIGTERM, signal.SIG_DFL)):
+        if signal.getsignal(sig) is default:
+            previous[sig] = signal.signal(sig, on_signal)
+    if signal.SIGINT in previous:
+        sys.unraisablehook = unraisable
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         sys.unraisablehook = hook
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``roverimpact`` console script; returns the exit code."""
-    seen: list = []
-    with _ctrl_c_noted(seen):
+    _SEEN.clear()
+    with _signals_noted(_SEEN):
         try:
-            return _main(argv)
+            code = _main(argv)
         except Exception:
-            if seen:  # numba's compiler failing after a Ctrl-C it did not pass on
+            if _SEEN:  # numba's compiler failing after a Ctrl-C it did not pass on
                 _print_interrupted("interrupted", None)
-                return 130
+                return _stopped()[1]
             raise
+    return _stopped()[1] if code == 130 and _SEEN else code
 
 
 def _main(argv: list[str] | None) -> int:

@@ -25,7 +25,7 @@ from urllib.parse import urlparse
 import numpy as np
 import pandas as pd
 
-from ..exceptions import ConfigError, RoverImpactError
+from ..exceptions import ConfigError, InputError, RoverImpactError
 from .config import Case, flatten
 from .store import PARQUET_WRITE
 
@@ -94,10 +94,21 @@ def _cell(v):
 
 def compute_chunk(evaluator, base: Mapping, normalized_base: Mapping, cases: Sequence[Case],
                   params: Sequence[str], simulate: bool) -> pd.DataFrame:
-    """Evaluate ``cases`` and return their rows: ids, inputs, outputs."""
+    """Evaluate ``cases`` and return their rows: ids, inputs, outputs.
+
+    Raises
+    ------
+    InputError
+        A case that cannot be posed (a model of impossible parameters): the message
+        names the case (its index and parameter values), found by evaluating the
+        chunk's cases one by one.
+    """
     cases = list(cases)  # a chunk's view makes its cases here (on the worker), once
     overrides = [c.overrides for c in cases]
-    outputs = evaluator.evaluate(base, overrides, simulate=simulate)
+    try:
+        outputs = evaluator.evaluate(base, overrides, simulate=simulate)
+    except InputError as exc:
+        raise _failing_case(evaluator, base, cases, simulate, exc) from None
     n = len(cases)
     cols: dict[str, Any] = {
         "case": np.array([c.index for c in cases], dtype=np.int64),
@@ -121,6 +132,24 @@ def compute_chunk(evaluator, base: Mapping, normalized_base: Mapping, cases: Seq
             )
         cols[k] = arr
     return pd.DataFrame(cols)
+
+
+def _failing_case(evaluator, base, cases: list[Case], simulate, exc: InputError
+                  ) -> InputError:
+    """``exc`` (raised by a chunk of ``cases``) with the first case that raises alone
+    named in front: "case 8 (model.params.h = 0.1, ...): ..."; the study's message
+    before named no case, and a grid of two parameters shows only the combination."""
+    bad = cases[0] if len(cases) == 1 else None
+    for c in cases if bad is None else ():
+        try:
+            evaluator.evaluate(base, [c.overrides], simulate=simulate)
+        except InputError as e:
+            bad, exc = c, e
+            break
+    if bad is None:  # pragma: no cover - only the chunk as a whole fails
+        return exc
+    where = ", ".join(f"{k} = {v!r}" for k, v in bad.overrides.items())
+    return type(exc)(f"case {bad.index}" + (f" ({where})" if where else "") + f": {exc}")
 
 
 @dataclass(frozen=True)

@@ -283,12 +283,14 @@ def chunk_path(out_dir: Path, k: int) -> Path:
     return out_dir / CHUNKS / f"chunk-{k:06d}.parquet"
 
 
-def finished_chunks(out_dir: Path, chunks: list[list[Case]]) -> set[int]:
-    """Chunks whose file exists and holds exactly the expected case ids."""
+def finished_chunks(out_dir: Path, chunks: list[list[Case]], among=None) -> set[int]:
+    """Chunks whose file exists and holds exactly the expected case ids (of the chunk
+    indices ``among``; default: every chunk)."""
     import pyarrow.parquet as pq
 
     done = set()
-    for k, chunk in enumerate(chunks):
+    for k in range(len(chunks)) if among is None else among:
+        chunk = chunks[k]
         path = chunk_path(out_dir, k)
         if not path.is_file():
             continue

@@ -23,7 +23,7 @@ from typing import Any
 import pandas as pd
 
 from .._io import some_names, visible_entries
-from ..exceptions import ConfigError, StudyInterrupted
+from ..exceptions import ConfigError, InputError, StudyInterrupted
 from .config import (
     CaseSequence,
     Study,
@@ -337,20 +337,31 @@ def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv
               if scheduler is not None or workers is not None or cluster is not None
               else None)
 
+    in_flight = None  # the chunk being written (for the count of an interruption)
+
     def store(k: int, df: pd.DataFrame | ChunkFile) -> None:
         # written and dropped: no chunk is kept in memory (the table is assembled from
         # the files, one chunk at a time); a worker's chunk comes as the file's bytes
-        nonlocal n_done
+        nonlocal n_done, in_flight
+        in_flight = k
         if isinstance(df, ChunkFile):
             atomic_write_bytes(chunk_path(out_dir, k), df.data)
             n_done += df.n_rows
         else:
             atomic_parquet(df, chunk_path(out_dir, k))
             n_done += len(df)
+        in_flight = None
         if progress:
             progress(n_done, total)
         if stream is not None:
             stream.ready(k)
+
+    def n_kept() -> int:
+        """Cases in finished chunk files: a chunk put in place just before the
+        interruption, which ``store`` had not counted yet, counts."""
+        if in_flight is not None and finished_chunks(out_dir, chunks, [in_flight]):
+            return n_done + chunks.n_cases(in_flight)
+        return n_done
 
     args = (prep.evaluator, prep.study.base, prep.base)
     params = prep.study.parameters()
@@ -359,34 +370,62 @@ def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv
     if own:
         cluster = LazyCluster(workers)
     finished = False
+    # from here on the manifest says how the run ended: ``complete``, ``interrupted``
+    # (Ctrl-C, or SIGTERM through the CLI) or ``failed`` (an error: a case that cannot be
+    # posed, a full disk), never ``running`` once the run is over; an interruption while
+    # the table is written (every chunk done) is resumed as well
     try:
-        if not pending:
-            pass
-        elif scheduler is not None:
-            run_dask(pending, chunks, args, params, simulate, scheduler, retries, store)
-            manifest["executor"] = f"Dask scheduler at {scheduler}"
-        elif cluster is not None:
-            executor = _local_or_serial(pending, chunks, args, params, simulate, store,
-                                        cluster, retries)
-            manifest["executor"] = executor
-            if note and executor.startswith("serial"):
-                note(executor)
-        else:
-            run_serial(pending, chunks, args, params, simulate, store)
-        finished = True
+        try:
+            if not pending:
+                pass
+            elif scheduler is not None:
+                run_dask(pending, chunks, args, params, simulate, scheduler, retries, store)
+                manifest["executor"] = f"Dask scheduler at {scheduler}"
+            elif cluster is not None:
+                executor = _local_or_serial(pending, chunks, args, params, simulate, store,
+                                            cluster, retries)
+                manifest["executor"] = executor
+                if note and executor.startswith("serial"):
+                    note(executor)
+            else:
+                run_serial(pending, chunks, args, params, simulate, store)
+            finished = True
+        finally:
+            if own:
+                cluster.close()
+            if stream is not None and not finished:
+                stream.abandon()
+        return _finish(prep, out_dir, chunks, manifest, csv=csv, t0=t0,
+                       n_computed=sum(chunks.n_cases(k) for k in pending),
+                       n_reused=sum(chunks.n_cases(k) for k in done), stream=stream)
     except KeyboardInterrupt:
-        write_manifest(out_dir, manifest | {"status": "interrupted", "n_done": n_done})
+        kept = n_kept()
+        _mark(out_dir, manifest, "interrupted", n_done=kept)
+        if finished:
+            raise StudyInterrupted(
+                f"interrupted while writing {RESULTS}; all {total} cases are computed and "
+                f"kept in {out_dir}: rerun with --resume to write the table") from None
         raise StudyInterrupted(
-            f"interrupted after {n_done} of {total} cases; the finished chunks are kept in "
+            f"interrupted after {kept} of {total} cases; the finished chunks are kept in "
             f"{out_dir}: rerun with --resume to continue") from None
-    finally:
-        if own:
-            cluster.close()
-        if stream is not None and not finished:
-            stream.abandon()
-    return _finish(prep, out_dir, chunks, manifest, csv=csv, t0=t0,
-                   n_computed=sum(chunks.n_cases(k) for k in pending),
-                   n_reused=sum(chunks.n_cases(k) for k in done), stream=stream)
+    except Exception as exc:
+        kept = n_kept()
+        _mark(out_dir, manifest, "failed", n_done=kept, error=f"{type(exc).__name__}: {exc}")
+        if isinstance(exc, InputError) and not finished:  # a case that cannot be posed
+            raise type(exc)(
+                f"{exc}. The study stopped after {kept} of {total} cases (kept in "
+                f"{out_dir}); change the study so that every case can be posed and run it "
+                "again with --overwrite") from None
+        raise
+
+
+def _mark(out_dir: Path, manifest: dict, status: str, **extra) -> None:
+    """The manifest of a run that stopped says how (``status``); a manifest that cannot
+    be written (the disk that failed the run) leaves the first error to be reported."""
+    try:
+        write_manifest(out_dir, manifest | {"status": status, **extra})
+    except OSError:
+        pass
 
 
 #: The probe that sizes the work before a local cluster is started: about this fraction
