@@ -137,3 +137,43 @@ def test_outputs_without_their_summary_are_not_called_foreign(tmp_path):
             staged_folder(out, OWNED, SIGNATURE, "test"):
         pass
     assert (out / "table.csv").read_text() == "1"
+
+
+def test_sigterm_leaves_the_output_folder_as_it_was(tmp_path):
+    """SIGTERM (`kill`, `timeout`) while `simulate` works: the process died where it stood
+    (exit -15, nothing said) and its staging folder `.out.partial-*` stayed beside the
+    output for good; now it ends as interrupted ("terminated", exit 143), the staging
+    folder is removed and the previous output is left as it was."""
+    import signal
+    import subprocess
+    import sys
+    import textwrap
+    import time
+
+    out = tmp_path / "out"
+    out.mkdir()
+    for name in ("summary.json", "config.json"):  # a previous run's output
+        (out / name).write_text("{}")
+    marker = tmp_path / "working"
+    code = textwrap.dedent(f"""
+        import pathlib, sys, time
+        import roverimpact.simulate as sim
+        def slow(*a, **kw):
+            pathlib.Path({str(marker)!r}).touch()
+            time.sleep(60)
+        sim.simulate_scenario = slow
+        from roverimpact.cli import main
+        sys.exit(main(["simulate", {str(EX / "simulate_rover2d.toml")!r}, "-o", {str(out)!r},
+                       "--no-plot"]))
+    """)
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    t_end = time.time() + 60
+    while time.time() < t_end and not marker.exists() and proc.poll() is None:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert "terminated" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "working"]
+    assert _snapshot(out) == {"config.json": b"{}", "summary.json": b"{}"}
