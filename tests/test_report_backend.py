@@ -26,3 +26,44 @@ print(matplotlib.get_backend())
     assert out[-1] == "svg"
     assert (tmp_path / "study.png").stat().st_size > 1000
     assert (tmp_path / "laws.png").stat().st_size > 1000
+
+
+def test_an_interrupted_or_failed_figure_leaves_the_previous_one(tmp_path):
+    """Ctrl-C or a full disk while a figure is written: matplotlib wrote into the file
+    itself, so the previous figure was lost and a truncated image stayed (the report's
+    figure.png, a `draw -o` file); now the file is the previous one, and no temporary is
+    left. A real figure is written in the format of its suffix."""
+    import errno
+
+    import pytest
+    from matplotlib.figure import Figure
+
+    from roverimpact.report.plots import save_figure, savefig
+
+    class Broken:
+        def __init__(self, exc):
+            self.exc = exc
+
+        def savefig(self, path, **kw):
+            with open(path, "wb") as f:
+                f.write(b"half an image")
+            raise self.exc
+
+    for ext in ("png", "svg"):
+        (tmp_path / f"figure.{ext}").write_bytes(b"the previous figure")
+    for exc in (KeyboardInterrupt(), OSError(errno.ENOSPC, "No space left on device")):
+        with pytest.raises(type(exc)) as info:
+            save_figure(Broken(exc), tmp_path / "figure")
+        if isinstance(exc, OSError):  # the error names the file
+            assert info.value.filename == str(tmp_path / "figure.png")
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["figure.png", "figure.svg"]
+        assert (tmp_path / "figure.png").read_bytes() == b"the previous figure"
+    fig = Figure()
+    fig.subplots().plot([0, 1], [0, 1])
+    paths = save_figure(fig, tmp_path / "figure")
+    assert paths["png"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert b"<svg" in paths["svg"].read_bytes()[:1000]
+    savefig(fig, tmp_path / "one.PDF")
+    assert (tmp_path / "one.PDF").read_bytes()[:5] == b"%PDF-"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["figure.png", "figure.svg",
+                                                           "one.PDF"]

@@ -957,3 +957,34 @@ def test_worker_start_method_default_and_bad_value(monkeypatch):
     monkeypatch.setenv("ROVERIMPACT_WORKER_START", "threads")
     with pytest.raises(ConfigError, match="ROVERIMPACT_WORKER_START must be one of"):
         worker_start_method()
+
+
+def test_cli_interrupt_while_the_report_is_written_says_the_results_are_complete(
+        tmp_path, monkeypatch, capsys):
+    """Ctrl-C once the table is written, while `sweep` draws the report: the message was a
+    bare "interrupted", which left the user to guess whether the study must run again;
+    it says the results are complete and which command writes the report."""
+    import textwrap
+
+    from roverimpact.cli import main
+    from roverimpact.report import html
+
+    def interrupted(*a, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(html, "build_report", interrupted)
+    study = tmp_path / "s.toml"
+    study.write_text(textwrap.dedent("""
+        name = "small"
+        [base]
+        model = { name = "rigid_body" }
+        velocity = { u = 0.5 }
+        obstacle = { frame = "contact", beta_deg = 90.0 }
+        [grid]
+        "model.params.mass" = [1.0, 2.0, 3.0]
+    """))
+    out = tmp_path / "o"
+    assert main(["sweep", str(study), "-o", str(out)]) == 130
+    err = " ".join(capsys.readouterr().err.split())
+    assert f"the results are complete in {out}: `roverimpact report {out}`" in err
+    assert json.loads((out / "manifest.json").read_text())["status"] == "complete"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+import uuid
 import zipfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -161,6 +162,32 @@ def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[
             os.replace(new, out_dir / new.name)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+
+
+@contextmanager
+def writing(path: Path, cleanup):
+    """Around writing ``path``: on any error ``cleanup()`` (what was half written goes),
+    then the error again; an ``OSError`` (a full disk) names ``path``."""
+    try:
+        yield
+    except OSError as exc:
+        cleanup()
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
+    except BaseException:
+        cleanup()
+        raise
+
+
+def atomic_write(path: str | Path, write) -> None:
+    """``write(tmp)`` then ``os.replace(tmp, path)``: ``path`` is the whole new file or, if
+    writing fails or is interrupted (a full disk, Ctrl-C), as it was; the temp file
+    (``.<name>.<32 hex digits>.tmp`` beside it) is removed and an ``OSError`` names
+    ``path``."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    with writing(path, lambda: tmp.unlink(missing_ok=True)):
+        write(tmp)
+        os.replace(tmp, path)
 
 
 def load_system(path: str | Path) -> dict[str, np.ndarray]:

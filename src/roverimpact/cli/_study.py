@@ -167,9 +167,15 @@ def sweep_cmd(
                         note=lambda text: err_console.print(f"note: {text}"))
     path, sections = None, []
     if report:
+        from ..exceptions import StudyInterrupted
         from ..report.html import build_report
 
-        path, sections = build_report(res.out_dir)
+        try:
+            path, sections = build_report(res.out_dir)
+        except KeyboardInterrupt:  # a bare "interrupted" said nothing of the results
+            raise StudyInterrupted(
+                f"interrupted while writing the report; the results are complete in "
+                f"{res.out_dir}: `roverimpact report {res.out_dir}` writes it") from None
     failed = _failed_simulations(res.failures, res.n_cases, allow_failures)
     if as_json:
         print_json({"cases": res.n_cases, "computed": res.n_computed,

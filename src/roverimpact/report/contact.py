@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from ..contact.closed_form import peak_force
 from ..contact.impact import impact_1dof
 from ..contact.registry import LAWS, get_law, law_class
-from .plots import typeset
+from .plots import savefig, typeset
 
 __all__ = ["default_laws", "plot_hysteresis_loops", "plot_peak_force_vs_T"]
 
@@ -46,7 +44,7 @@ def plot_hysteresis_loops(laws, m_eff: float, v_n: float, path=None, *, title=No
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     if path is not None:
-        fig.savefig(Path(path), dpi=120)
+        savefig(fig, path, dpi=120)
     return fig
 
 
@@ -65,5 +63,5 @@ def plot_peak_force_vs_T(laws, v_n: float, T_range=(1e-2, 1e2), path=None, *, nu
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     if path is not None:
-        fig.savefig(Path(path), dpi=120)
+        savefig(fig, path, dpi=120)
     return fig

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .plots import typeset
+from .plots import savefig, typeset
 
 __all__ = ["draw_setup"]
 
@@ -158,5 +158,5 @@ def draw_setup(setup, path: str | Path | None = None, *, title: str | None = Non
     ax.set_title(typeset(title), fontsize=9)
     fig.tight_layout()
     if path is not None:
-        fig.savefig(path, dpi=110)
+        savefig(fig, path, dpi=110)
     return fig

@@ -7,6 +7,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..experiments.compare import ModelComparison
+from .plots import savefig
 
 __all__ = ["plot_overlay"]
 
@@ -56,5 +57,5 @@ def plot_overlay(trials_df: pd.DataFrame, comparison: ModelComparison | None, pa
     ax.set_ylabel("peak normal force [N]")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    savefig(fig, path, dpi=120)
     return Path(path)

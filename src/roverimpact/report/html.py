@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .._io import check_writable
+from .._io import atomic_write, check_writable
 from ..exceptions import ConfigError
 from ..studies.indicators import IndicatorComparison, compare_indicators, with_baselines
 from ..studies.stats import Agreement, ForceRatios, agreement, check_n_boot, force_ratios
@@ -376,7 +376,8 @@ def _write_stats(folder: Path, agr: Agreement, n_ww: int, engines: list[EngineSt
                              "baselines": (engines[0].comparison.as_dict()
                                            if engines[0].comparison is not None else None),
                              "engines": {e.engine: e.as_dict() for e in engines}}
-    (folder / "stats.json").write_text(json.dumps(_nulls(stats), indent=2, allow_nan=False))
+    text = json.dumps(_nulls(stats), indent=2, allow_nan=False)
+    atomic_write(folder / "stats.json", lambda tmp: tmp.write_text(text))
 
 
 def _nulls(obj):
@@ -522,9 +523,7 @@ def write_report(path: str | Path, sections: list[StudySection], *, title: str,
            + f"<ul>{toc}</ul>{body}<h2>Software versions</h2><table>{vers}</table>"
            "<p class='small'>Regenerate with <code>roverimpact report "
            f"{html.escape(str(path.parent))}</code>.</p></body></html>")
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(doc, encoding="utf-8")
-    tmp.replace(path)
+    atomic_write(path, lambda tmp: tmp.write_text(doc, encoding="utf-8"))
     return path
 
 

@@ -193,15 +193,26 @@ def _from_zero(ax, values) -> None:
 FIGURE_TYPES = (".png", ".svg", ".pdf")
 
 
+def savefig(fig, path: str | Path, **kw) -> Path:
+    """``fig.savefig(path, **kw)``, atomically (:func:`roverimpact._io.atomic_write`): an
+    interrupted or failed write (Ctrl-C, a full disk) leaves no half-written image and the
+    previous file, if any, as it was. The format is ``path``'s suffix."""
+    from .._io import atomic_write
+
+    path = Path(path)
+    fmt = kw.pop("format", None) or path.suffix.lstrip(".").lower() or None
+    atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, **kw))
+    return path
+
+
 def save_figure(fig, stem: str | Path, dpi: float | None = None) -> dict[str, Path]:
-    """Write ``<stem>.png`` and ``<stem>.svg``; return the paths. The suffixes are added
-    to the whole name: a stem holding a dot (``map-route_1.5``) keeps it (replacing its
-    "suffix" wrote the maps of routes 1.5 and 1.7 both to ``map-route_1.png``)."""
+    """Write ``<stem>.png`` and ``<stem>.svg`` (each atomically, :func:`savefig`); return
+    the paths. The suffixes are added to the whole name: a stem holding a dot
+    (``map-route_1.5``) keeps it (replacing its "suffix" wrote the maps of routes 1.5 and
+    1.7 both to ``map-route_1.png``)."""
     out = {}
     for ext in ("png", "svg"):
-        path = Path(f"{stem}.{ext}")
-        fig.savefig(path, dpi=dpi or "figure")
-        out[ext] = path
+        out[ext] = savefig(fig, Path(f"{stem}.{ext}"), dpi=dpi or "figure")
     return out
 
 
@@ -219,7 +230,7 @@ def save_figure_to(fig, target: str | Path, dpi: float | None = None) -> dict[st
     files = figure_files(target)
     if len(files) > 1:
         return save_figure(fig, target, dpi)
-    fig.savefig(files[0], dpi=dpi or "figure")
+    savefig(fig, files[0], dpi=dpi or "figure")
     return {files[0].suffix.lower()[1:]: files[0]}
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .plots import typeset
+from .plots import savefig, typeset
 
 
 def plot_force_history(result, path: str | Path | None = None, *, law=None, title: str = ""):
@@ -70,5 +70,5 @@ def plot_force_history(result, path: str | Path | None = None, *, law=None, titl
     ax.set_xlim(left=float(np.min(t_ms[keep])))
     fig.tight_layout(rect=None if result.separated else (0, 0.05, 1, 1))
     if path is not None:
-        fig.savefig(path)
+        savefig(fig, path)
     return fig

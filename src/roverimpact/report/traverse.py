@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .._io import check_writable
+from .._io import atomic_write, check_writable
 from ..exceptions import ConfigError
 from .html import REPORT_CSS
 from .plots import save_figure
@@ -391,7 +391,5 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
            f"{html.escape(config.name)}</title><style>{REPORT_CSS}</style></head><body>"
            + "\n".join(parts) + "</body></html>")
     path = folder / REPORT
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(doc, encoding="utf-8")
-    tmp.replace(path)
+    atomic_write(path, lambda tmp: tmp.write_text(doc, encoding="utf-8"))
     return path

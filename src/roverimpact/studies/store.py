@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .._io import atomic_write, writing
 from ..exceptions import ConfigError, RoverImpactError
 from .config import Case, Study, load_study
 
@@ -152,32 +153,9 @@ def _versions() -> dict[str, str]:
     return out
 
 
-@contextmanager
-def _writing(path: Path, cleanup):
-    """Around writing ``path``: on any error ``cleanup()`` (what was half written goes),
-    then the error again; an ``OSError`` (a full disk) names ``path``."""
-    try:
-        yield
-    except OSError as exc:
-        cleanup()
-        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
-    except BaseException:
-        cleanup()
-        raise
-
-
-def _atomic(path: Path, write) -> None:
-    """``write(tmp)`` then ``os.replace(tmp, path)``; on failure (a full disk) the temp file
-    is removed and the error names ``path``."""
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    with _writing(path, lambda: tmp.unlink(missing_ok=True)):
-        write(tmp)
-        os.replace(tmp, path)
-
-
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically (never a half-written file)."""
-    _atomic(path, lambda tmp: tmp.write_bytes(data))
+    atomic_write(path, lambda tmp: tmp.write_bytes(data))
 
 
 #: pyarrow's Parquet writer options of every table the studies write (chunk files,
@@ -191,17 +169,18 @@ PARQUET_WRITE = {"use_dictionary": False}
 
 def atomic_parquet(df: pd.DataFrame, path: Path) -> None:
     """Write ``df`` as Parquet to ``path`` atomically (:data:`PARQUET_WRITE`)."""
-    _atomic(path, lambda tmp: df.to_parquet(tmp, index=False, **PARQUET_WRITE))
+    atomic_write(path, lambda tmp: df.to_parquet(tmp, index=False, **PARQUET_WRITE))
 
 
-#: The name of a temporary file of :func:`_atomic` (and of a results table being
+#: The name of a temporary file of :func:`.atomic_write` (and of a results table being
 #: written): ``.<name>.<32 hex digits>.tmp``
 _TEMPORARY = re.compile(r"\..+\.[0-9a-f]{32}\.tmp")
 
 
 def remove_stale_temporaries(out_dir: Path) -> None:
     """Delete temp files that an interrupted run left behind (never a finished file, nor
-    a hidden ``.tmp`` file of another program: only the names :func:`_atomic` makes)."""
+    a hidden ``.tmp`` file of another program: only the names :func:`.atomic_write`
+    makes)."""
     for folder in (out_dir, out_dir / CHUNKS):
         if folder.is_dir():
             for f in folder.glob(".*.tmp"):
@@ -377,8 +356,9 @@ class ResultsStream:
 
     def advance(self) -> None:
         """Append the ready chunks, in order (stops at the first one not ready). A failing
-        disk: as :func:`_atomic`, no temporary is left and the error names the table."""
-        with _writing(self.path, self.abandon):
+        disk: as :func:`.atomic_write`, no temporary is left and the error names the
+        table."""
+        with writing(self.path, self.abandon):
             self._advance()
 
     def _advance(self) -> None:
@@ -406,7 +386,7 @@ class ResultsStream:
         written)."""
         self._ready.update(range(len(self._paths)))
         self.advance()
-        with _writing(self.path, self.abandon):
+        with writing(self.path, self.abandon):
             if self._stopped or self._next < len(self._paths):
                 self.abandon()
                 return None
@@ -462,7 +442,7 @@ def write_results(out_dir: Path, chunks, path: Path, csv: Path | None = None, *,
                     pq.read_table(p, schema=schema).to_pandas().to_csv(
                         f, index=False, header=k == 0)
 
-        _atomic(csv, write_csv)
+        atomic_write(csv, write_csv)
     return n
 
 

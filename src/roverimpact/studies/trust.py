@@ -54,6 +54,7 @@ import pandas as pd
 
 from ..exceptions import ConfigError
 from .config import Study, expand, load_study, study_from_dict
+from .store import atomic_parquet
 
 __all__ = [
     "TrustGrid",
@@ -379,7 +380,7 @@ def trust_map(
     out = Path(out_dir)
     files = dict(res.files)
     files["trust"] = out / TRUST_TABLE
-    table.to_parquet(files["trust"], index=False)
+    atomic_parquet(table, files["trust"])
     return TrustResult(table=table, results=results, grid=grid, n_configs=n_configs,
                        out_dir=out, files=files, elapsed=time.perf_counter() - t0,
                        title=f"{st.name}: {n_configs} configurations")
