@@ -177,3 +177,57 @@ def test_sigterm_leaves_the_output_folder_as_it_was(tmp_path):
     assert "terminated" in err and "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "working"]
     assert _snapshot(out) == {"config.json": b"{}", "summary.json": b"{}"}
+
+
+def test_a_ctrl_c_while_the_outputs_are_put_in_place_loses_none(tmp_path, monkeypatch):
+    """Ctrl-C while the new outputs replace the old ones (a few moves): the old files
+    were removed first and the new ones moved one by one, so a Ctrl-C between two moves
+    left a folder with neither run's outputs (the rest went with the staging folder).
+    The signal is now held until every file is in place; then the command stops."""
+    import os
+    import signal
+
+    from roverimpact import _io
+
+    out = tmp_path / "out"
+    with staged_folder(out, OWNED, SIGNATURE, "test") as work:
+        for name in ("summary.json", "table.csv"):
+            (work / name).write_text("old")
+    real, calls = os.replace, []
+
+    def replace(src, dst):
+        calls.append(dst)
+        if len(calls) == 1:  # Ctrl-C after the first file is in place
+            os.kill(os.getpid(), signal.SIGINT)
+        real(src, dst)
+
+    monkeypatch.setattr(_io.os, "replace", replace)
+    with pytest.raises(KeyboardInterrupt), staged_folder(out, OWNED, SIGNATURE, "test") as work:
+        for name in ("summary.json", "table.parquet"):
+            (work / name).write_text("new")
+    assert len(calls) == 2
+    assert _snapshot(out) == {"summary.json": b"new", "table.parquet": b"new"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_ctrl_c_says_the_output_folder_is_as_it_was(tmp_path, monkeypatch, capsys):
+    """A Ctrl-C in `simulate` (its outputs staged): the message was a bare "interrupted";
+    it says that nothing was written and the folder is as it was."""
+    import roverimpact.simulate as sim
+
+    def interrupted(*a, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sim, "simulate_scenario", interrupted)
+    out = tmp_path / "out"
+    args = ["simulate", str(EX / "simulate_rover2d.toml"), "-o", str(out), "--no-plot"]
+    assert main(args) == 130
+    err = " ".join(capsys.readouterr().err.split())
+    assert f"interrupted: nothing was written ({out} was not made)" in err
+    out.mkdir()
+    for name in ("summary.json", "config.json"):  # a previous run's output
+        (out / name).write_text("{}")
+    assert main(args) == 130
+    err = " ".join(capsys.readouterr().err.split())
+    assert f"interrupted: nothing was written; {out} is as it was" in err
+    assert _snapshot(out) == {"config.json": b"{}", "summary.json": b"{}"}

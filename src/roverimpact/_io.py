@@ -151,17 +151,62 @@ def staged_folder(out_dir: str | Path, owned: tuple[str, ...], signature: tuple[
     while not near.is_dir() and near != near.parent:
         near = near.parent
     stage = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.partial-", dir=near))
+    existed = out_dir.is_dir() and bool(visible_entries(out_dir))
     try:
-        yield stage
-        out_dir.mkdir(parents=True, exist_ok=True)
-        for old in out_dir.iterdir():
-            if (not old.name.startswith(".") and old.is_file()
-                    and any(fnmatch.fnmatch(old.name, pat) for pat in owned)):
-                old.unlink()
-        for new in stage.iterdir():
-            os.replace(new, out_dir / new.name)
+        try:
+            yield stage
+        except KeyboardInterrupt as exc:
+            if str(exc):  # says already what was kept
+                raise
+            # a bare "interrupted" left the user to look whether the previous outputs
+            # were still there
+            raise KeyboardInterrupt(
+                f"nothing was written; {out_dir} is as it was" if existed
+                else f"nothing was written ({out_dir} was not made)") from None
+        with signals_held():  # a Ctrl-C here would leave half of each run
+            out_dir.mkdir(parents=True, exist_ok=True)
+            names = {new.name for new in stage.iterdir()}
+            for new in stage.iterdir():
+                os.replace(new, out_dir / new.name)
+            for old in out_dir.iterdir():
+                if (old.name not in names and not old.name.startswith(".")
+                        and old.is_file()
+                        and any(fnmatch.fnmatch(old.name, pat) for pat in owned)):
+                    old.unlink()
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+
+
+@contextmanager
+def signals_held():
+    """Ctrl-C (SIGINT) and SIGTERM held back, then acted on as they would have been, when
+    the block ends: around a few file moves that must all happen (the new outputs put in
+    place, the old ones removed). Their handlers are swapped for one that notes them (a
+    signal mask would not do: the process's other threads, a progress bar's, take the
+    signal). Elsewhere than in the main thread nothing is held."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+    previous = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        handler = signal.getsignal(sig)
+        if handler not in (signal.SIG_IGN, None):
+            previous[sig] = signal.signal(sig, lambda signum, frame: pending.append(signum))
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(pending):
+            handler = previous[sig]
+            if callable(handler):
+                handler(sig, None)
+            else:  # the default action (SIGTERM ends the process)
+                os.kill(os.getpid(), sig)
 
 
 @contextmanager
