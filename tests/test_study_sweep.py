@@ -724,6 +724,65 @@ def test_cli_signal_exits_with_the_resume_hint(tmp_path, sig, code, word):
     pd.testing.assert_frame_equal(res.table, run_study(study, tmp_path / "whole").table)
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_cli_signal_on_a_local_cluster_leaves_no_worker_and_no_dask_lines(tmp_path, sig):
+    """`sweep --workers 2` stopped while both forked workers compute: the command ends at
+    once with its one line, no worker process outlives it, and Dask's "Async instruction
+    for <Task cancelled ...> ended with CancelledError" (one line per busy worker, before
+    the command's own) is not printed."""
+    pytest.importorskip("dask.distributed")
+    if not sys.platform.startswith("linux"):
+        pytest.skip("fork and /proc: Linux only")
+    import subprocess
+    import textwrap
+
+    study = tmp_path / "s.toml"
+    study.write_text(textwrap.dedent("""
+        name = "slow"
+        [base]
+        model = { name = "rigid_body" }
+        velocity = { u = 0.5 }
+        obstacle = { frame = "contact", beta_deg = 90.0 }
+        [random]
+        n = 40
+        seed = 1
+        params = { "model.params.mass" = { low = 1.0, high = 50.0 } }
+    """))
+    code_text = textwrap.dedent(f"""
+        import signal, sys, time
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        import roverimpact.studies.evaluate as ev
+        slow = ev.ScenarioEvaluator.evaluate
+        def evaluate(self, base, overrides, *, simulate=False):
+            time.sleep(0.3 * len(overrides))
+            return slow(self, base, overrides, simulate=simulate)
+        ev.ScenarioEvaluator.evaluate = evaluate
+        from roverimpact.cli import main
+        sys.exit(main(["sweep", {str(study)!r}, "-o", {str(tmp_path / 'o')!r},
+                       "--chunk-size", "4", "--no-report", "--workers", "2"]))
+    """)
+    env = {**os.environ, "ROVERIMPACT_WORKER_START": "fork"}
+    proc = subprocess.Popen([sys.executable, "-c", code_text], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)
+    t_end = time.time() + 90
+    while time.time() < t_end and not any((tmp_path / "o" / "chunks").glob("*.parquet")):
+        time.sleep(0.05)
+    # the local cluster's workers (forked by one of Dask's threads)
+    workers = [w for t in Path(f"/proc/{proc.pid}/task").iterdir()
+               for w in (t / "children").read_text().split()]
+    assert len(workers) == 2
+    proc.send_signal(sig)
+    _out, err = proc.communicate(timeout=60)
+    assert proc.returncode == (130 if sig == signal.SIGINT else 143), err
+    assert "--resume" in err and "CancelledError" not in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1, err
+    t_end = time.time() + 10
+    while time.time() < t_end and any(Path(f"/proc/{w}").exists() for w in workers):
+        time.sleep(0.1)
+    assert not [w for w in workers if Path(f"/proc/{w}").exists()]
+    assert json.loads((tmp_path / "o" / "manifest.json").read_text())["status"] == "interrupted"
+
+
 def test_interrupt_while_writing_the_table_is_resumed(tmp_path, monkeypatch):
     """Ctrl-C once every chunk is done, while results.parquet is written: the manifest
     said "running" and the message was a bare "interrupted"; it says "interrupted", the

@@ -287,10 +287,23 @@ def _dask_logs_at_warning():
     level = log.level
     if log.getEffectiveLevel() < logging.WARNING:
         log.setLevel(logging.WARNING)
+    # a worker closed while it computes a chunk (the cluster closed after a Ctrl-C or a
+    # SIGTERM) logs "Async instruction for <Task cancelled name=execute(...)> ended with
+    # CancelledError", a line of Dask's internals per busy worker before the command's
+    # "interrupted: ... --resume"; forked workers inherit this filter and drop it
+    machine = logging.getLogger("distributed.worker.state_machine")
+    machine.addFilter(_not_cancelled_at_close)
     try:
         yield
     finally:
         log.setLevel(level)
+        machine.removeFilter(_not_cancelled_at_close)
+
+
+def _not_cancelled_at_close(record: logging.LogRecord) -> bool:
+    """False for the worker's "... ended with CancelledError" record of a closing worker
+    (:func:`_dask_logs_at_warning`)."""
+    return not str(record.msg).endswith("ended with CancelledError")
 
 
 def _close(cluster, *, quiet: bool) -> None:
