@@ -1047,3 +1047,25 @@ def test_cli_interrupt_while_the_report_is_written_says_the_results_are_complete
     err = " ".join(capsys.readouterr().err.split())
     assert f"the results are complete in {out}: `roverimpact report {out}`" in err
     assert json.loads((out / "manifest.json").read_text())["status"] == "complete"
+
+
+def test_report_of_an_interrupted_study_says_how_far_it_got(tmp_path):
+    """`report` on a study stopped half-way advised to "rebuild the table (nothing is
+    recomputed)" with --resume, which computes the 10 missing cases; it says where the
+    study stopped, and the advice works."""
+    from roverimpact.exceptions import StudyInterrupted
+    from roverimpact.report.html import build_report
+
+    def stop(done, total):
+        if done >= 8:
+            raise KeyboardInterrupt
+
+    with pytest.raises(StudyInterrupted):
+        run_study(_study(chunk_size=4), tmp_path / "r", progress=stop)
+    with pytest.raises(ConfigError, match=r"\(stopped after 8 of 18 cases: interrupted\): "
+                       r"finish it \(the finished chunks are not recomputed\) with "
+                       r"`roverimpact sweep .*study\.toml -o .* --resume`") as info:
+        build_report(tmp_path / "r")
+    assert "nothing is recomputed" not in str(info.value)
+    res = run_study(tmp_path / "r" / "study.toml", tmp_path / "r", resume=True)
+    assert res.n_reused == 8 and res.n_computed == 10

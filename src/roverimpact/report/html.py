@@ -25,6 +25,7 @@ from ..studies.indicators import IndicatorComparison, compare_indicators, with_b
 from ..studies.stats import Agreement, ForceRatios, agreement, check_n_boot, force_ratios
 from ..studies.store import (
     CHUNKS,
+    MANIFEST,
     RESULTS,
     STUDY_COPY,
     WHOLE_WINDOW,
@@ -138,15 +139,26 @@ def find_study_folders(root: str | Path) -> list[Path]:
     if not found and any((root / CHUNKS).glob("*.parquet")):
         study = root / STUDY_COPY
         raise ConfigError(
-            f"{root}: no {RESULTS} here, but {CHUNKS}/ holds the finished chunks of a study: "
-            f"rebuild the table (nothing is recomputed) with `roverimpact sweep {study} -o "
-            f"{root} --resume`, then report again")
+            f"{root}: no {RESULTS} here, but {CHUNKS}/ holds the finished chunks of a study"
+            f"{_stopped(root)}: finish it (the finished chunks are not recomputed) with "
+            f"`roverimpact sweep {study} -o {root} --resume`, then report again")
     if not found:
         raise ConfigError(
             f"{root}: no study results here ({RESULTS} in it or in its subfolders); "
             "run `roverimpact sweep` or `roverimpact reproduce` first"
         )
     return found
+
+
+def _stopped(folder: Path) -> str:
+    """`` (stopped after 8 of 40 cases: interrupted)`` from a study's manifest, or ``""``.
+    The advice once said "nothing is recomputed", also of a study stopped half-way."""
+    try:
+        m = json.loads((folder / MANIFEST).read_text())
+        done, n, status = int(m["n_done"]), int(m["n_cases"]), str(m["status"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return ""
+    return f" (stopped after {done} of {n} cases: {status})"
 
 
 def _fmt(v: float) -> str:

@@ -67,7 +67,7 @@ from .store import (
 )
 
 __all__ = ["StudyResult", "failed_simulations", "input_files", "load_results", "prepare_study",
-           "run_study"]
+           "run_study", "study_toml"]
 
 
 class StudyResult:
@@ -546,10 +546,7 @@ def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int,
     if prep.text is not None:
         atomic_write_bytes(out_dir / STUDY_COPY, prep.text.encode("utf-8"))
     else:
-        import tomli_w
-
-        data = st.model_dump(mode="json", exclude_none=True)
-        atomic_write_bytes(out_dir / STUDY_COPY, tomli_w.dumps(data).encode("utf-8"))
+        atomic_write_bytes(out_dir / STUDY_COPY, study_toml(st).encode("utf-8"))
     manifest = {
         "name": st.name,
         "fingerprint": st.fingerprint(),
@@ -567,6 +564,32 @@ def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int,
     }
     write_manifest(out_dir, manifest)
     return manifest
+
+
+def study_toml(study: Study) -> str:
+    """The TOML text of a study given as a dict (or of a study file whose base is another
+    file): read back, the same study with the same cases in the same order.
+
+    ``tomli_w`` writes a table's plain values before its sub-tables, so a grid of a list
+    and a ``{start, stop, num}`` range came back with its keys in another order: the
+    same fingerprint, other case numbers (the first key varies slowest). ``--resume``
+    with that copy (the advice of ``report`` on a stopped study) found no finished chunk
+    and computed every case again. The grid is written as one inline value a key, in
+    its order."""
+    import tomli_w
+
+    data = study.model_dump(mode="json", exclude_none=True)
+    grid = data.pop("grid", None)
+    text = tomli_w.dumps(data)
+    if grid:
+        def value(v) -> str:
+            if isinstance(v, dict):
+                return "{ " + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + " }"
+            return tomli_w.dumps({"v": v}).split("=", 1)[1].strip()
+
+        text += "\n[grid]\n" + "".join(f"{json.dumps(k)} = {value(v)}\n"
+                                       for k, v in grid.items())
+    return text
 
 
 def _finish(prep, out_dir, chunks, manifest, *, csv, t0, n_computed, n_reused,
