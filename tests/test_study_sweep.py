@@ -845,9 +845,13 @@ def test_a_full_disk_names_the_file_and_leaves_no_temporary(tmp_path, monkeypatc
         return real(self, path, *a, **kw)
 
     monkeypatch.setattr(store.pd.DataFrame, "to_parquet", full_disk)
-    with pytest.raises(OSError, match=r"No space left on device: .*chunk-000001\.parquet"):
+    with pytest.raises(OSError, match=r"No space left on device \(the study stopped after 4 of "
+                       r"18 cases, kept in .*: once there is room, rerun with --resume to "
+                       r"continue\): .*chunk-000001\.parquet"):
         run_study(_study(chunk_size=4), tmp_path / "r")
     assert not list((tmp_path / "r").rglob("*.tmp"))
+    manifest = json.loads((tmp_path / "r" / "manifest.json").read_text())
+    assert manifest["status"] == "failed" and manifest["n_done"] == 4
     monkeypatch.setattr(store.pd.DataFrame, "to_parquet", real)
     res = run_study(_study(chunk_size=4), tmp_path / "r", resume=True)
     assert len(res.table) == 18 and not list((tmp_path / "r").rglob("*.tmp"))
@@ -870,8 +874,11 @@ def test_a_full_disk_while_writing_the_table_names_it_and_keeps_the_chunks(tmp_p
         return real(self, *a, **kw)
 
     monkeypatch.setattr(pq.ParquetWriter, "write_table", full_disk)
-    with pytest.raises(OSError, match=r"No space left on device: .*results\.parquet"):
+    with pytest.raises(OSError, match=r"No space left on device \(all 18 cases are computed, "
+                       r"kept in .*: once there is room, rerun with --resume to write the "
+                       r"table\): .*results\.parquet"):
         run_study(_study(chunk_size=4), tmp_path / "r")
+    assert json.loads((tmp_path / "r" / "manifest.json").read_text())["status"] == "failed"
     assert not list((tmp_path / "r").rglob("*.tmp"))
     assert len(list((tmp_path / "r" / "chunks").glob("*.parquet"))) == 5
     monkeypatch.setattr(pq.ParquetWriter, "write_table", real)

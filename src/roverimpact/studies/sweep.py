@@ -416,6 +416,12 @@ def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv
                 f"{exc}. The study stopped after {kept} of {total} cases (kept in "
                 f"{out_dir}); change the study so that every case can be posed and run it "
                 "again with --overwrite") from None
+        if isinstance(exc, OSError) and exc.filename and exc.strerror:  # a full disk
+            where = (f"all {total} cases are computed, kept in {out_dir}: once there is "
+                     "room, rerun with --resume to write the table" if finished else
+                     f"the study stopped after {kept} of {total} cases, kept in {out_dir}: "
+                     "once there is room, rerun with --resume to continue")
+            raise OSError(exc.errno, f"{exc.strerror} ({where})", exc.filename) from None
         raise
 
 
