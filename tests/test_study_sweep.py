@@ -1076,3 +1076,45 @@ def test_report_of_an_interrupted_study_says_how_far_it_got(tmp_path):
     assert "nothing is recomputed" not in str(info.value)
     res = run_study(tmp_path / "r" / "study.toml", tmp_path / "r", resume=True)
     assert res.n_reused == 8 and res.n_computed == 10
+
+
+class _CountingToFile(ScenarioEvaluator):
+    """The scenario evaluator, appending a line to a file per call (on a worker too)."""
+
+    name = "counting_to_file"
+
+    def __init__(self, path):
+        self.path = str(path)
+
+    def evaluate(self, base, overrides, *, simulate=False):
+        with open(self.path, "a") as f:
+            f.write(f"{len(overrides)}\n")
+        return super().evaluate(base, overrides, simulate=simulate)
+
+
+def test_a_case_that_cannot_be_posed_on_dask_is_not_retried(tmp_path, monkeypatch):
+    """On a Dask cluster the chunk holding a case that cannot be posed was retried three
+    more times (``retries``), each finding the case again one by one: 16 evaluator calls
+    for a chunk of 3 instead of 4. The error comes back once, naming the case."""
+    pytest.importorskip("dask.distributed")
+    from roverimpact.exceptions import InputError
+    from roverimpact.studies.executors import local_cluster, run_dask
+    from roverimpact.studies.sweep import Chunks, prepare_study
+
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", "fork")
+    study = {"name": "bad", "base": {
+        "model": {"name": "rover2d", "params": {"suspension": "rigid", "h": 0.35}},
+        "velocity": {"u": 0.5}, "contacts": {"ground": "normal"},
+        "obstacle": {"wheel": "front", "beta_deg": 60.0}},
+        "cases": [{"model.params.h": 0.35, "model.params.wheel_mass": 40.0},
+                  {"model.params.h": 0.1, "model.params.wheel_mass": 40.0},
+                  {"model.params.h": 0.2, "model.params.wheel_mass": 1.0}]}
+    calls = tmp_path / "calls"
+    prep = prepare_study(study, evaluator=_CountingToFile(calls), chunk_size=3)
+    chunks = Chunks(prep.cases, 3)
+    args = (prep.evaluator, prep.study.base, prep.base)
+    with local_cluster(1) as address, \
+            pytest.raises(InputError, match=r"^case 1 \(model\.params\.h = 0\.1, "):
+        run_dask([0], chunks, args, prep.study.parameters(), False, address, 3,
+                 lambda k, df: None)
+    assert calls.read_text().split() == ["3", "1", "1"]  # the chunk, then case by case
