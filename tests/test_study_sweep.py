@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from roverimpact.exceptions import ConfigError
+from roverimpact.exceptions import ConfigError, InputError
 from roverimpact.studies import ScenarioEvaluator, expand, load_results, run_study
 from roverimpact.studies.config import apply_overrides, study_from_dict
 
@@ -1118,3 +1118,26 @@ def test_a_case_that_cannot_be_posed_on_dask_is_not_retried(tmp_path, monkeypatc
         run_dask([0], chunks, args, prep.study.parameters(), False, address, 3,
                  lambda k, df: None)
     assert calls.read_text().split() == ["3", "1", "1"]  # the chunk, then case by case
+
+
+class _OddError(InputError):
+    """An evaluator's own error class, of two arguments."""
+
+    def __init__(self, code, text):
+        super().__init__(f"{code}: {text}")
+
+
+def _refuses_heavy(scenario):
+    mass = scenario["model"]["params"]["mass"]
+    if mass > 30:
+        raise _OddError("E1", f"mass {mass} too large")
+    return {"T_c_minus": 0.5 * mass}
+
+
+def test_an_evaluators_own_error_class_is_named_too(tmp_path):
+    """The case-naming message remade the error with its class and one argument: an
+    evaluator's own class of another signature became a TypeError traceback."""
+    study = {"name": "odd", "base": BASE, "grid": {"model.params.mass": [10.0, 20.0, 40.0]}}
+    with pytest.raises(InputError, match=r"^case 2 \(model\.params\.mass = 40\.0\): E1: mass "
+                       r"40\.0 too large\. The study stopped after 0 of 3 cases"):
+        run_study(study, tmp_path / "r", evaluator=_refuses_heavy)

@@ -41,6 +41,7 @@ __all__ = [
     "compute_chunk_file",
     "local_cluster",
     "need_dask",
+    "reworded",
     "run_dask",
     "run_serial",
     "why_serial",
@@ -149,7 +150,16 @@ def _failing_case(evaluator, base, cases: list[Case], simulate, exc: InputError
     if bad is None:  # pragma: no cover - only the chunk as a whole fails
         return exc
     where = ", ".join(f"{k} = {v!r}" for k, v in bad.overrides.items())
-    return type(exc)(f"case {bad.index}" + (f" ({where})" if where else "") + f": {exc}")
+    return reworded(exc, f"case {bad.index}" + (f" ({where})" if where else "") + f": {exc}")
+
+
+def reworded(exc: InputError, message: str) -> InputError:
+    """An error of ``exc``'s type with ``message`` (an ``InputError`` if that type takes
+    other arguments: an evaluator's own error class)."""
+    try:
+        return type(exc)(message)
+    except TypeError:
+        return InputError(message)
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ from .executors import (
     check_scheduler,
     compute_chunk,
     need_dask,
+    reworded,
     run_dask,
     run_serial,
     why_serial,
@@ -412,10 +413,10 @@ def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv
         kept = n_kept()
         _mark(out_dir, manifest, "failed", n_done=kept, error=f"{type(exc).__name__}: {exc}")
         if isinstance(exc, InputError) and not finished:  # a case that cannot be posed
-            raise type(exc)(
+            raise reworded(exc, (
                 f"{exc}. The study stopped after {kept} of {total} cases (kept in "
                 f"{out_dir}); change the study so that every case can be posed and run it "
-                "again with --overwrite") from None
+                "again with --overwrite")) from None
         if isinstance(exc, OSError) and exc.filename and exc.strerror:  # a full disk
             where = (f"all {total} cases are computed, kept in {out_dir}: once there is "
                      "room, rerun with --resume to write the table" if finished else
