@@ -144,3 +144,35 @@ def test_cli_bad_input(tmp_path, capsys):
     assert "comma-separated" in capsys.readouterr().err
     missing = tmp_path / "nope.toml"
     assert main(["trust", str(missing), "-o", str(tmp_path / "z")]) == 2
+
+
+def test_cli_interrupt_after_the_simulations_says_resume_recomputes_nothing(
+        tmp_path, monkeypatch, capsys):
+    """Ctrl-C once a trust map's simulations are complete (while the table or the map is
+    drawn): the message was a bare "interrupted"; it says the simulations are kept and
+    that --resume draws the map. A Ctrl-C before that stays a plain interruption."""
+    import json
+
+    from roverimpact.cli import main
+    from roverimpact.studies import trust
+
+    out = tmp_path / "t"
+
+    def interrupted_after_the_study(*a, **kw):
+        out.mkdir(exist_ok=True)
+        (out / "manifest.json").write_text(json.dumps({"status": "complete"}))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(trust, "trust_map", interrupted_after_the_study)
+    assert main(["trust", "--quick", "-o", str(out)]) == 130
+    err = " ".join(capsys.readouterr().err.split())
+    assert (f"interrupted: interrupted after the simulations, which are complete in {out}: "
+            "rerun the same command with --resume") in err
+    (out / "manifest.json").write_text(json.dumps({"status": "running"}))
+
+    def interrupted(*a, **kw):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(trust, "trust_map", interrupted)
+    assert main(["trust", "--quick", "-o", str(out)]) == 130
+    assert "complete" not in capsys.readouterr().err

@@ -32,6 +32,16 @@ def _floats(text: str | None, what: str) -> list[float] | None:
         raise ConfigError(f"--{what}: give comma-separated numbers, got {text!r}") from None
 
 
+def _complete(out: Path) -> bool:
+    """Whether the study folder ``out`` holds a complete study (its manifest says so)."""
+    import json
+
+    try:
+        return json.loads((out / "manifest.json").read_text()).get("status") == "complete"
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
 @app.command("trust")
 def trust_cmd(
     study: Path = typer.Argument(None, help="Study file (TOML); default: built-in 2-D rover "
@@ -53,16 +63,30 @@ def trust_cmd(
 ) -> None:
     """Trust map: where the T_c^- ranking agrees with the simulated F_max ranking."""
     one_format(as_json, as_csv)
+    from ..exceptions import StudyInterrupted
     from ..report.trust import plot_trust_map
     from ..studies.trust import FIGURE_STEM, grid_from_options, trust_map
 
     engines = [x.strip() for x in engine.split(",") if x.strip()] or [engine]
     grid = grid_from_options(laws.split(",") if laws else None, _floats(k, "k"),
                              _floats(e, "e"), quick=quick)
-    with progress_bar("trust map", unit="runs", to_stderr=as_json or as_csv) as update:
-        res = trust_map(study, out, grid=grid, quick=quick, workers=workers, resume=resume,
-                        overwrite=overwrite, progress=update, engines=engines)
-    res.files.update(plot_trust_map(res.table, res.out_dir / FIGURE_STEM, title=res.title))
+    try:
+        with progress_bar("trust map", unit="runs", to_stderr=as_json or as_csv) as update:
+            res = trust_map(study, out, grid=grid, quick=quick, workers=workers,
+                            resume=resume, overwrite=overwrite, progress=update,
+                            engines=engines)
+        res.files.update(plot_trust_map(res.table, res.out_dir / FIGURE_STEM,
+                                        title=res.title))
+    except StudyInterrupted:  # in the simulations: says what is kept
+        raise
+    except KeyboardInterrupt:
+        if not _complete(out):
+            raise
+        # a bare "interrupted" said nothing of the simulations, all done
+        raise StudyInterrupted(
+            f"interrupted after the simulations, which are complete in {out}: rerun the "
+            "same command with --resume to write the trust map (nothing is "
+            "recomputed)") from None
     n_sims = len(res.results) * res.table["engine"].nunique()
     cols = ["law", "k", "e", "tau", "spearman", "n", "n_failed", "engine", "spearman_v_n",
             "spearman_T_n_total", "spearman_T_c_obstacle"]
