@@ -1094,8 +1094,8 @@ class _CountingToFile(ScenarioEvaluator):
 
 def test_a_case_that_cannot_be_posed_on_dask_is_not_retried(tmp_path, monkeypatch):
     """On a Dask cluster the chunk holding a case that cannot be posed was retried three
-    more times (``retries``), each finding the case again one by one: 16 evaluator calls
-    for a chunk of 3 instead of 4. The error comes back once, naming the case."""
+    more times (``retries``), each finding the case again one by one: 12 evaluator calls
+    for a chunk of 3 instead of 3. The error comes back once, naming the case."""
     pytest.importorskip("dask.distributed")
     from roverimpact.exceptions import InputError
     from roverimpact.studies.executors import local_cluster, run_dask

@@ -177,7 +177,8 @@ def compute_chunk_file(evaluator, base, normalized_base, cases, params, simulate
     :func:`~.store.atomic_parquet` writes); a case that cannot be posed is returned as its
     error (:func:`run_dask` raises it): raised on the worker, Dask retried the chunk
     (``retries``) three more times for the same error, each time finding the case again
-    one by one (a chunk of 3 cases: 16 evaluator calls instead of 4)."""
+    one by one (a chunk of 3 cases, the second failing: 12 evaluator calls instead of
+    3)."""
     try:
         df = compute_chunk(evaluator, base, normalized_base, cases, params, simulate)
     except InputError as exc:
