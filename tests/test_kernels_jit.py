@@ -151,6 +151,57 @@ print(json.dumps([before, sent, k.cached(), sum(d.stats.cache_hits.values()),
     assert _python(code_off, tmp_path, ROVERIMPACT_BACKGROUND_COMPILE="0") == "[]"
 
 
+# numba caches a kernel beside its source, else in NUMBA_CACHE_DIR, else in the user's cache
+# folder; with none writable (a read-only install and an unwritable or unset HOME, as on a
+# shared cluster or in a container run as another user) its ``cache=True`` raised
+# "cannot cache function ...: no locator available" when a kernel module was imported. The
+# tests run as root, who can write anywhere: this stands in for the file permissions,
+# refusing every cache folder but the one of ``config.CACHE_DIR`` when ``allow_set``.
+_NO_CACHE_FOLDER = """
+import errno, json, os, warnings
+from numba.core import caching, config
+_ensure = caching._CacheLocator.ensure_cache_path
+def ensure(self, allow_set={allow_set}):
+    path = self.get_cache_path()
+    if not (allow_set and config.CACHE_DIR and path.startswith(config.CACHE_DIR)):
+        raise OSError(errno.EACCES, "Permission denied", path)
+    _ensure(self)
+caching._CacheLocator.ensure_cache_path = ensure
+import numpy as np
+with warnings.catch_warnings(record=True) as seen:
+    warnings.simplefilter("always")
+    from roverimpact._kernels.partition import factor
+M = np.array([[4.0, 2.0], [2.0, 3.0]])
+L, invd = np.zeros((2, 2)), np.zeros(2)
+status = factor(M, L, invd)
+folder = os.environ.get("NUMBA_CACHE_DIR")
+print(json.dumps([status, L.tolist(), [str(w.message) for w in seen], folder,
+                  bool(folder) and any(n.endswith(".nbi") for _, _, f in os.walk(folder)
+                                       for n in f)]))
+"""
+
+
+@pytest.mark.parametrize("allow_set", [True, False])
+def test_kernels_run_when_no_cache_folder_is_writable(allow_set):
+    """No writable cache folder: the kernels are cached for this run in a temporary folder
+    (removed at exit; the background compile and Dask workers share it), or, when not even
+    that can be written, not cached; a warning says how to keep them (NUMBA_CACHE_DIR)."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (SRC, env.get("PYTHONPATH")) if p)
+    run = subprocess.run([sys.executable, "-c", _NO_CACHE_FOLDER.format(allow_set=allow_set)],
+                         capture_output=True, text=True, env=env)
+    assert run.returncode == 0, run.stderr
+    status, L, warned, folder, cached = json.loads(run.stdout)
+    assert status == 0
+    np.testing.assert_allclose(L, np.linalg.cholesky([[4.0, 2.0], [2.0, 3.0]]), rtol=1e-15)
+    assert len(warned) == 1 and "NUMBA_CACHE_DIR" in warned[0], warned
+    if allow_set:
+        assert cached and folder in warned[0]
+        assert not Path(folder).exists()  # removed at exit
+    else:
+        assert folder is None and not cached
+
+
 def test_build_settings_are_scoped_to_the_kernel(monkeypatch):
     """``slp`` / ``loop_vectorize`` hold only while this kernel compiles (the lane kernel:
     SLP on, loop vectoriser off; the one-item kernel: loop vectoriser off)."""

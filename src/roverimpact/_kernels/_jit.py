@@ -20,14 +20,25 @@ need a kernel later can have it compiled meanwhile on another core:
 :func:`compile_in_background` starts a separate Python process that builds the kernels
 into numba's on-disk cache (only those whose cache entry is missing), and :meth:`Kernel.get`
 waits for that process and loads the result instead of compiling it a second time.
+
+Every compiled function of the package takes :data:`NJIT_OPTIONS`. numba caches a function
+beside its source, else in ``NUMBA_CACHE_DIR``, else in the user's cache folder, and with
+``cache=True`` refuses to compile one when none of them can be written (a read-only install
+used with an unwritable or unset home). Importing this module checks that once
+(:func:`ensure_cache_folder`) and falls back to a temporary folder for the run, or to no
+cache.
 """
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import threading
+import warnings
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
@@ -39,8 +50,72 @@ from .. import _kernels
 
 f8, i8, b1, boolean = types.float64, types.int64, types.bool_, types.boolean
 
-#: numba options of every kernel and :func:`shared` function (their own options go on top)
+#: numba options of every compiled function of the package (a kernel's or a :func:`shared`
+#: function's own options go on top); ``cache`` is False when no folder can hold numba's
+#: cache (:func:`ensure_cache_folder`).
 NJIT_OPTIONS = {"cache": True, "nogil": True}
+
+
+def _cache_probe():  # pragma: no cover - never called: numba locates its cache by its file
+    pass
+
+
+def cache_writable() -> bool:
+    """Whether numba finds a writable folder for the cache of this package's kernels
+    (beside their sources, in ``NUMBA_CACHE_DIR`` or in the user's cache folder)."""
+    from numba.core.caching import FunctionCache
+
+    try:
+        FunctionCache(_cache_probe)
+    except RuntimeError:  # numba: "cannot cache function ...: no locator available"
+        return False
+    return True
+
+
+def ensure_cache_folder() -> str | None:
+    """Make ``cache=True`` usable when numba can write its cache nowhere.
+
+    Then the compiled kernels are cached, for this run only, in a new temporary folder
+    removed at exit: ``NUMBA_CACHE_DIR`` is set to it, in numba's settings and in the
+    environment, so that the background compile (:func:`compile_in_background`) and Dask
+    workers started by this process use it too. If numba cannot use a temporary folder
+    either, :data:`NJIT_OPTIONS` turns the cache off. Either way a warning says how to keep the
+    kernels between runs. Returns the temporary folder, or None.
+    """
+    if cache_writable():
+        return None
+    tried = [f"roverimpact's folder {Path(__file__).resolve().parents[1]}",
+             "the user's cache folder"]
+    if numba_config.CACHE_DIR:
+        tried.insert(0, f"NUMBA_CACHE_DIR={numba_config.CACHE_DIR}")
+    keep = (f"set NUMBA_CACHE_DIR to a writable folder to keep them ({', '.join(tried)}: "
+            "not writable)")
+    try:
+        folder = tempfile.mkdtemp(prefix="roverimpact-numba-")
+    except OSError:
+        folder = None
+    if folder is not None:
+        before = os.environ.get("NUMBA_CACHE_DIR"), numba_config.CACHE_DIR
+        os.environ["NUMBA_CACHE_DIR"] = numba_config.CACHE_DIR = folder
+        if cache_writable():
+            atexit.register(shutil.rmtree, folder, ignore_errors=True)
+            warnings.warn(f"numba can write its cache of compiled kernels only to the "
+                          f"temporary folder {folder}, removed at exit: every run compiles "
+                          f"them again; {keep}", UserWarning, stacklevel=2)
+            return folder
+        shutil.rmtree(folder, ignore_errors=True)
+        if before[0] is None:
+            del os.environ["NUMBA_CACHE_DIR"]
+        else:
+            os.environ["NUMBA_CACHE_DIR"] = before[0]
+        numba_config.CACHE_DIR = before[1]
+    NJIT_OPTIONS["cache"] = False
+    warnings.warn(f"numba can write its cache of compiled kernels nowhere: every run "
+                  f"compiles them again; {keep}", UserWarning, stacklevel=2)
+    return None
+
+
+ensure_cache_folder()
 
 
 def ro(dtype, ndim: int):

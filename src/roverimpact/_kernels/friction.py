@@ -49,7 +49,7 @@ import numpy as np
 from numba import njit, types
 
 from .._validation import STATUS_OK
-from ._jit import b1, boolean, f8, i8, kernel, ro, rw
+from ._jit import NJIT_OPTIONS, b1, boolean, f8, i8, kernel, ro, rw
 from .lemke import (
     STATUS_INFEASIBLE,
     STATUS_LOCKED,
@@ -73,7 +73,7 @@ _ACCEPT = 1e-10  # residual of the scaled LCP (max|b| = 1) accepted at once
 _ATTEMPTS = 5  # unperturbed, then four perturbations of b
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _whiten(L, invd, row, out, col):  # pragma: no cover - compiled
     """``out[col] = L^{-1} row`` (forward substitution); returns the norm."""
     n = row.shape[0]
@@ -90,7 +90,7 @@ def _whiten(L, invd, row, out, col):  # pragma: no cover - compiled
     return np.sqrt(nrm)
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _orth_append_t(Q, r, x, rtol):  # pragma: no cover - compiled
     """CGS2: orthogonalise unit vector ``x`` against the rows ``Q[:r]``; append it as
     row ``r`` if independent (``_lcp._orth_append`` with the basis stored by rows)."""
@@ -115,7 +115,7 @@ def _orth_append_t(Q, r, x, rtol):  # pragma: no cover - compiled
     return r + 1
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _lexless(T, i, si, j, sj, K, rhs):  # pragma: no cover - compiled
     """Is row ``i`` (times ``si``) lexicographically smaller than row ``j`` (times ``sj``)?
 
@@ -139,7 +139,7 @@ def _lexless(T, i, si, j, sj, K, rhs):  # pragma: no cover - compiled
     return False
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _pivot(T, K, ncol, r, c):  # pragma: no cover - compiled
     inv = 1.0 / T[r, c]
     for j in range(ncol):
@@ -154,7 +154,7 @@ def _pivot(T, K, ncol, r, c):  # pragma: no cover - compiled
     T[r, c] = 1.0
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _lemke(G, q, K, z, T, basis, maxit):  # pragma: no cover - compiled
     """Lemke's algorithm on the leading ``K x K`` block: ``w = G z + q >= 0 _|_ z >= 0``.
 
@@ -206,7 +206,7 @@ def _lemke(G, q, K, z, T, basis, maxit):  # pragma: no cover - compiled
     return STATUS_MAXITER
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _basis_solve(G, q, K, basis, S, A, rs, out):  # pragma: no cover - compiled
     """Exact solution on Lemke's final basis: ``G_SS z_S = -q_S``, ``S`` its basic ``z``.
 
@@ -255,7 +255,7 @@ def _basis_solve(G, q, K, basis, S, A, rs, out):  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _residual(G, q, z, K):  # pragma: no cover - compiled
     res = 0.0
     for i in range(K):
@@ -266,7 +266,7 @@ def _residual(G, q, z, K):  # pragma: no cover - compiled
     return res
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _frictional_lcp(G, qs, K, thr, z, qx, qp, zl, zb, T, basis, S, A, rs):
     # pragma: no cover - compiled
     """Solve the scaled frictional LCP ``(G, qs)`` (leading K); ``z`` in units of ``qs``.
@@ -333,7 +333,7 @@ _M_VERT = 3  # sliding, friction impulse mu p d_j (a vertex of the polygon)
 _M_EDGE = 4  # sliding, friction impulse on the edge (d_j, d_j+1), beta_j + beta_j+1 = mu p
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _gauss(A, rhs, m, out, pc):  # pragma: no cover - compiled
     """Solve ``A[:m, :m] out = rhs``: rows equilibrated, partial pivoting.
 
@@ -392,7 +392,7 @@ def _gauss(A, rhs, m, out, pc):  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _mode_iteration(H, h0, tgt, sc, tw, fr, mue, ntan, nd, coef, cosm, k, tm, thr, mode,
                     va, xp, xt, vel, uc, ux, ec, ex, Am, HX, rhs, sol, perm, hist, maxit):
     # pragma: no cover - compiled
@@ -676,7 +676,7 @@ def _mode_iteration(H, h0, tgt, sc, tw, fr, mue, ntan, nd, coef, cosm, k, tm, th
     return -1
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _held_energy(H, h, nrm, S, m, C, y):  # pragma: no cover - compiled
     """``(1/2 h_S^T H_SS^+ h_S, rank)`` by a pivoted Cholesky factor of the Gram matrix
     of the held columns ``S[:m]`` (normalised by ``nrm``).

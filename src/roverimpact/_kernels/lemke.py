@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 
 from .._validation import STATUS_OK
-from ._jit import b1, boolean, f8, i8, kernel, ro, rw
+from ._jit import NJIT_OPTIONS, b1, boolean, f8, i8, kernel, ro, rw
 from .partition import factor  # the same checked Cholesky as the partition kernel
 
 #: kernel status codes beyond the mass-matrix codes of ``_validation`` (1..5)
@@ -35,7 +35,7 @@ _PIV = 1e-12  # smallest tableau entry accepted as a pivot (problem scaled to O(
 
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _lexless(T, i, si, j, sj, k, rhs, tol):  # pragma: no cover - compiled
     """Is row ``i`` (times ``si``) lexicographically smaller than row ``j`` (times ``sj``)?
 
@@ -58,7 +58,7 @@ def _lexless(T, i, si, j, sj, k, rhs, tol):  # pragma: no cover - compiled
     return False
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _pivot(T, r, c):  # pragma: no cover - compiled
     ncol = T.shape[1]
     k = T.shape[0]
@@ -75,7 +75,7 @@ def _pivot(T, r, c):  # pragma: no cover - compiled
     T[r, c] = 1.0
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def lcp_residual(G, q, z, k):  # pragma: no cover - compiled
     res = 0.0
     for i in range(k):
@@ -86,7 +86,7 @@ def lcp_residual(G, q, z, k):  # pragma: no cover - compiled
     return res
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _impulse_scaled_residual(G, q, z, k):  # pragma: no cover - compiled
     """:func:`lcp_residual` of ``q`` scaled to O(1), with ``w`` relative to
     ``s = max(1, max|z|)`` and ``z_i w_i`` to ``s^2`` (round-off of ``w`` grows with ``z``)."""
@@ -102,7 +102,7 @@ def _impulse_scaled_residual(G, q, z, k):  # pragma: no cover - compiled
     return res
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def relative_residual(G, q, z, k, usc):  # pragma: no cover - compiled
     """Residual of ``w = G z + q`` relative to the velocity scale ``usc`` (``sqrt(2T^-)``).
 
@@ -122,7 +122,7 @@ def relative_residual(G, q, z, k, usc):  # pragma: no cover - compiled
     return res
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def lemke(G, q, z, T, basis, S, A, rhs_s, zp, maxit):  # pragma: no cover - compiled
     """Solve ``w = G z + q >= 0, z >= 0, z.w = 0`` for a PSD ``G`` (k x k, k >= 1).
 
@@ -226,7 +226,7 @@ def lemke(G, q, z, T, basis, S, A, rhs_s, zp, maxit):  # pragma: no cover - comp
     return STATUS_OK
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _solve_sub(G, q, S, ns, A, rs, out):  # pragma: no cover - compiled
     """Solve ``G_SS x = -q_S`` (partial pivoting); False if singular."""
     for a in range(ns):
@@ -261,7 +261,7 @@ def _solve_sub(G, q, S, ns, A, rs, out):  # pragma: no cover - compiled
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def nnls_lcp(G, q, z, S, A, rs, sol, maxit):  # pragma: no cover - compiled
     """Lawson-Hanson active-set method for ``min 1/2 z^T G z + q^T z, z >= 0`` (PSD ``G``).
 
@@ -324,7 +324,7 @@ def nnls_lcp(G, q, z, S, A, rs, sol, maxit):  # pragma: no cover - compiled
     return 11
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _orth_append(Q, r, x, rtol):  # pragma: no cover - compiled
     """CGS2: orthogonalise unit vector ``x`` against ``Q[:, :r]``; append it if independent."""
     n = x.shape[0]
@@ -346,7 +346,7 @@ def _orth_append(Q, r, x, rtol):  # pragma: no cover - compiled
     return r + 1
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def scaled_lcp(G, qs, z, T, basis, S, A, rs, zp, maxit, thr):  # pragma: no cover - compiled
     """Lemke on ``q`` scaled to unit max norm; ``z`` returned in the units of ``qs``.
 

@@ -41,7 +41,7 @@ from .._validation import (
     STATUS_OK,
     SYM_RTOL,
 )
-from ._jit import boolean, f8, i8, kernel, ro, rw, shared
+from ._jit import NJIT_OPTIONS, boolean, f8, i8, kernel, ro, rw, shared
 
 _EPS = np.finfo(np.float64).eps
 # Reassociation lets LLVM vectorise the lane kernel's sums (SLP); no 'nnan'/'ninf': the
@@ -233,7 +233,7 @@ def partition_factored(
 OUT_T, OUT_TC, OUT_TA, OUT_RANK, OUT_STATUS, OUT_V = range(6)
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _failed(row, code):  # pragma: no cover - compiled
     """An output row of an item that fails its checks: the status, NaN energies, rank 0."""
     row[OUT_T] = row[OUT_TC] = row[OUT_TA] = np.nan

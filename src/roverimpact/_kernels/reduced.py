@@ -34,10 +34,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._jit import Kernel, f8, i8, ro, rw, types
+from ._jit import NJIT_OPTIONS, Kernel, f8, i8, ro, rw, types
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _forces(d, dd, k, n, a, c, f0, out):
     """Each row's force; a row at zero penetration and closing is in contact (the limit
     from inside: c dd for a damper, so that the first step of an impact sees it)."""
@@ -55,7 +55,7 @@ def _forces(d, dd, k, n, a, c, f0, out):
             out[i] = 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _deriv(G, b, k, n, a, c, f0, d, dd, f, acc):
     _forces(d, dd, k, n, a, c, f0, f)
     m = d.shape[0]
@@ -66,7 +66,7 @@ def _deriv(G, b, k, n, a, c, f0, d, dd, f, acc):
         acc[i] = -s
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _reduced_peak(G, b, k, n, a, c, f0, delta0, rate0, o, t_max, dt, out):
     """One item: out = (peak, t_peak, duration, ended)."""
     m = b.shape[0]
@@ -139,7 +139,7 @@ def _reduced_peak(G, b, k, n, a, c, f0, delta0, rate0, o, t_max, dt, out):
     out[3] = 1.0 if ended else 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _rhs(G, b, k, n, a, c, f0, y, m, f, out):
     """out = (dd, -(b + G f(d, dd))) for y = (d, dd)."""
     _forces(y[:m], y[m:], k, n, a, c, f0, f)
@@ -151,7 +151,7 @@ def _rhs(G, b, k, n, a, c, f0, y, m, f, out):
         out[m + i] = -s
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _lu(W, piv):
     """In-place LU with partial pivoting of the square W."""
     N = W.shape[0]
@@ -179,7 +179,7 @@ def _lu(W, piv):
                     W[i, q] -= f * W[j, q]
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _solve(W, piv, x):
     """x <- W^-1 x with the factors of :func:`_lu`."""
     N = W.shape[0]
@@ -201,7 +201,7 @@ def _solve(W, piv, x):
         x[i] = s / W[i, i] if W[i, i] != 0.0 else 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _reduced_peak_stiff(G, b, k, n, a, c, f0, delta0, rate0, o, t_max, h0, d_scale, tol,
                         out):
     """One item by the L-stable Rosenbrock pair of Shampine and Reichelt (MATLAB's ode23s,

@@ -22,10 +22,12 @@ import math
 import numpy as np
 from numba import njit
 
+from ._jit import NJIT_OPTIONS
+
 _EPS_OUT = 1e-9   # the grid's tolerance at its border, in cells (as HeightField._eval)
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _cr(t, w, dw, ddw):
     """Catmull-Rom weights of the samples j-1 .. j+2 (and derivatives) at fraction t."""
     t2 = t * t
@@ -44,7 +46,7 @@ def _cr(t, w, dw, ddw):
     ddw[3] = 0.5 * (6 * t - 2)
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _eval(zp, stride, nx, ny, x0, y0, dx, dy, x, y, out):
     """Height and derivatives at (x, y) into ``out`` = (h, hx, hy, hxx, hxy, hyy);
     False if the point is outside the grid."""
@@ -87,7 +89,7 @@ def _eval(zp, stride, nx, ny, x0, y0, dx, dy, x, y, out):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _refine(zp, stride, nx, ny, x0, y0, dx, dy, c0, c1, c2, e0, e1, e2, f0, f1, f2, rr,
             phis, k, g_start, n_scan, max_iter, out):
     """Safeguarded Newton on g'(phi) from scan index ``k`` in its neighbours' bracket:
@@ -128,7 +130,7 @@ def _refine(zp, stride, nx, ny, x0, y0, dx, dy, c0, c1, c2, e0, e1, e2, f0, f1, 
     return phi_best, g_best, True
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def hf_wheel_contact(zp, stride, nx, ny, x0, y0, dx, dy, C, A, r, n_scan, max_iter,
                      point, normal, gap, phi_out, ok):
     """Rim point of lowest clearance of each disc wheel above a height field.

@@ -24,7 +24,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
-from .._kernels._jit import b1, f8, i8, kernel, ro, rw
+from .._kernels._jit import NJIT_OPTIONS, b1, f8, i8, kernel, ro, rw
 from .._kernels.partition import factor, partition_factored, readonly
 from ._build import LinearLoopClosure
 from .constraints import GroundContact, LockedJoint, LoopClosure, PointContact
@@ -35,7 +35,7 @@ _NORMAL, _LONG, _LAT, _CONST = 0, 1, 2, 3
 _WHEEL, _POINT = 0, 1
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
               r_const, support, A):  # pragma: no cover - compiled
     """Fill ``A`` (m, nv).
@@ -104,7 +104,7 @@ def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact
                 A[row, j] = 0.0
 
 
-@njit(cache=True, nogil=True)
+@njit(**NJIT_OPTIONS)
 def _symmetrize(M):  # pragma: no cover - compiled
     """Copy the upper triangle of ``M`` (what ``pin.crba`` fills) to the lower one."""
     n = M.shape[0]
