@@ -107,3 +107,33 @@ def test_no_click_import():
     for path in SRC.rglob("*.py"):
         mods = {m for m, _ in _imports(path)}
         assert "click" not in mods, path
+
+
+# Standard-library modules newer than the oldest Python of ``requires-python`` (3.10), with the
+# version that brought them: each import must sit under ``if sys.version_info >= ...`` with a
+# fallback (``tomli`` for ``tomllib``), or come from a module that does (``_io.tomllib``).
+NEWER_STDLIB = {"tomllib": (3, 11)}
+
+
+def test_requires_python_matches_the_stdlib_imports():
+    """``roverimpact traverse-report`` imported ``tomllib`` bare inside a function: on
+    Python 3.10, which ``requires-python = ">=3.10"`` admits, it failed with
+    ModuleNotFoundError."""
+    floor = tuple(int(x) for x in re.findall(r"\d+", PYPROJECT["project"]["requires-python"]))
+    problems = []
+    for path in sorted(SRC.rglob("*.py")):
+        tree = ast.parse(path.read_text(), filename=str(path))
+        guarded = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.If) and "sys.version_info" in ast.unparse(node.test):
+                guarded.update(id(n) for stmt in node.body for n in ast.walk(stmt))
+        for node in ast.walk(tree):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0
+                     else [])
+            for name in names:
+                since = NEWER_STDLIB.get(name.split(".")[0])
+                if since and since > floor and id(node) not in guarded:
+                    problems.append(f"{path.relative_to(ROOT)}:{node.lineno}: imports {name} "
+                                    f"(Python >= {'.'.join(map(str, since))}) unguarded")
+    assert not problems, "\n".join(problems)

@@ -308,7 +308,7 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
     poses, wheels, segments, man, text = load_traverse_results(folder)
     check_writable(folder, folder=True, option=None)
     if config is None:
-        import tomllib
+        from .._io import tomllib  # tomli on Python 3.10
 
         if not text:
             raise ConfigError(f"{folder}: traverse.toml missing: cannot redraw the map")

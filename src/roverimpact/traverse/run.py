@@ -607,7 +607,7 @@ def config_fingerprint(text: str) -> str:
 
 
 def _write(res: TraverseResult, text: str | None, csv: bool) -> None:
-    import tomllib
+    from .._io import tomllib  # tomli on Python 3.10
 
     out = res.out_dir
     cfg = res.config
