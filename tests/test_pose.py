@@ -296,6 +296,32 @@ def test_underdetermined_gives_the_nearest_pose():
     np.testing.assert_allclose(prob.difference(guess, pose.q), ref.x, atol=1e-6)
 
 
+@pytest.mark.parametrize("z0", [-4500.0, 20.0, 1500.0])
+def test_terrain_at_an_absolute_elevation(z0, mars):
+    """A DEM in absolute elevations (Mars's datum at -4500 m, a test site at 1500 m) is
+    the same terrain raised by z0: the pose from the nominal guess is the pose on the
+    terrain at 0 raised by z0 (translation invariance), for a determined problem
+    (rocker-bogie on rough ground) and an underdetermined one (rover2d with struts: the
+    nearest pose, which must not be pulled towards a guess z0 away). Before, the steps of
+    0.25 m ran out (1500 m: "did not converge in 50 steps")."""
+    raised = HeightField(mars.z + z0, (mars.dx, mars.dy), (mars.x0, mars.y0))
+    rb = rocker_bogie()
+    guess = place(rb, 1.5, -0.7, yaw=0.4)
+    low, high = (pose_on_terrain(rb, t, guess) for t in (mars, raised))
+    np.testing.assert_allclose(high.q - low.q, np.eye(rb.model.nq)[2] * z0, atol=1e-8)
+    assert np.abs(high.gap).max() < 1e-9
+    rv = rover2d(suspension="prismatic")
+    waves = _waves()
+    up = FunctionTerrain(lambda x, y: waves.height(x, y) + z0)
+    guess = place(rv, 0.7)
+    jz = rv.model.joints[rv.model.getJointId("base_z")].idx_q
+    # the guess at its height above the terrain (mean gap 0): the raised terrain's guess
+    # is moved by z0 exactly, and the nearest pose to it is the nearest pose raised
+    guess[jz] -= PoseProblem(rv, waves).evaluate(guess, jacobian=False)[0][:2].mean()
+    low, high = (pose_on_terrain(rv, t, guess) for t in (waves, up))
+    np.testing.assert_allclose(high.q - low.q, np.eye(rv.model.nq)[jz] * z0, atol=1e-8)
+
+
 # ------------------------------------------------------------------ file models
 @pytest.mark.parametrize("mbm", [rocker_bogie(), rover2d(suspension="rocker")],
                          ids=["rocker_bogie", "rover2d"])

@@ -60,6 +60,24 @@ def test_uniform_slope_velocity_is_a_translation_along_it():
         float(ri.energy_of(ri.Scenario.model_validate(RV)).T), rel=1e-9)
 
 
+@pytest.mark.parametrize("base", [RB, RV], ids=["rocker_bogie", "rover2d"])
+def test_terrain_at_an_absolute_elevation_is_the_same_impact(base, tmp_path):
+    """Ground raised by 1500 m (a DEM in absolute elevations, as a .npy file) or a plane
+    20 m up: the same impact as on the ground at 0 (translation invariance: M, the rows
+    and the velocity do not change). Before, the rover was not placed ("did not converge
+    in 50 steps") since its nominal pose was 20 m or 1500 m off the ground."""
+    want = _T(base)
+    assert _T({**base, "terrain": {"plane": {"point": [0.0, 0.0, 20.0]}}}) == pytest.approx(
+        want, rel=1e-9)
+    x = np.arange(-3.0, 3.0 + 1e-9, 0.1)
+    np.save(tmp_path / "dem.npy", np.full((41, x.size), 1500.0))
+    path = tmp_path / "sc.toml"
+    _write(path, {**base, "terrain": {"file": "dem.npy", "spacing": 0.1,
+                                      "origin": [-3.0, -2.0]}})
+    assert float(ri.energy_of(ri.load_scenario(path)).T_c_minus) == pytest.approx(
+        want, rel=1e-9)
+
+
 def _plane_h(x, y):
     return np.tan(SLOPE) * np.asarray(x) + 0.0 * np.asarray(y)
 

@@ -97,6 +97,9 @@ _BASE_PLANAR = ("base_z", "base_pitch")
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 #: largest step of one iteration in any coordinate [m or rad]
 _MAX_STEP = 0.25
+#: a guess whose chosen wheels are on average farther than this above or below the terrain
+#: [m] is first moved vertically onto it (four capped steps; a DEM's absolute elevations)
+_FAR = 4 * _MAX_STEP
 #: statuses solved again from other starts (``restarts`` of :func:`pose_on_terrain`)
 _RESTARTED = ("stalled", "max_iter", "infeasible")
 _RESTART_SEED = 0
@@ -566,7 +569,10 @@ def pose_on_terrain(mbm: MultibodyModel, terrain: Terrain, q_guess=None, *, whee
     q_guess : (..., nq) array_like, optional
         Start and the coordinates that are kept: the base's x, y and yaw (the caller
         places the rover; see :func:`place`), wheel spins, fixed joints. Default: the
-        model's ``params["q_nominal"]`` (or Pinocchio's neutral configuration).
+        model's ``params["q_nominal"]`` (or Pinocchio's neutral configuration). A guess
+        whose chosen wheels are on average more than 1 m above or below the terrain (the
+        nominal pose over a DEM in absolute elevations) is first moved vertically by that
+        mean gap, if ``base_z`` is solved for.
     wheels : sequence of str, optional
         The wheels that must touch (default: every wheel).
     fixed : sequence of str
@@ -618,7 +624,7 @@ def pose_on_terrain(mbm: MultibodyModel, terrain: Terrain, q_guess=None, *, whee
     Qg = np.array([prob.normalize(q) for q in q_guess.reshape(-1, prob.model.nq)])
     k = Qg.shape[0]
     Q, r, gap, point, normal, status, steps, rank = _gauss_newton(prob, Qg, Qg.copy(), tol,
-                                                                  max_iter)
+                                                                  max_iter, lift=True)
     again = np.flatnonzero(np.isin(status, _RESTARTED))
     if restarts and again.size:
         # local minima of |r| where a wheel's lowest rim point jumps between two places
@@ -660,13 +666,29 @@ def pose_on_terrain(mbm: MultibodyModel, terrain: Terrain, q_guess=None, *, whee
 
 
 def _gauss_newton(prob: PoseProblem, Qg: np.ndarray, Q: np.ndarray, tol: float,
-                  max_iter: int):
+                  max_iter: int, lift: bool = False):
     """Gauss-Newton with backtracking from the starts ``Q`` (k, nq) towards the guesses
     ``Qg`` (the null-space pull); returns ``Q, r, gap, point, normal, status, steps,
-    rank`` (status without ``"penetration"``)."""
+    rank`` (status without ``"penetration"``).
+
+    ``lift``: a start whose chosen wheels are on average more than ``_FAR`` above or
+    below the terrain is first moved vertically by that mean gap, and its guess with it
+    (``Qg`` is changed in place): the steps are capped at ``_MAX_STEP``, and the nominal
+    pose over a terrain in absolute elevations (a DEM at 1500 m) ran out of steps."""
     k, nx = Qg.shape[0], prob.nx
     r, J, wc = prob.evaluate(Q)
     gap, point, normal = wc.gap.copy(), wc.point.copy(), wc.normal.copy()
+    if lift and "base_z" in prob.names:
+        mean = r[:, :prob._ic.size].mean(axis=1)
+        far = np.flatnonzero(np.abs(mean) > _FAR)
+        if far.size:
+            dz = np.zeros(nx)
+            iz = prob.names.index("base_z")
+            for i in far:
+                dz[iz] = -mean[i]
+                Q[i] = Qg[i] = prob.step(Q[i], dz)
+            r[far], J[far], wcf = prob.evaluate(Q[far])
+            gap[far], point[far], normal[far] = wcf.gap, wcf.point, wcf.normal
     normr = np.linalg.norm(r, axis=1)
     status = np.full(k, "run", dtype=object)
     steps = np.zeros(k, dtype=int)
