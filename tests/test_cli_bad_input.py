@@ -56,6 +56,13 @@ def _write_inputs(d: Path) -> None:
         "system.csv": "x",
         # scenarios (energy, draw, simulate)
         "beta120.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='front'\nbeta_deg=120\n",
+        # a terrain function that raises, or is written with math (scalars only)
+        "terrain_raise.py": "def h(x, y):\n    raise RuntimeError('no data here')\n",
+        "terrain_math.py": "import math\ndef h(x, y):\n    return 0.1 * math.sin(x)\n",
+        "terrain_raise.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='front'\n"
+                              "beta_deg=45\n[terrain]\nfunction='terrain_raise.py:h'\n",
+        "terrain_math.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='front'\n"
+                             "beta_deg=45\n[terrain]\nfunction='terrain_math.py:h'\n",
         "normal0.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='front'\n"
                         "normal=[0,0,0]\n",
         "wheel.toml": "[model]\nname='rover2d'\n[obstacle]\nwheel='nose'\nbeta_deg=10\n",
@@ -314,6 +321,9 @@ CASES = [
     ("energy-missing", ["energy", "{d}/nope.toml"], [], "no such file", None),
     ("energy-folder", ["energy", "{d}"], [], "a folder, not a file", None),
     ("energy-beta", ["energy", "{d}/beta120.toml"], [], "beta_deg", None),
+    ("energy-terrain-raises", ["energy", "{d}/terrain_raise.toml"], [],
+     "terrain function failed on an array of", None),
+    ("energy-terrain-math", ["energy", "{d}/terrain_math.toml"], [], "not math.sin", None),
     ("energy-normal", ["energy", "{d}/normal0.toml"], [], "non-zero", None),
     ("energy-wheel", ["energy", "{d}/wheel.toml"], [], "unknown wheel", None),
     ("energy-coulomb-all", ["energy", "{d}/coulomb_all.toml"], [],

@@ -441,6 +441,10 @@ def test_bad_input():
     small = HeightField(np.zeros((3, 3)), 0.1)
     with pytest.raises(InputError, match="leaves the terrain"):
         pose_on_terrain(rv, small)
+    # a terrain function that fails is named as such, not as a wheel off the terrain
+    with pytest.raises(InputError, match=r"^pose_on_terrain: wheel_ground_contact: terrain "
+                                         r"function is not finite"):
+        pose_on_terrain(rv, FunctionTerrain(lambda x, y: np.nan * x))
     with pytest.raises(InputError, match="y and yaw must be 0"):
         place(rv, 0.0, 1.0)
     for bad in (-1, 1.5, True, "8"):

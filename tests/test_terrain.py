@@ -184,6 +184,19 @@ def test_bad_terrain_inputs():
         FunctionTerrain(lambda x, y: np.zeros(3)).height(np.zeros(4), 0)
     with pytest.raises(InputError, match="not finite at"):
         FunctionTerrain(lambda x, y: np.where(x > 0, x, np.nan)).height(np.array([-1.0, 1.0]), 0)
+    # a user's function that raises (or takes scalars only) is an InputError, not its own
+    # exception: the CLI prints InputErrors in one line
+    import math
+
+    def boom(x, y):
+        raise RuntimeError("no data")
+    for t in (FunctionTerrain(boom), FunctionTerrain(lambda x, y: math.sin(x)),
+              FunctionTerrain(lambda x, y: x + y, grad=boom),
+              FunctionTerrain(lambda x, y: x + y, grad=lambda x, y: None)):
+        with pytest.raises(InputError, match=r"terrain (function|gradient) failed on an "
+                                             r"array of 2 points \((RuntimeError|TypeError|"
+                                             r"ValueError)"):
+            t.normal(np.array([0.1, 0.2]), 0.0)
 
 
 def test_function_terrain_numerical_derivatives():

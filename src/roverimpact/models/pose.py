@@ -88,7 +88,7 @@ import pinocchio as pin
 from ..exceptions import InputError, ModelError, SolverError
 from .base import MultibodyModel
 from .declare import base_info
-from .terrain import Terrain, WheelContact, wheel_ground_contact, wheel_terrains
+from .terrain import HeightField, Terrain, WheelContact, wheel_ground_contact, wheel_terrains
 
 __all__ = ["PoseError", "PoseProblem", "TerrainPose", "place", "pose_on_terrain", "wheel_contacts"]
 
@@ -478,7 +478,7 @@ class PoseProblem:
         try:
             wc = _contacts(self._groups, C, Ax, self.radii)
         except InputError as exc:
-            raise InputError(f"pose_on_terrain: a wheel leaves the terrain ({exc})") from None
+            raise InputError(f"pose_on_terrain: {exc}") from None
         g = wc.point[:, ic, 2] - wc.ground[:, ic, 2]
         r = np.concatenate([g, phi], axis=1)
         J = None
@@ -498,16 +498,26 @@ class PoseProblem:
         return r.reshape(*batch, r.shape[1]), J, wc
 
 
+def _contact(terrain, C, Ax, radii) -> WheelContact:
+    """:func:`wheel_ground_contact`; a height field's only error is a rim off the grid."""
+    try:
+        return wheel_ground_contact(terrain, C, Ax, radii)
+    except InputError as exc:
+        if isinstance(terrain, HeightField):
+            raise InputError(f"a wheel leaves the terrain ({exc})") from None
+        raise
+
+
 def _contacts(groups, C, Ax, radii) -> WheelContact:
     """:func:`wheel_ground_contact` of every wheel (``C``, ``Ax``: (k, n_wheels, 3)), each
     on its own terrain: one call per distinct terrain."""
     if len(groups) == 1:
-        return wheel_ground_contact(groups[0][0], C, Ax, radii)
+        return _contact(groups[0][0], C, Ax, radii)
     k, nw = C.shape[:2]
     out = {f: np.empty((k, nw, 3)) for f in ("point", "ground", "normal")}
     out |= {f: np.empty((k, nw)) for f in ("gap", "phi")}
     for t, ix in groups:
-        wc = wheel_ground_contact(t, C[:, ix], Ax[:, ix], radii[ix])
+        wc = _contact(t, C[:, ix], Ax[:, ix], radii[ix])
         for f in out:
             out[f][:, ix] = getattr(wc, f)
     return WheelContact(**out)

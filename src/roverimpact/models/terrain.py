@@ -559,6 +559,14 @@ class HeightField(Terrain):
         return cls._from_loaded(z[::-1], path, (sx, sy), (x0, y_last), **kw)
 
 
+def _failed(what: str, x: np.ndarray, exc: Exception) -> InputError:
+    """The error of a user's terrain function (or gradient) that raised on ``x``."""
+    return InputError(f"terrain {what} failed on an array of {x.size} points "
+                      f"({type(exc).__name__}: {exc}); it is called with numpy arrays x, y "
+                      "(write it with numpy: np.sin, not math.sin) and must return numbers "
+                      "of their shape")
+
+
 class FunctionTerrain(Terrain):
     r"""A terrain given by a vectorised function ``f(x, y) -> z``.
 
@@ -592,7 +600,10 @@ class FunctionTerrain(Terrain):
         self.resolution = float(resolution)
 
     def _call(self, fn, x, y, what: str):
-        z = np.asarray(fn(x, y), dtype=float)
+        try:
+            z = np.asarray(fn(x, y), dtype=float)
+        except Exception as exc:  # the user's function: say which and why, no traceback
+            raise _failed(what, x, exc) from None
         if z.shape != x.shape:
             try:
                 z = np.broadcast_to(z, x.shape).copy()
@@ -607,9 +618,12 @@ class FunctionTerrain(Terrain):
 
     def _g(self, x, y):
         if self._grad is not None:
-            g = self._grad(x, y)
-            return (self._call(lambda *_: g[0], x, y, "gradient"),
-                    self._call(lambda *_: g[1], x, y, "gradient"))
+            try:
+                gx, gy = self._grad(x, y)
+            except Exception as exc:
+                raise _failed("gradient", x, exc) from None
+            return (self._call(lambda *_: gx, x, y, "gradient"),
+                    self._call(lambda *_: gy, x, y, "gradient"))
         s = self.step
         f = self._f
         return ((self._call(f, x + s, y, "function") - self._call(f, x - s, y, "function"))
