@@ -164,6 +164,17 @@ def test_terrain_errors_are_named(tmp_path):
     with pytest.raises(ValueError, match="one of"):
         ri.Scenario.model_validate({**RB, "terrain": {"file": "x.npy", "spacing": 0.1,
                                                        "function": "m:h"}})
+    # keys that would be ignored: a GeoTIFF's own spacing and origin, an origin without a
+    # height-field file (before, silently: the terrain was not where the user put it)
+    for terrain, word in (({"file": "dem.tif", "spacing": 0.5}, "terrain.spacing: a GeoTIFF"),
+                          ({"file": "dem.TIFF", "origin": [100.0, 0.0]},
+                           "terrain.origin: a GeoTIFF"),
+                          ({"function": "m:h", "origin": [1.0, 2.0]},
+                           "terrain.origin applies to a height-field file only"),
+                          ({"plane": {"normal": UP}, "origin": [1.0, 2.0]},
+                           "terrain.origin applies")):
+        with pytest.raises(ValueError, match=word):
+            ri.Scenario.model_validate({**RB, "terrain": terrain})
     with pytest.raises(ConfigError, match="cannot import 'no_such_module_here'"):
         _T({**RB, "terrain": {"function": "no_such_module_here:h"}})
     # a rigid 2-D rover (wheelbase 0.6 m) cannot stand on planes 2 m apart in height

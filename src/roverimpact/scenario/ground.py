@@ -74,7 +74,9 @@ def _base_terrain(spec: TerrainSpec):
         if not Path(f).is_file():
             raise ConfigError(f"terrain.file {f!r}: {no_file(Path(f))}")
         suffix = Path(f).suffix.lower()
-        kw = {} if spec.spacing is None else {"spacing": spec.spacing, "origin": spec.origin}
+        kw = {} if spec.spacing is None else {
+            "spacing": spec.spacing,
+            "origin": spec.origin if spec.origin is not None else (0.0, 0.0)}
         if suffix == ".npy":
             return HeightField.from_npy(f, **kw)
         if suffix == ".csv":

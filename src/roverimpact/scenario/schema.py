@@ -496,7 +496,8 @@ class TerrainSpec(StrictModel):
 
     One of ``plane`` (``{point, normal}``), ``file`` (a height field: ``.npy``, ``.csv``
     or ``.tif``/``.tiff`` GeoTIFF, with ``spacing`` [m] (one number or ``[dx, dy]``) and
-    ``origin`` [m] of its first node; rows are y, columns x, see docs/terrain.md) or
+    ``origin`` [m] of its first node, default (0, 0); rows are y, columns x, see
+    docs/terrain.md; a GeoTIFF carries its own spacing and origin: giving them is refused) or
     ``function`` (a vectorised ``h(x, y)`` [m]: ``"package.module:name"`` importable, or
     ``"file.py:name"`` relative to the scenario's folder); else the plane z = 0.
     ``wheels``: a plane of its own under some wheels (:class:`WheelGroundSpec`), the
@@ -513,7 +514,7 @@ class TerrainSpec(StrictModel):
     plane: PlaneSpec | None = None
     file: str | None = None
     spacing: float | tuple[float, float] | None = None
-    origin: tuple[float, float] = (0.0, 0.0)
+    origin: tuple[float, float] | None = None
     function: str | None = None
     wheels: dict[str, WheelGroundSpec] = Field(default_factory=dict)
     pose: bool = True
@@ -528,8 +529,15 @@ class TerrainSpec(StrictModel):
         if self.file is not None and self.spacing is None and not self.file.lower().endswith(
                 (".tif", ".tiff")):
             raise ValueError("terrain.file needs spacing (the grid step, m)")
-        if self.spacing is not None and self.file is None:
-            raise ValueError("terrain.spacing applies to a height-field file only")
+        for key in ("spacing", "origin"):
+            if getattr(self, key) is not None and self.file is None:
+                raise ValueError(f"terrain.{key} applies to a height-field file only")
+        if self.file is not None and self.file.lower().endswith((".tif", ".tiff")):
+            given = [k for k in ("spacing", "origin") if getattr(self, k) is not None]
+            if given:
+                raise ValueError(f"terrain.{' and terrain.'.join(given)}: a GeoTIFF "
+                                 f"({self.file!r}) carries its own grid spacing and origin "
+                                 "(they would be ignored): remove them")
         sp = np.atleast_1d(np.asarray(self.spacing if self.spacing is not None else 1.0, float))
         if not np.all(sp > 0.0):
             raise ValueError(f"terrain.spacing must be > 0 m, got {self.spacing}")
