@@ -243,6 +243,15 @@ def test_npy_and_csv_round_trip(tmp_path):
     (b"\x89PNG\r\n\x1a\n\x00\xff", r"not a text CSV file"),
     ("1,2,3\n", r"at least 2 x 2"),
     ("", r"empty"),
+    # numpy.savetxt's default (spaces), semicolons, tabs: the separator named, in one
+    # short line (before: the whole first line quoted as a cell that "is not a number")
+    (" ".join(["1.000000000000000000e+00"] * 40) + "\n" + " ".join(["2.0"] * 40) + "\n",
+     r"line 1: the values are separated by spaces, not ','.{0,150}$"),
+    ("1;2;3\n4;5;6\n", r"separated by semicolons, not ','"),
+    ("1\t2\t3\n4\t5\t6\n", r"separated by tabs, not ','"),
+    ("1,2,3,\n4,5,6,\n", r"line 1, column 4: the cell is empty \(a ',' at the end of the line"),
+    ("1,,3\n4,5,6\n", r"line 1, column 2: the cell is empty$"),
+    ("x" * 100 + "\n1\n", r"line 1, column 1: 'x{37}\.\.\.' is not a number"),
 ])
 def test_bad_csv(tmp_path, text, match):
     p = tmp_path / "bad.csv"

@@ -436,8 +436,24 @@ class HeightField(Terrain):
                 try:
                     float(cell)
                 except ValueError:
+                    sep = _other_separator(cell) if len(row) == 1 else None
+                    if sep is not None:
+                        raise ConfigError(
+                            f"height field {path}, line {lineno}: the values are separated "
+                            f"by {sep}, not {delimiter!r}: a CSV grid has one row per line "
+                            f"and its values separated by {delimiter!r} (numpy.savetxt(path, "
+                            f"z, delimiter={delimiter!r}) writes one)") from None
+                    text = cell.strip()
+                    if len(text) > 40:
+                        text = text[:37] + "..."
+                    if text:
+                        what = f"{text!r} is not a number"
+                    elif col == len(row):
+                        what = f"the cell is empty (a {delimiter!r} at the end of the line?)"
+                    else:
+                        what = "the cell is empty"
                     raise ConfigError(f"height field {path}, line {lineno}, column {col}: "
-                                      f"{cell.strip()!r} is not a number") from None
+                                      f"{what}") from None
             if width is None:
                 width, first = len(row), lineno
             elif len(row) != width:
@@ -557,6 +573,20 @@ class HeightField(Terrain):
         cls._check_finite(z, path, lambda r, c: f"row {r}, column {c} (from 0, row 0 at the "
                           "top of the file)")
         return cls._from_loaded(z[::-1], path, (sx, sy), (x0, y_last), **kw)
+
+
+def _other_separator(cell: str) -> str | None:
+    """The separator of a CSV line read as one cell: ``cell`` split by semicolons, tabs
+    or spaces into two or more numbers (``numpy.savetxt``'s default is a space), or None."""
+    for sep, name in ((";", "semicolons"), ("\t", "tabs"), (None, "spaces")):
+        parts = cell.strip().split(sep)
+        if len(parts) > 1:
+            try:
+                [float(p) for p in parts]
+            except ValueError:
+                continue
+            return name
+    return None
 
 
 def _failed(what: str, x: np.ndarray, exc: Exception) -> InputError:
