@@ -636,18 +636,25 @@ def test_geometry_against_brute_force_on_rocky_terrain():
 
 
 @pytest.mark.parametrize("field", ["smooth", "rocky"])
-def test_lowest_rim_point_is_the_global_minimum(field):
+@pytest.mark.parametrize(("r", "atol"), [(0.1, 1e-7), (0.3, 1e-4)])
+def test_lowest_rim_point_is_the_global_minimum(field, r, atol):
     """2000 random wheels (tilted up to 0.3 rad, 2 cm above or into the ground): the
     clearance found is never above the minimum over 4001 rim angles of the lower half
     rim beyond that scan's own sampling error (about 1e-8 m). Refining only the lowest
     of 16 samples missed the deeper of two basins for 5 in 4000 of these wheels on the
-    smooth field, by up to 0.21 mm."""
+    smooth field, by up to 0.21 mm.
+
+    A wheel of r = 0.3 m (a Curiosity-size rover) on the 5 cm grid: a fixed scan of 24
+    angles (3.9 cm along the rim) stepped over narrow basins, 13 of 2000 wheels missed
+    by up to 2.2 mm on the rocky field (1.1 mm on the smooth one), the normal taken up to
+    29 deg off. With the scan step at most a third of the spacing the misses left are
+    near-ties of two rim points (0.008 / 0.041 mm): atol 0.1 mm."""
     T = (synthetic_mars((6.0, 6.0), 0.05, seed=1215, rms=0.08, corner_wavelength=3.0,
                         rock_abundance=1e-6, origin=(-3.0, -3.0)) if field == "smooth"
          else synthetic_mars((6.0, 6.0), 0.05, seed=3, rock_abundance=0.2, d_max=0.5,
                              origin=(-3.0, -3.0)))
     rng = np.random.default_rng(1)
-    n, r = 2000, 0.1
+    n = 2000
     c = np.column_stack([rng.uniform(-2.5, 2.5, n), rng.uniform(-2.5, 2.5, n), np.zeros(n)])
     c[:, 2] = T.height(c[:, 0], c[:, 1]) + r + rng.uniform(-0.02, 0.02, n)
     yaw, tilt = rng.uniform(-np.pi, np.pi, n), rng.uniform(-0.3, 0.3, n)
@@ -660,7 +667,7 @@ def test_lowest_rim_point_is_the_global_minimum(field):
     p = c[:, None] + r * (-np.cos(ph)[:, None] * e[:, None] + np.sin(ph)[:, None] * f[:, None])
     brute = (p[..., 2] - T.height(p[..., 0], p[..., 1])).min(axis=1)
     ours = wc.point[:, 2] - wc.ground[:, 2]
-    assert (ours <= brute + 1e-7).all(), np.max(ours - brute)
+    assert (ours <= brute + atol).all(), np.max(ours - brute)
 
 
 # --------------------------------------------------------------------------- synthetic terrain

@@ -801,8 +801,13 @@ def _rim(c, r, e, f, phi):
 
 #: scan minima refined per wheel by :func:`wheel_ground_contact`
 N_BASINS = 2
-#: scan intervals over the half rim of :func:`wheel_ground_contact` (7.5 degrees)
+#: scan intervals over the half rim of :func:`wheel_ground_contact` (7.5 degrees), at least
 N_SCAN = 24
+#: ... and enough that the scan's step along the rim is at most the terrain's resolution
+#: over this (a rim of 0.25 to 0.4 m on a 5 cm grid missed basins narrower than the step)
+SCAN_PER_CELL = 3.0
+#: most scan intervals (a fine grid under a large wheel)
+N_SCAN_MAX = 512
 
 
 def _refine(terrain, phis, k, g_start, c, r, e, f, max_iter):
@@ -923,7 +928,12 @@ def wheel_ground_contact(terrain: Terrain, centre, axis, radius, *, n_scan: int 
     radius : float or (...) array_like
         Rim radii [m].
     n_scan : int
-        Scan intervals over the half rim (default 24, i.e. 7.5 degrees).
+        Scan intervals over the half rim, at least (default 24, i.e. 7.5 degrees). On a
+        terrain of finite ``resolution`` (a height field's spacing) raised so that the
+        step along the rim, :math:`\pi r / n`, is at most a third of it (up to 512
+        intervals): a scan of 24 on a 5 cm grid missed a deeper basin of the clearance
+        for 6 in 1000 wheels of radius 0.3 m, by up to 2.2 mm, taking the normal 29 deg
+        off (``tests/test_terrain.py::test_lowest_rim_point_is_the_global_minimum``).
     max_iter : int
         Newton iterations (converges in 3 to 6 on smooth terrain).
 
@@ -938,6 +948,11 @@ def wheel_ground_contact(terrain: Terrain, centre, axis, radius, *, n_scan: int 
     a :class:`HeightField` has none), the normal is that of one side of it.
     """
     batch, n, c, a, r, e, f = wheel_planes(centre, axis, radius)
+    n_scan = int(n_scan)
+    res = getattr(terrain, "resolution", np.inf)
+    if n and np.isfinite(res):
+        step = res / SCAN_PER_CELL
+        n_scan = max(n_scan, min(int(np.ceil(np.pi * float(r.max()) / step)), N_SCAN_MAX))
     if isinstance(terrain, HeightField) and n:
         fast = _compiled_contact(terrain, c, a, r, int(n_scan), int(max_iter), batch)
         if fast is not None:
