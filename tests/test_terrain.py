@@ -199,6 +199,18 @@ def test_bad_terrain_inputs():
             t.normal(np.array([0.1, 0.2]), 0.0)
 
 
+def test_function_terrain_slopes_in_projected_coordinates():
+    """A plane written in UTM coordinates (x, y ~ 4e6 m): the central difference divides by
+    the steps as rounded, so its slopes are the plane's (0.1, 0.05) to 1e-9; dividing by
+    2 x 1e-6 m made them 2.3e-5 off."""
+    X0 = 4.0e6
+    t = FunctionTerrain(lambda x, y: 0.1 * (x - X0) + 0.05 * (y - X0))
+    rng = np.random.default_rng(0)
+    x, y = X0 + rng.uniform(0, 10, 1000), X0 + rng.uniform(0, 10, 1000)
+    np.testing.assert_allclose(t.gradient(x, y), np.broadcast_to([0.1, 0.05], (1000, 2)),
+                               rtol=0, atol=1e-9)
+
+
 def test_function_terrain_numerical_derivatives():
     """Central differences against the analytic gradient and Hessian of a smooth surface."""
     def f(x, y):

@@ -656,10 +656,13 @@ class FunctionTerrain(Terrain):
                     self._call(lambda *_: gy, x, y, "gradient"))
         s = self.step
         f = self._f
-        return ((self._call(f, x + s, y, "function") - self._call(f, x - s, y, "function"))
-                / (2 * s),
-                (self._call(f, x, y + s, "function") - self._call(f, x, y - s, "function"))
-                / (2 * s))
+        # divided by the steps as rounded: at x = 4e6 m (UTM) x + 1e-6 is off by up to
+        # 5e-10 m, which made the slope 2e-4 of itself wrong when divided by 2 s
+        xp, xm, yp, ym = x + s, x - s, y + s, y - s
+        return ((self._call(f, xp, y, "function") - self._call(f, xm, y, "function"))
+                / (xp - xm),
+                (self._call(f, x, yp, "function") - self._call(f, x, ym, "function"))
+                / (yp - ym))
 
     def _eval(self, x, y, order):
         h = self._call(self._f, x, y, "function")
