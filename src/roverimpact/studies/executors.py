@@ -16,7 +16,7 @@ import sys
 import threading
 import time
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from typing import Any
@@ -33,6 +33,7 @@ __all__ = [
     "CLUSTER_CONFIG",
     "CLUSTER_START_S",
     "START_METHODS",
+    "WORKERS_WAIT_S",
     "WORKER_ENVIRON",
     "ChunkFile",
     "LazyCluster",
@@ -59,8 +60,28 @@ CLUSTER_START_S = {"fork": 1.5, "forkserver": 6.0, "spawn": 6.0}
 CLUSTER_RUNNING_S = 0.5
 
 
-def check_scheduler(address: str, timeout: float = 3.0) -> str:
-    """Check that ``tcp://HOST:PORT`` is a well-formed, reachable address."""
+#: How long [s] a command waits for a first worker to join a running scheduler that has
+#: none (a batch job may start the scheduler, the workers and the command together)
+WORKERS_WAIT_S = 60.0
+
+
+def check_scheduler(address: str, timeout: float = 3.0, *, workers_wait: float = WORKERS_WAIT_S,
+                    note: Callable[[str], None] | None = None) -> str:
+    """Check that ``tcp://HOST:PORT`` is a well-formed address where a Dask scheduler
+    answers, with at least one worker; return it normalised.
+
+    The scheduler is asked who it is (Dask's ``identity``), each step within ``timeout``:
+    a port that accepts connections but is not a scheduler's (its dashboard's HTTP port,
+    a worker's, another server's) otherwise hung Dask's client for ever, or ended in a
+    MemoryError (it read the server's bytes as a frame length). A scheduler without
+    workers would hold the tasks for ever: ``note`` says the command waits, and after
+    ``workers_wait`` seconds without a worker it stops.
+
+    Raises
+    ------
+    ConfigError
+        Malformed address, nothing listening, not a Dask scheduler, no worker.
+    """
     url = urlparse(address if "://" in address else f"tcp://{address}")
     if url.scheme not in ("tcp", "tls") or not url.hostname or not url.port:
         raise ConfigError(
@@ -75,7 +96,63 @@ def check_scheduler(address: str, timeout: float = 3.0) -> str:
             f"cannot reach the Dask scheduler at {address} ({exc.strerror or exc}); start "
             "one with `dask scheduler` and check host, port and firewall"
         ) from None
-    return f"{url.scheme}://{url.hostname}:{url.port}"
+    norm = f"{url.scheme}://{url.hostname}:{url.port}"
+    who = _identity(norm, timeout)
+    if who.get("type") != "Scheduler":
+        what = ("a Dask worker (its scheduler is "
+                f"{who.get('scheduler')})" if who.get("type") == "Worker"
+                else "not a Dask scheduler: no answer to Dask's handshake")
+        raise ConfigError(
+            f"{address} is {what}; give the address `dask scheduler` prints "
+            "(tcp://HOST:PORT, usually port 8786, not the dashboard's)")
+    if not who.get("workers"):
+        if note is not None:
+            note(f"the Dask scheduler at {norm} has no worker yet: waiting up to "
+                 f"{workers_wait:.0f} s for one (start them with `dask worker {norm}`)")
+        end = time.monotonic() + workers_wait
+        while not who.get("workers"):
+            if time.monotonic() >= end:
+                raise ConfigError(
+                    f"no worker joined the Dask scheduler at {norm} in {workers_wait:.0f} s: "
+                    f"start them with `dask worker {norm}` (nothing was computed)")
+            time.sleep(min(0.5, max(end - time.monotonic(), 0.0)))
+            who = _identity(norm, timeout)
+    return norm
+
+
+def _identity(address: str, timeout: float) -> dict:
+    """The answer of the Dask server at ``address`` to ``identity``, each step within
+    ``timeout`` seconds; ``{}`` when it does not answer as a Dask server. Run on a thread
+    of its own (its own event loop: the caller may be in one, a notebook's)."""
+    import asyncio
+
+    from distributed.comm import connect
+    from distributed.security import Security
+
+    args = Security().get_connection_args("client")  # tls:// as Dask's config sets it
+
+    async def ask() -> dict:
+        comm = await asyncio.wait_for(connect(address, timeout=timeout, **args), timeout)
+        try:
+            await asyncio.wait_for(comm.write({"op": "identity", "reply": True}), timeout)
+            return await asyncio.wait_for(comm.read(), timeout)
+        finally:
+            comm.abort()
+
+    out: dict = {}
+
+    def run() -> None:
+        try:
+            reply = asyncio.run(ask())
+        except BaseException:  # any failure means: not a Dask server
+            return
+        if isinstance(reply, dict):
+            out.update(reply)
+
+    t = threading.Thread(target=run, daemon=True, name="roverimpact-dask-identity")
+    t.start()
+    t.join(4 * timeout + 1.0)
+    return out
 
 
 def need_dask() -> None:

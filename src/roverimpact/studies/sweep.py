@@ -304,7 +304,7 @@ def run_study(
     prep = prepare_study(study, evaluator=evaluator, chunk_size=chunk_size)
     if scheduler is not None:
         need_dask()
-        scheduler = check_scheduler(scheduler)
+        scheduler = check_scheduler(scheduler, note=note)
     elif workers is not None:
         need_dask()
     out_dir = Path(out_dir)

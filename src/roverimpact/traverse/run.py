@@ -517,7 +517,7 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         raise ConfigError("give --workers (a local cluster) or --scheduler, not both")
     if scheduler is not None:
         need_dask()
-        scheduler = check_scheduler(scheduler)
+        scheduler = check_scheduler(scheduler, note=note)
     elif workers is not None:
         need_dask()
         worker_start_method()  # a bad ROVERIMPACT_WORKER_START fails before any work

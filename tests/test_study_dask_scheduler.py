@@ -1,0 +1,86 @@
+"""--scheduler: a running Dask cluster started by the user (``dask scheduler``, ``dask
+worker``): what the command says when the address is not a usable scheduler's."""
+
+from __future__ import annotations
+
+import http.server
+import threading
+import time
+
+import pytest
+
+from roverimpact.exceptions import ConfigError
+from roverimpact.studies import run_study
+from roverimpact.studies.executors import check_scheduler
+
+pytest.importorskip("dask.distributed")
+
+STUDY = {
+    "name": "rb",
+    "base": {"model": {"name": "rigid_body", "params": {"mass": 20.0, "inertia": 1.2,
+                                                         "com_height": 0.3, "lever": 0.4}},
+             "velocity": {"u": 0.5}, "obstacle": {"frame": "contact", "beta_deg": 90.0}},
+    "grid": {"obstacle.beta_deg": [30.0, 60.0]},
+}
+
+
+@pytest.fixture
+def http_port():
+    """An HTTP server (as a scheduler's dashboard is) on a free local port: it accepts the
+    connection and waits for a request that Dask never sends."""
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0),
+                                             http.server.SimpleHTTPRequestHandler)
+    t = threading.Thread(target=server.serve_forever, daemon=True)
+    t.start()
+    yield server.server_address[1]
+    server.shutdown()
+    server.server_close()
+
+
+def test_a_port_that_is_not_a_schedulers_is_refused_before_any_work(tmp_path, http_port):
+    """The dashboard's port (or any server's) was taken for the scheduler: the TCP check
+    passed and Dask's client then waited for its handshake for ever (a traverse or sweep
+    hung with 0 cases done; another server's bytes ended in a MemoryError traceback)."""
+    address = f"tcp://127.0.0.1:{http_port}"
+    t = time.perf_counter()
+    with pytest.raises(ConfigError, match="not a Dask scheduler"):
+        check_scheduler(address, timeout=1.0)
+    assert time.perf_counter() - t < 6.0
+    with pytest.raises(ConfigError, match="not a Dask scheduler"):
+        run_study(STUDY, tmp_path / "out", scheduler=address)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_workers_address_is_named_as_such():
+    from dask.distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        worker = next(iter(cluster.workers.values())).address
+        with pytest.raises(ConfigError, match="is a Dask worker"):
+            check_scheduler(worker, timeout=2.0)
+        assert check_scheduler(cluster.scheduler_address) == cluster.scheduler_address
+
+
+def test_a_scheduler_without_workers_is_waited_for_a_bounded_time_and_said(tmp_path):
+    """A scheduler with no worker held the tasks for ever: the command hung at 0 cases
+    with nothing said."""
+    from dask.distributed import LocalCluster
+
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp", dashboard_address=None) as cluster:
+        notes: list[str] = []
+        t = time.perf_counter()
+        with pytest.raises(ConfigError, match="no worker joined"):
+            check_scheduler(cluster.scheduler_address, workers_wait=1.0, note=notes.append)
+        assert time.perf_counter() - t < 6.0
+        assert len(notes) == 1 and "waiting up to 1 s" in notes[0]
+        assert f"dask worker {cluster.scheduler_address}" in notes[0]
+
+        # a worker that joins while the command waits: it goes on
+        def join():
+            time.sleep(0.5)
+            cluster.scale(1)
+
+        threading.Thread(target=join, daemon=True).start()
+        assert check_scheduler(cluster.scheduler_address, workers_wait=20.0,
+                               note=notes.append) == cluster.scheduler_address
