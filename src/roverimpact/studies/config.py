@@ -289,11 +289,23 @@ def _files_from(base: Any, folder: Path) -> Any:
 
 
 def study_from_dict(data: Mapping[str, Any], where: str = "study") -> Study:
-    """Validate a study given as a dict (as read from TOML)."""
+    """Validate a study given as a dict (as read from TOML).
+
+    A relative ``model.file``, ``terrain.file`` or ``terrain.function`` file of its base
+    is made absolute from the working folder (where this process reads it): a Dask worker
+    started in another folder read it there, another file of the same name or none (a
+    study of a 24 kg rover computed with the 64 kg one beside the workers, no error)."""
     if isinstance(data, Study):
+        if isinstance(data.base, dict):
+            base = _files_from(data.base, Path.cwd())
+            if base != data.base:
+                return data.model_copy(update={"base": base})
         return data
+    data = dict(data)
+    if isinstance(data.get("base"), dict):
+        data["base"] = _files_from(data["base"], Path.cwd())
     try:
-        return Study.model_validate(dict(data))
+        return Study.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(validation_message(exc, where)) from None
 
