@@ -121,3 +121,30 @@ def test_a_dict_studys_relative_robot_file_is_the_one_beside_the_caller(tmp_path
         dist = run_study(study, user / "d", scheduler=cluster.scheduler_address).table
     assert np.array_equal(dist["T_c_minus"].to_numpy(), serial["T_c_minus"].to_numpy())
     assert serial["model.file"].iloc[0] == str(user / "mjcf_rover.xml")
+
+
+def test_a_study_files_cases_read_their_robot_files_beside_the_study(tmp_path, monkeypatch):
+    """``[[cases]] "model.file" = "mjcf_rover.xml"`` in a study file was read from the
+    working folder of each process (the command's, each Dask worker's), not from the
+    study file's folder as the base's file is: run from another folder, the study failed
+    or took that folder's file (T_c^- of the 60 kg chassis)."""
+    from pathlib import Path
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    xml = (examples / "mjcf_rover.xml").read_text()
+    here, other = tmp_path / "study", tmp_path / "elsewhere"
+    here.mkdir()
+    other.mkdir()
+    (here / "mjcf_rover.xml").write_text(xml)
+    (other / "mjcf_rover.xml").write_text(xml.replace('mass="20"', 'mass="60"'))
+    scenario = (examples / "mjcf_rover_beta.toml").read_text()
+    (here / "scenario.toml").write_text(scenario)
+    (here / "by_case.toml").write_text(
+        'name = "c"\nbase = "scenario.toml"\n[[cases]]\n"model.file" = "mjcf_rover.xml"\n')
+    (here / "by_base.toml").write_text(
+        'name = "b"\nbase = "scenario.toml"\n[[cases]]\n"obstacle.beta_deg" = 45.0\n')
+    monkeypatch.chdir(other)
+    by_case = run_study(here / "by_case.toml", tmp_path / "c").table
+    by_base = run_study(here / "by_base.toml", tmp_path / "b").table
+    assert by_case["T_c_minus"].iloc[0] == by_base["T_c_minus"].iloc[0]
+    assert by_case["model.file"].iloc[0] == str(here / "mjcf_rover.xml")

@@ -250,11 +250,36 @@ def load_study(path: str | Path) -> tuple[Study, str]:
         text = None
     elif isinstance(raw.get("base"), dict):
         raw["base"] = _files_from(raw["base"], path.parent)
+    raw = _case_files_from(raw, path.parent)
     try:
         study = Study.model_validate(raw)
     except ValidationError as exc:
         raise ConfigError(validation_message(exc, str(path))) from None
     return study, text
+
+
+#: The scenario keys that name a file (read relative to the file that names them)
+FILE_KEYS = ("model.file", "terrain.file", "terrain.function")
+
+
+def _file_from(key: str, value: Any, folder: Path) -> Any:
+    """``value`` of the scenario key ``key`` with a relative file name read from
+    ``folder``; other keys and values unchanged."""
+    from ..scenario.schema import is_example_robot_name
+
+    if not isinstance(value, str):
+        return value
+    if key == "model.file":
+        if is_example_robot_name(value) or Path(value).is_absolute():
+            return value
+        return str((folder / value).resolve())
+    if key == "terrain.file":
+        return value if Path(value).is_absolute() else str((folder / value).resolve())
+    if key == "terrain.function":
+        mod, _, name = value.rpartition(":")
+        if mod.endswith(".py") and not Path(mod).is_absolute():
+            return f"{(folder / mod).resolve()}:{name}"
+    return value
 
 
 def _files_from(base: Any, folder: Path) -> Any:
@@ -263,28 +288,34 @@ def _files_from(base: Any, folder: Path) -> Any:
     ``model.file``, ``terrain.file`` and a ``terrain.function`` of a ``.py`` file. (Only
     ``model.file`` was, and a study of a scenario that ``roverimpact energy`` reads
     refused its terrain, or took another one of the same name from the working folder.)"""
-    from ..scenario.schema import is_example_robot_name
-
     if not isinstance(base, dict):
         return base
     out = dict(base)
-    model = base.get("model")
-    f = model.get("file") if isinstance(model, dict) else None
-    if isinstance(f, str) and not is_example_robot_name(f) and not Path(f).is_absolute():
-        out["model"] = model | {"file": str((folder / f).resolve())}
-    terrain = base.get("terrain")
-    if isinstance(terrain, dict):
-        upd = {}
-        f = terrain.get("file")
-        if isinstance(f, str) and not Path(f).is_absolute():
-            upd["file"] = str((folder / f).resolve())
-        fn = terrain.get("function")
-        if isinstance(fn, str):
-            mod, _, name = fn.rpartition(":")
-            if mod.endswith(".py") and not Path(mod).is_absolute():
-                upd["function"] = f"{(folder / mod).resolve()}:{name}"
-        if upd:
-            out["terrain"] = terrain | upd
+    for key in FILE_KEYS:
+        section, _, name = key.partition(".")
+        table = out.get(section)
+        if isinstance(table, dict) and name in table:
+            value = _file_from(key, table[name], folder)
+            if value != table[name]:
+                out[section] = table | {name: value}
+    return out
+
+
+def _case_files_from(raw: dict, folder: Path) -> dict:
+    """``raw`` (a study) with the relative file names its ``[grid]`` and ``[[cases]]``
+    give (``"model.file" = [...]``) read from ``folder``, as its base's are: they were
+    read from the working folder of each process, and a Dask worker's is not the
+    command's."""
+    out = dict(raw)
+    grid = raw.get("grid")
+    if isinstance(grid, dict):
+        out["grid"] = {k: ([_file_from(k, v, folder) for v in vals]
+                           if k in FILE_KEYS and isinstance(vals, list) else vals)
+                       for k, vals in grid.items()}
+    cases = raw.get("cases")
+    if isinstance(cases, list):
+        out["cases"] = [{k: _file_from(k, v, folder) for k, v in c.items()}
+                        if isinstance(c, dict) else c for c in cases]
     return out
 
 
@@ -301,7 +332,7 @@ def study_from_dict(data: Mapping[str, Any], where: str = "study") -> Study:
             if base != data.base:
                 return data.model_copy(update={"base": base})
         return data
-    data = dict(data)
+    data = _case_files_from(dict(data), Path.cwd())
     if isinstance(data.get("base"), dict):
         data["base"] = _files_from(data["base"], Path.cwd())
     try:
