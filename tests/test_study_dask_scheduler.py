@@ -148,3 +148,37 @@ def test_a_study_files_cases_read_their_robot_files_beside_the_study(tmp_path, m
     by_base = run_study(here / "by_base.toml", tmp_path / "b").table
     assert by_case["T_c_minus"].iloc[0] == by_base["T_c_minus"].iloc[0]
     assert by_case["model.file"].iloc[0] == str(here / "mjcf_rover.xml")
+
+
+class MissingFileOnWorker:
+    """An evaluator that fails as a worker that does not see the study's robot file does."""
+
+    name = "missing_file"
+
+    def evaluate(self, base, overrides, *, simulate=False):
+        raise ConfigError("/data/rover.urdf: no such URDF/MJCF file")
+
+
+def test_an_input_error_on_a_worker_says_it_was_on_a_worker():
+    """A robot file this machine has but a worker does not see: the error read "no such
+    URDF/MJCF file" for a file the user could see, with no word of where it was read."""
+    from dask.distributed import LocalCluster
+
+    from roverimpact.studies.config import study_from_dict
+    from roverimpact.studies.executors import run_dask
+    from roverimpact.studies.sweep import Chunks, prepare_study
+
+    prep = prepare_study(study_from_dict(STUDY))
+    chunks = Chunks(prep.cases, 1)
+    args = (MissingFileOnWorker(), prep.study.base, prep.base)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        address = cluster.scheduler_address
+        with pytest.raises(ConfigError) as err:
+            run_dask([0, 1], chunks, args, prep.study.parameters(), False, address, 0,
+                     lambda k, df: None)
+    msg = str(err.value)
+    # (the case that raised is named: the chunk's cases are tried one by one)
+    assert msg.startswith(f"on a Dask worker of the scheduler at {address}: case 0 (")
+    assert "/data/rover.urdf: no such URDF/MJCF file" in msg
+    assert "must see them" in msg

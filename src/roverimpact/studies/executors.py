@@ -10,6 +10,7 @@ import io
 import json
 import logging
 import os
+import re
 import signal
 import socket
 import sys
@@ -46,6 +47,7 @@ __all__ = [
     "run_dask",
     "run_serial",
     "why_serial",
+    "worker_result",
     "worker_start_method",
     "worth_a_cluster",
 ]
@@ -541,6 +543,32 @@ def run_serial(pending, chunks, args, params, simulate, store) -> None:
         store(k, compute_chunk(*args, chunks[k], params, simulate))
 
 
+def worker_result(fut, scheduler: str):
+    """``fut.result()``, a chunk's rows; a case that cannot be posed, returned as its error
+    (:func:`compute_chunk_file`), is raised. An error of the workers' environment says so:
+    a robot file this machine has but the worker does not see read "no such URDF/MJCF
+    file" with no hint where it was read, a package the worker lacks an ImportError."""
+    try:
+        out = fut.result()
+    except ImportError as exc:
+        raise ConfigError(f"on a Dask worker of the scheduler at {scheduler}: {exc}; the "
+                          "workers need the same Python packages as this machine") from None
+    except InputError as exc:
+        out = exc
+    if isinstance(out, InputError):
+        if MISSING_FILE.search(str(out)):
+            raise reworded(out, (
+                f"on a Dask worker of the scheduler at {scheduler}: {out}; the workers read "
+                "the study's files at the paths given here, so they must see them (a shared "
+                "or copied folder)")) from None
+        raise out  # (a case's own error: its message names the case)
+    return out
+
+
+#: How the loaders say that a file is missing (:func:`worker_result`'s hint).
+MISSING_FILE = re.compile(r"no such|not found|does not exist|No such file", re.IGNORECASE)
+
+
 def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store) -> None:
     """Compute the ``pending`` chunks on the Dask scheduler at ``scheduler``; ``store`` each
     as it returns (once, whatever happens to the workers)."""
@@ -579,9 +607,7 @@ def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store)
         queue = as_completed(list(futures))
         for fut in queue:
             k = futures.pop(fut)
-            df = fut.result()
-            if isinstance(df, InputError):  # a case that cannot be posed: no retry
-                raise df
+            df = worker_result(fut, scheduler)
             if k not in written:  # a chunk is stored once, whatever happened to workers
                 store(k, df)
                 written.add(k)
