@@ -3,6 +3,7 @@ worker``): what the command says when the address is not a usable scheduler's.""
 
 from __future__ import annotations
 
+import contextlib
 import http.server
 import threading
 import time
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 from roverimpact.exceptions import ConfigError
-from roverimpact.studies import run_study
+from roverimpact.studies import ScenarioEvaluator, run_study
 from roverimpact.studies.executors import check_scheduler
 
 pytest.importorskip("dask.distributed")
@@ -182,3 +183,45 @@ def test_an_input_error_on_a_worker_says_it_was_on_a_worker():
     assert msg.startswith(f"on a Dask worker of the scheduler at {address}: case 0 (")
     assert "/data/rover.urdf: no such URDF/MJCF file" in msg
     assert "must see them" in msg
+
+
+class SlowRigidBody(ScenarioEvaluator):
+    """The scenario evaluator, slowed down so the scheduler can go away mid-study."""
+
+    name = "slow_rigid_body"
+
+    def evaluate(self, base, overrides, *, simulate=False):
+        time.sleep(0.2)
+        return super().evaluate(base, overrides, simulate=simulate)
+
+
+def test_a_scheduler_gone_mid_study_is_one_line_and_the_study_resumes(tmp_path):
+    """The scheduler stopped mid-study: Dask's FutureCancelledError traceback, after its
+    client logged a traceback of its failed reconnection. Now one error that says what is
+    kept, and --resume finishes the study."""
+    from dask.distributed import LocalCluster
+
+    from roverimpact.exceptions import RoverImpactError
+
+    study = dict(STUDY, grid={"obstacle.beta_deg": [10.0, 20.0, 30.0, 40.0, 50.0, 60.0]},
+                 chunk_size=1)
+    serial = run_study(study, tmp_path / "s").table
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                           dashboard_address=None)
+
+    def stop_scheduler(done, total):
+        if done >= 2 and cluster.scheduler.status.name == "running":
+            cluster.sync(cluster.scheduler.close)
+
+    t = time.perf_counter()
+    try:
+        with pytest.raises(RoverImpactError, match=r"lost the Dask scheduler at .*--resume"):
+            run_study(study, tmp_path / "d", evaluator=SlowRigidBody(),
+                      scheduler=cluster.scheduler_address, progress=stop_scheduler)
+        assert time.perf_counter() - t < 10.0
+    finally:
+        with contextlib.suppress(TimeoutError):  # its scheduler is gone: nothing to wait for
+            cluster.close(timeout=1)
+    res = run_study(study, tmp_path / "d", resume=True)
+    assert 2 <= res.n_reused < 6
+    assert np.array_equal(res.table["T_c_minus"].to_numpy(), serial["T_c_minus"].to_numpy())

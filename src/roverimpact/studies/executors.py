@@ -543,11 +543,15 @@ def run_serial(pending, chunks, args, params, simulate, store) -> None:
         store(k, compute_chunk(*args, chunks[k], params, simulate))
 
 
-def worker_result(fut, scheduler: str):
+def worker_result(fut, scheduler: str, then: str = "rerun once it runs again"):
     """``fut.result()``, a chunk's rows; a case that cannot be posed, returned as its error
     (:func:`compute_chunk_file`), is raised. An error of the workers' environment says so:
     a robot file this machine has but the worker does not see read "no such URDF/MJCF
-    file" with no hint where it was read, a package the worker lacks an ImportError."""
+    file" with no hint where it was read, a package the worker lacks an ImportError. A
+    scheduler gone away is one line ending with ``then`` (what to do), not Dask's
+    ``FutureCancelledError`` traceback."""
+    from concurrent.futures import CancelledError
+
     try:
         out = fut.result()
     except ImportError as exc:
@@ -555,6 +559,10 @@ def worker_result(fut, scheduler: str):
                           "workers need the same Python packages as this machine") from None
     except InputError as exc:
         out = exc
+    except CancelledError:
+        raise RoverImpactError(
+            f"lost the Dask scheduler at {scheduler} (it stopped, or the connection to it "
+            f"was cut): {then}") from None
     if isinstance(out, InputError):
         if MISSING_FILE.search(str(out)):
             raise reworded(out, (
@@ -569,6 +577,21 @@ def worker_result(fut, scheduler: str):
 MISSING_FILE = re.compile(r"no such|not found|does not exist|No such file", re.IGNORECASE)
 
 
+class _LoggerAtLeast:
+    """A logger's level raised to at least ``level`` while in the context."""
+
+    def __init__(self, name: str, level: int):
+        self.log, self.level, self.old = logging.getLogger(name), level, None
+
+    def __enter__(self):
+        self.old = self.log.level
+        if self.log.getEffectiveLevel() < self.level:
+            self.log.setLevel(self.level)
+
+    def __exit__(self, *exc):
+        self.log.setLevel(self.old)
+
+
 def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store) -> None:
     """Compute the ``pending`` chunks on the Dask scheduler at ``scheduler``; ``store`` each
     as it returns (once, whatever happens to the workers)."""
@@ -581,40 +604,46 @@ def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store)
         own = True
     if own:
         client = Client(scheduler, timeout="10s")
+    # a scheduler gone away is said once, by worker_result; Dask's client would log each
+    # failed reconnection with a traceback first
+    quiet = _LoggerAtLeast("distributed.client", logging.CRITICAL) if own else nullcontext()
     try:
-        # at most a few chunks per worker in flight: the chunks' cases are made as they
-        # are submitted and results are written as they return, so memory does not grow
-        # with the number of chunks
-        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        window = max(4 * n_workers, 8)
-        todo = iter(pending)
-        futures = {}
+        with quiet:
+            # at most a few chunks per worker in flight: the chunks' cases are made as they
+            # are submitted and results are written as they return, so memory does not grow
+            # with the number of chunks
+            n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
+            window = max(4 * n_workers, 8)
+            todo = iter(pending)
+            futures = {}
 
-        def submit() -> bool:
-            k = next(todo, None)
-            if k is None:
-                return False
-            # arguments are small: shipped with each task, so a lost worker loses nothing
-            fut = client.submit(compute_chunk_file, *args, chunks[k], params, simulate,
-                                retries=retries, pure=False)
-            futures[fut] = k
-            return True
+            def submit() -> bool:
+                k = next(todo, None)
+                if k is None:
+                    return False
+                # arguments are small: shipped with each task, so a lost worker loses nothing
+                fut = client.submit(compute_chunk_file, *args, chunks[k], params, simulate,
+                                    retries=retries, pure=False)
+                futures[fut] = k
+                return True
 
-        for _ in range(window):
-            if not submit():
-                break
-        written = set()
-        queue = as_completed(list(futures))
-        for fut in queue:
-            k = futures.pop(fut)
-            df = worker_result(fut, scheduler)
-            if k not in written:  # a chunk is stored once, whatever happened to workers
-                store(k, df)
-                written.add(k)
-            fut.release()
-            del df
-            if submit():
-                queue.add(next(reversed(futures)))
+            for _ in range(window):
+                if not submit():
+                    break
+            written = set()
+            queue = as_completed(list(futures))
+            for fut in queue:
+                k = futures.pop(fut)
+                df = worker_result(fut, scheduler, "the finished chunks are kept: rerun "
+                                   "with --resume once it runs again")
+                if k not in written:  # a chunk is stored once, whatever happened to workers
+                    store(k, df)
+                    written.add(k)
+                fut.release()
+                del df
+                if submit():
+                    queue.add(next(reversed(futures)))
     finally:
         if own:
-            client.close()
+            with quiet:  # closing cancels the client's reconnection, which Dask logs
+                client.close()
