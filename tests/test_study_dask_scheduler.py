@@ -225,3 +225,32 @@ def test_a_scheduler_gone_mid_study_is_one_line_and_the_study_resumes(tmp_path):
     res = run_study(study, tmp_path / "d", resume=True)
     assert 2 <= res.n_reused < 6
     assert np.array_equal(res.table["T_c_minus"].to_numpy(), serial["T_c_minus"].to_numpy())
+
+
+def test_a_traverse_given_as_a_dict_names_its_files_absolute(tmp_path, monkeypatch):
+    """``run_traverse(dict)`` with ``terrain.file = "dem.npy"`` kept the name relative, and
+    its chunks (shipped as the config's dict) were read from each Dask worker's working
+    folder. The config the run goes on with names the file beside the caller."""
+    from pathlib import Path
+
+    import tomllib
+
+    from roverimpact.traverse import run as trun
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    raw = tomllib.loads((examples / "traverse_sparse.toml").read_text())
+    raw["terrain"] = {"kind": "file", "file": "dem.npy", "spacing": 0.05}
+    seen = []
+
+    class Seen(Exception):
+        pass
+
+    def check_inputs(cfg, where):
+        seen.append(cfg)
+        raise Seen
+
+    monkeypatch.setattr(trun, "_check_inputs", check_inputs)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(Seen):
+        trun.run_traverse(raw)
+    assert seen[0].terrain.file == str(tmp_path / "dem.npy")

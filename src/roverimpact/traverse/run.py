@@ -499,10 +499,10 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         worker_start_method,
     )
 
-    if isinstance(source, TraverseConfig):
-        cfg, text = source, None
-    elif isinstance(source, dict):
-        cfg, text = traverse_from_dict(source), None
+    if isinstance(source, (TraverseConfig, dict)):
+        # relative file names from the working folder, made absolute: a Dask worker
+        # started in another folder read them from its own
+        cfg, text = traverse_from_dict(source, base_dir=Path.cwd()), None
     else:
         cfg, text = load_traverse(source), Path(source).read_text()
     where = str(source) if isinstance(source, (str, Path)) else "traverse"
