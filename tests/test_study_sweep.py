@@ -667,6 +667,41 @@ def test_interrupt_marks_the_manifest_and_says_how_to_resume(tmp_path):
     assert res.n_reused == 8 and len(res.table) == 18
 
 
+def _slow_sweep(tmp_path, n: int, sleep: str, *args: str) -> tuple[Path, str]:
+    """A random study of ``n`` cases (``tmp_path / "s.toml"``) and the code of a Python
+    process that sweeps it into ``tmp_path / "o"`` (``--no-report``, ``args``), every
+    evaluator call slowed by ``time.sleep(<sleep>)``, for a signal to find it at work."""
+    import textwrap
+
+    study = tmp_path / "s.toml"
+    study.write_text(textwrap.dedent(f"""
+        name = "slow"
+        [base]
+        model = {{ name = "rigid_body" }}
+        velocity = {{ u = 0.5 }}
+        obstacle = {{ frame = "contact", beta_deg = 90.0 }}
+        [random]
+        n = {n}
+        seed = 1
+        params = {{ "model.params.mass" = {{ low = 1.0, high = 50.0 }} }}
+    """))
+    argv = ["sweep", str(study), "-o", str(tmp_path / "o"), "--no-report", *args]
+    return study, textwrap.dedent(f"""
+        import signal, sys, time
+        # Ctrl-C as a terminal delivers it, also when the tests run as a background job
+        # (whose shell starts it with SIGINT ignored)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        import roverimpact.studies.evaluate as ev
+        slow = ev.ScenarioEvaluator.evaluate
+        def evaluate(self, base, overrides, *, simulate=False):
+            time.sleep({sleep})
+            return slow(self, base, overrides, simulate=simulate)
+        ev.ScenarioEvaluator.evaluate = evaluate
+        from roverimpact.cli import main
+        sys.exit(main({argv!r}))
+    """)
+
+
 @pytest.mark.parametrize("sig, code, word", [(signal.SIGINT, 130, "interrupted"),
                                               (signal.SIGTERM, 143, "terminated")])
 def test_cli_signal_exits_with_the_resume_hint(tmp_path, sig, code, word):
@@ -675,35 +710,8 @@ def test_cli_signal_exits_with_the_resume_hint(tmp_path, sig, code, word):
     "running" for ever, exit -15, nothing said), the message says to resume, and
     --resume finishes the table of an uninterrupted run."""
     import subprocess
-    import textwrap
 
-    study = tmp_path / "s.toml"
-    study.write_text(textwrap.dedent("""
-        name = "slow"
-        [base]
-        model = { name = "rigid_body" }
-        velocity = { u = 0.5 }
-        obstacle = { frame = "contact", beta_deg = 90.0 }
-        [random]
-        n = 400
-        seed = 1
-        params = { "model.params.mass" = { low = 1.0, high = 50.0 } }
-    """))
-    code_text = textwrap.dedent(f"""
-        import signal, sys, time
-        # Ctrl-C as a terminal delivers it, also when the tests run as a background job
-        # (whose shell starts it with SIGINT ignored)
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        import roverimpact.studies.evaluate as ev
-        slow = ev.ScenarioEvaluator.evaluate
-        def evaluate(self, base, overrides, *, simulate=False):
-            time.sleep(0.2)
-            return slow(self, base, overrides, simulate=simulate)
-        ev.ScenarioEvaluator.evaluate = evaluate
-        from roverimpact.cli import main
-        sys.exit(main(["sweep", {str(study)!r}, "-o", {str(tmp_path / 'o')!r},
-                       "--chunk-size", "10", "--no-report"]))
-    """)
+    study, code_text = _slow_sweep(tmp_path, 400, "0.2", "--chunk-size", "10")
     proc = subprocess.Popen([sys.executable, "-c", code_text], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     manifest = tmp_path / "o" / "manifest.json"
@@ -734,33 +742,9 @@ def test_cli_signal_on_a_local_cluster_leaves_no_worker_and_no_dask_lines(tmp_pa
     if not sys.platform.startswith("linux"):
         pytest.skip("fork and /proc: Linux only")
     import subprocess
-    import textwrap
 
-    study = tmp_path / "s.toml"
-    study.write_text(textwrap.dedent("""
-        name = "slow"
-        [base]
-        model = { name = "rigid_body" }
-        velocity = { u = 0.5 }
-        obstacle = { frame = "contact", beta_deg = 90.0 }
-        [random]
-        n = 40
-        seed = 1
-        params = { "model.params.mass" = { low = 1.0, high = 50.0 } }
-    """))
-    code_text = textwrap.dedent(f"""
-        import signal, sys, time
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        import roverimpact.studies.evaluate as ev
-        slow = ev.ScenarioEvaluator.evaluate
-        def evaluate(self, base, overrides, *, simulate=False):
-            time.sleep(0.3 * len(overrides))
-            return slow(self, base, overrides, simulate=simulate)
-        ev.ScenarioEvaluator.evaluate = evaluate
-        from roverimpact.cli import main
-        sys.exit(main(["sweep", {str(study)!r}, "-o", {str(tmp_path / 'o')!r},
-                       "--chunk-size", "4", "--no-report", "--workers", "2"]))
-    """)
+    _, code_text = _slow_sweep(tmp_path, 40, "0.3 * len(overrides)", "--chunk-size", "4",
+                               "--workers", "2")
     env = {**os.environ, "ROVERIMPACT_WORKER_START": "fork"}
     proc = subprocess.Popen([sys.executable, "-c", code_text], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env)
