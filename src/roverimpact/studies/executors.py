@@ -365,6 +365,21 @@ def local_cluster(workers: int):
             _close(cluster, quiet=interrupted)
 
 
+class _LoggerAtLeast:
+    """A logger's level raised to at least ``level`` while in the context."""
+
+    def __init__(self, name: str, level: int):
+        self.log, self.level, self.old = logging.getLogger(name), level, None
+
+    def __enter__(self):
+        self.old = self.log.level
+        if self.log.getEffectiveLevel() < self.level:
+            self.log.setLevel(self.level)
+
+    def __exit__(self, *exc):
+        self.log.setLevel(self.old)
+
+
 @contextmanager
 def _dask_logs_at_warning():
     """Dask's ``distributed`` loggers at WARNING (at least) while a local cluster lives.
@@ -379,10 +394,6 @@ def _dask_logs_at_warning():
     below WARNING are now not made at all, in the command or in the workers (a forked
     process keeps its parent's logger levels), so nothing writes while a worker forks;
     the level is restored afterwards."""
-    log = logging.getLogger("distributed")
-    level = log.level
-    if log.getEffectiveLevel() < logging.WARNING:
-        log.setLevel(logging.WARNING)
     # a worker closed while it computes a chunk (the cluster closed after a Ctrl-C or a
     # SIGTERM) logs "Async instruction for <Task cancelled name=execute(...)> ended with
     # CancelledError", a line of Dask's internals per busy worker before the command's
@@ -390,9 +401,9 @@ def _dask_logs_at_warning():
     machine = logging.getLogger("distributed.worker.state_machine")
     machine.addFilter(_not_cancelled_at_close)
     try:
-        yield
+        with _LoggerAtLeast("distributed", logging.WARNING):
+            yield
     finally:
-        log.setLevel(level)
         machine.removeFilter(_not_cancelled_at_close)
 
 
@@ -405,14 +416,8 @@ def _not_cancelled_at_close(record: logging.LogRecord) -> bool:
 def _close(cluster, *, quiet: bool) -> None:
     """Close a local cluster; ``quiet`` (after a Ctrl-C, which the command reports): without
     Dask's shutdown warnings (cancelled tasks, workers killed)."""
-    log = logging.getLogger("distributed")
-    level = log.level
-    if quiet:
-        log.setLevel(logging.CRITICAL)
-    try:
+    with _LoggerAtLeast("distributed", logging.CRITICAL) if quiet else nullcontext():
         cluster.close()
-    finally:
-        log.setLevel(level)
 
 
 @contextmanager
@@ -575,21 +580,6 @@ def worker_result(fut, scheduler: str, then: str = "rerun once it runs again"):
 
 #: How the loaders say that a file is missing (:func:`worker_result`'s hint).
 MISSING_FILE = re.compile(r"no such|not found|does not exist|No such file", re.IGNORECASE)
-
-
-class _LoggerAtLeast:
-    """A logger's level raised to at least ``level`` while in the context."""
-
-    def __init__(self, name: str, level: int):
-        self.log, self.level, self.old = logging.getLogger(name), level, None
-
-    def __enter__(self):
-        self.old = self.log.level
-        if self.log.getEffectiveLevel() < self.level:
-            self.log.setLevel(self.level)
-
-    def __exit__(self, *exc):
-        self.log.setLevel(self.old)
 
 
 def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store) -> None:
