@@ -34,12 +34,9 @@ def _floats(text: str | None, what: str) -> list[float] | None:
 
 def _complete(out: Path) -> bool:
     """Whether the study folder ``out`` holds a complete study (its manifest says so)."""
-    import json
+    from ..studies.store import read_manifest
 
-    try:
-        return json.loads((out / "manifest.json").read_text()).get("status") == "complete"
-    except (OSError, ValueError, AttributeError):
-        return False
+    return (read_manifest(out) or {}).get("status") == "complete"
 
 
 @app.command("trust")

@@ -25,11 +25,11 @@ from ..studies.indicators import IndicatorComparison, compare_indicators, with_b
 from ..studies.stats import Agreement, ForceRatios, agreement, check_n_boot, force_ratios
 from ..studies.store import (
     CHUNKS,
-    MANIFEST,
     RESULTS,
     STUDY_COPY,
     WHOLE_WINDOW,
     load_results,
+    read_manifest,
     simulated_forces,
     whole_window_cases,
 )
@@ -153,10 +153,10 @@ def find_study_folders(root: str | Path) -> list[Path]:
 def _stopped(folder: Path) -> str:
     """`` (stopped after 8 of 40 cases: interrupted)`` from a study's manifest, or ``""``.
     The advice once said "nothing is recomputed", also of a study stopped half-way."""
+    m = read_manifest(folder)
     try:
-        m = json.loads((folder / MANIFEST).read_text())
         done, n, status = int(m["n_done"]), int(m["n_cases"]), str(m["status"])
-    except (OSError, ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError):  # (TypeError: None, no manifest)
         return ""
     return f" (stopped after {done} of {n} cases: {status})"
 

@@ -17,7 +17,6 @@ rover parameters). Output: one folder per study (table, study file, manifest);
 from __future__ import annotations
 
 import copy
-import json
 from collections.abc import Callable
 from contextlib import ExitStack
 from importlib import resources
@@ -27,7 +26,7 @@ from .._io import read_toml, some_names, visible_entries
 from ..exceptions import ConfigError, StudyInterrupted
 from .config import study_from_dict
 from .executors import LazyCluster
-from .store import MANIFEST, is_study_manifest
+from .store import is_study_manifest, read_manifest
 from .sweep import run_study
 
 __all__ = ["BUILTIN_STUDIES", "QUICK_POINTS", "builtin_study_path", "run_builtin_studies"]
@@ -67,12 +66,8 @@ def _quick(data: dict) -> dict:
 def _refuse_replacing(out_dir: Path, stem: str, full) -> None:
     """ConfigError if ``out_dir/stem`` holds the full study's results (a quick run would
     replace them with 5 points)."""
-    path = out_dir / stem / MANIFEST
-    try:
-        old = json.loads(path.read_text()) if path.is_file() else {}
-    except (OSError, ValueError):
-        return
-    if isinstance(old, dict) and old.get("fingerprint") == full.fingerprint():
+    old = read_manifest(out_dir / stem) or {}
+    if old.get("fingerprint") == full.fingerprint():
         raise ConfigError(
             f"{out_dir} holds a full reproduction ({stem}: {old.get('n_cases')} cases); "
             f"--quick would replace it with {QUICK_POINTS} points a study. Choose another "
@@ -91,11 +86,7 @@ def _refuse_other_files(out_dir: Path) -> None:
     if not entries:
         return
     for stem in BUILTIN_STUDIES:
-        try:
-            old = json.loads((out_dir / stem / MANIFEST).read_text())
-        except (OSError, ValueError):
-            continue
-        if is_study_manifest(old):
+        if is_study_manifest(read_manifest(out_dir / stem)):
             return
     raise ConfigError(f"{out_dir} holds files but no reproduction ({some_names(entries)}); "
                       "choose a new or empty folder with -o (nothing was written)")

@@ -45,6 +45,7 @@ __all__ = [
     "folder_lock",
     "is_study_manifest",
     "load_results",
+    "read_manifest",
     "read_results_table",
     "remove_stale_temporaries",
     "simulated_forces",
@@ -186,6 +187,16 @@ def remove_stale_temporaries(out_dir: Path) -> None:
             for f in folder.glob(".*.tmp"):
                 if _TEMPORARY.fullmatch(f.name):
                     f.unlink(missing_ok=True)
+
+
+def read_manifest(folder: Path) -> dict | None:
+    """The parsed ``manifest.json`` of ``folder``; None if there is none, or it cannot be
+    read, or it is not a JSON object."""
+    try:
+        data = json.loads((Path(folder) / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
 
 
 def is_study_manifest(data) -> bool:
