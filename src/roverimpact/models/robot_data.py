@@ -63,7 +63,7 @@ def example_robots_dir() -> Path:
     except md.PackageNotFoundError:
         raise ModelError(
             "example-robot-data is not installed: pip install example-robot-data "
-            "(or roverimpact[test])"
+            "(or the extra: pip install 'roverimpact[robots]')"
         ) from None
     for f in dist.files or ():
         parts = Path(str(f)).parts
