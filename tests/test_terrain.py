@@ -346,6 +346,81 @@ def test_geotiff(tmp_path):
         HeightField.from_geotiff(tmp_path / "plain.tif")
 
 
+# A GDAL/QGIS export's holes: a number, not NaN (before, a -9999 cell loaded as a 10 km pit:
+# a wrong pose, T_c^- or an "outside the height field" error far from it, with no word of it)
+@pytest.mark.parametrize(("value", "dtype", "nodata"), [
+    (-9999.0, np.float64, None), (-32768.0, np.float64, None),
+    (-3.4028235e38, np.float32, None),   # float32's lowest, GDAL's float default
+    (-1e38, np.float64, None), (-1.0, np.float64, -1.0), (250.0, np.float64, [7.0, 250.0])])
+@pytest.mark.parametrize("suffix", [".npy", ".csv"])
+def test_nodata_cells_refused_with_count_and_place(tmp_path, value, dtype, nodata, suffix):
+    """A grid of the plane z = 0.1 x + 0.05 y with no-data cells at (i, j) = (3, 5) and
+    (4, 2): refused by the one loader, naming the count, the first cell in the file's own
+    numbering, its world (x, y) = (x0 + j dx, y0 + i dy) and the box of all of them."""
+    x0, y0, dx, dy = 10.0, -2.0, 0.5, 0.25
+    plane = np.fromfunction(lambda i, j: 0.1 * (x0 + j * dx) + 0.05 * (y0 + i * dy), (6, 8))
+    z = plane.astype(dtype)
+    z[3, 5] = z[4, 2] = value
+    p = tmp_path / f"dem{suffix}"
+    if suffix == ".npy":
+        np.save(p, z)
+        first = "row 3, column 5"
+    else:
+        np.savetxt(p, z, delimiter=",", fmt="%.9g", header="z [m]")   # one comment line
+        first = "line 5, column 6"
+    with pytest.raises(ConfigError) as info:
+        HeightField.from_file(p, (dx, dy), (x0, y0), nodata=nodata)
+    msg = str(info.value)
+    assert f"has 2 no-data cell(s), the first at {first}, (x, y) = (12.5, -1.25) m" in msg
+    assert "x in [11, 12.5] m, y in [-1.25, -1] m" in msg
+    z = plane.astype(dtype)
+    if suffix == ".npy":
+        np.save(p, z)
+    else:
+        np.savetxt(p, z, delimiter=",", fmt="%.9g")
+    hf = HeightField.from_file(p, (dx, dy), (x0, y0), nodata=nodata)
+    assert hf.height(11.3, -1.1) == pytest.approx(0.1 * 11.3 + 0.05 * -1.1, abs=1e-6)
+
+
+def test_from_file_refuses_what_would_be_ignored(tmp_path):
+    np.save(tmp_path / "z.npy", np.zeros((3, 3)))
+    with pytest.raises(ConfigError, match="needs the grid spacing"):
+        HeightField.from_file(tmp_path / "z.npy")
+    (tmp_path / "z.asc").write_text("ncols 3\n")
+    with pytest.raises(ConfigError, match=r"not a \.npy, \.csv or \.tif"):
+        HeightField.from_file(tmp_path / "z.asc", 0.1)
+    with pytest.raises(ConfigError, match="no such file"):
+        HeightField.from_file(tmp_path / "none.npy", 0.1)
+    (tmp_path / "z.tif").write_bytes(b"")
+    with pytest.raises(ConfigError, match="a GeoTIFF carries its own grid spacing"):
+        HeightField.from_file(tmp_path / "z.tif", 0.1)
+
+
+def test_geotiff_nodata_tag_as_tools_round_it(tmp_path, caplog):
+    """GDAL_NODATA "-3.4028235e+38" (float32's lowest as ArcGIS and others write it; its
+    float64 reading is not the float32 value) on a float32 raster marks the cell, as GDAL
+    compares it in the raster's type: before, the cell loaded as a -3.4e38 m pit. A
+    -9999 cell without a tag is refused too; the tag's parse warning is not shown."""
+    tifffile = pytest.importorskip("tifffile")
+    z = np.arange(12, dtype=np.float32).reshape(3, 4)
+    z[1, 2] = np.finfo(np.float32).min
+    tags = [(33550, "d", 3, (2.0, 3.0, 0.0), False),
+            (33922, "d", 6, (0.0, 0.0, 0.0, 1000.0, 5000.0, 0.0), False),
+            (34735, "H", 8, (1, 1, 0, 1, 1025, 0, 1, 1), False)]
+    for text in ("-3.4028235e+38", "-3.40282346639e+038", "-3.4028234663852886e+38"):
+        tifffile.imwrite(tmp_path / "hole.tif", z, extratags=[*tags, (42113, "s", 0, text,
+                                                                      False)])
+        with pytest.raises(ConfigError, match=r"1 no-data cell\(s\), the first at row 1, "
+                           r"column 2 \(from 0, row 0 at the top of the file\), \(x, y\) = "
+                           r"\(1005, 4995.5\) m"):
+            HeightField.from_file(tmp_path / "hole.tif")
+    assert "castable" not in caplog.text
+    z[1, 2] = -9999.0
+    tifffile.imwrite(tmp_path / "untagged.tif", z, extratags=tags)
+    with pytest.raises(ConfigError, match=r"1 no-data cell.*holding -9999"):
+        HeightField.from_file(tmp_path / "untagged.tif")
+
+
 # --------------------------------------------------------------------------- resting wheel
 def _random_rotation(rng):
     q = rng.normal(size=4)

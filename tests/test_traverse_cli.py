@@ -6,6 +6,7 @@ progress bar, Dask), not the physics."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -571,3 +572,58 @@ def test_summary_length_is_the_path_length(tmp_path, capfd):
     assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json"]) == 0
     row = json.loads(capfd.readouterr().out)["summary"][0]
     assert row["lowest limit [m/s]"] == 0.3 and row["at s [m]"] is None
+
+
+def test_height_field_file_read_alike_by_scenario_and_traverse(tmp_path, capsys):
+    """One loader (HeightField.from_file) behind [terrain] file = ... of a scenario and of
+    a traverse: a DEM with a -9999 hole (a GDAL export's no-data) is refused by both with
+    the same message naming the cell (before: a 10 km pit, then 'cannot be placed' or
+    'outside the height field' far from it); ``nodata`` names another marker; the
+    traverse takes a spacing [dx, dy] as the scenario does (the plane z = 0.1 x + 0.05 y
+    read back at a point between nodes)."""
+    import roverimpact as ri
+    from roverimpact.scenario.ground import make_terrain
+    from roverimpact.traverse.run import build_terrain
+    from roverimpact.traverse.schema import traverse_from_dict
+
+    x0, y0, dx, dy = -4.0, -3.0, 0.1, 0.05
+    z = np.fromfunction(lambda i, j: 0.1 * (x0 + j * dx) + 0.05 * (y0 + i * dy), (121, 81))
+    z[65, 40] = -9999.0                            # under the left middle wheel (0, 0.25)
+    np.save(tmp_path / "dem.npy", z)
+    terrain = {"file": "dem.npy", "spacing": [dx, dy], "origin": [x0, y0]}
+    want = (r"dem.npy has 1 no-data cell\(s\), the first at row 65, column 40, "
+            r"\(x, y\) = \(0, 0.25\) m, holding -9999")
+    sc = tmp_path / "sc.toml"
+    sc.write_text('[model]\nname = "rocker_bogie"\n[velocity]\nu = 0.3\n[obstacle]\n'
+                  'wheel = "left_front"\nbeta_deg = 45.0\n[terrain]\nfile = "dem.npy"\n'
+                  f"spacing = [{dx}, {dy}]\norigin = [{x0}, {y0}]\n")
+    assert main(["energy", str(sc)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert re.search(want, err)
+    raw = json.loads(json.dumps(TRAV_FILE))
+    raw["terrain"] = {"kind": "file", **terrain}
+    with pytest.raises(ConfigError, match=want):
+        build_terrain(traverse_from_dict(raw, base_dir=tmp_path).terrain)
+    z[65, 40] = -1.0e6                             # a marker of the user's own
+    np.save(tmp_path / "dem.npy", z)
+    for where, extra in (("scenario", {}), ("traverse", {"kind": "file"})):
+        spec = {**terrain, "nodata": -1.0e6, **extra}
+        with pytest.raises(ConfigError, match=r"holding -1000000 \(the no-data value given"):
+            if where == "scenario":
+                sc_raw = ri.load_scenario(sc).model_dump()
+                sc_raw["terrain"] = {**spec, "file": str(tmp_path / "dem.npy")}
+                make_terrain(ri.Scenario.model_validate(sc_raw).terrain, None, None)
+            else:
+                build_terrain(traverse_from_dict({**raw, "terrain": spec},
+                                                 base_dir=tmp_path).terrain)
+    z[65, 40] = 0.1 * 0.0 + 0.05 * 0.25
+    np.save(tmp_path / "dem.npy", z)
+    hf = build_terrain(traverse_from_dict(raw, base_dir=tmp_path).terrain)
+    assert (hf.dx, hf.dy) == (dx, dy)
+    assert float(hf.height(0.33, 0.17)) == pytest.approx(0.1 * 0.33 + 0.05 * 0.17, abs=1e-12)
+
+
+TRAV_FILE = {"path": {"name": "a", "start": [-1.0, 0.0], "end": [1.0, 0.0]},
+             "model": {"name": "rocker_bogie"}, "drive": {"speed": 0.1},
+             "limits": {"T_allow": 0.01}}

@@ -43,6 +43,7 @@ radius ``(...)``). Angles are radians.
 from __future__ import annotations
 
 import csv
+import logging
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -67,6 +68,16 @@ __all__ = [
 
 #: points per block in the height-field evaluation (bounds the (n, 16) stencil gather)
 _CHUNK = 1 << 15
+
+#: Heights that GIS tools write for a cell without data: GDAL's and QGIS's usual -9999,
+#: ArcGIS's -99999, an integer DEM's -32768 / -32767 (SRTM). No terrain reaches them
+#: (Mars spans -8.2 to +21.2 km), so a height-field file holding one is refused
+#: (:meth:`HeightField.from_file`); so is any :data:`NODATA_ABOVE` or more in magnitude.
+NODATA_VALUES = (-9999.0, -99999.0, -32768.0, -32767.0)
+
+#: A height of this magnitude [m] or more is a no-data marker: float32's lowest value
+#: -3.4028235e+38 (written by GDAL, ArcGIS and QGIS, in whatever rounding), float64's.
+NODATA_ABOVE = 1e30
 
 
 # --------------------------------------------------------------------------- terrains
@@ -360,11 +371,49 @@ class HeightField(Terrain):
 
     # ------------------------------------------------------------------ loaders
     @classmethod
-    def from_npy(cls, path, spacing, origin=(0.0, 0.0), **kw) -> HeightField:
+    def from_file(cls, path, spacing=None, origin=None, *, nodata=None,
+                  **kw) -> HeightField:
+        """Load a height-field file by its suffix: ``.npy`` (:meth:`from_npy`), ``.csv``
+        (:meth:`from_csv`, comma-separated) or ``.tif``/``.tiff`` (:meth:`from_geotiff`).
+
+        ``spacing`` [m] (one number or ``(dx, dy)``) is needed for ``.npy`` and ``.csv``,
+        ``origin`` (x0, y0) [m] defaults to (0, 0); a GeoTIFF carries both, and giving
+        them is refused. ``nodata``: a value (or values) that marks the cells without
+        data, besides NaN, :data:`NODATA_VALUES`, :data:`NODATA_ABOVE` and a GeoTIFF's own
+        ``GDAL_NODATA``; a file holding any is refused, naming the count and where they
+        are (the terrain must be complete: fill the holes or crop the grid).
+
+        Raises :class:`~roverimpact.exceptions.ConfigError` for a missing file, another
+        suffix, a missing or extra spacing, and what the loaders refuse.
+        """
+        from .._io import no_file
+
+        path = Path(path)
+        if not path.is_file():
+            raise ConfigError(f"height field {path}: {no_file(path)}")
+        suffix = path.suffix.lower()
+        if suffix in (".tif", ".tiff"):
+            given = [k for k, v in (("spacing", spacing), ("origin", origin)) if v is not None]
+            if given:
+                raise ConfigError(f"height field {path}: a GeoTIFF carries its own grid "
+                                  f"spacing and origin: do not give {' and '.join(given)}")
+            return cls.from_geotiff(path, nodata=nodata, **kw)
+        if suffix not in (".npy", ".csv"):
+            raise ConfigError(f"height field {path} is not a .npy, .csv or .tif (GeoTIFF) "
+                              "file")
+        if spacing is None:
+            raise ConfigError(f"height field {path} needs the grid spacing (m)")
+        origin = (0.0, 0.0) if origin is None else origin
+        load = cls.from_npy if suffix == ".npy" else cls.from_csv
+        return load(path, spacing, origin, nodata=nodata, **kw)
+
+    @classmethod
+    def from_npy(cls, path, spacing, origin=(0.0, 0.0), *, nodata=None, **kw) -> HeightField:
         """Load a 2-D ``.npy`` grid (rows are y, columns x; see the class docstring).
 
         Raises :class:`~roverimpact.exceptions.ConfigError` on an unreadable, non-2-D,
-        non-numeric or non-finite file.
+        non-numeric or non-finite file, and on no-data cells (``nodata``, see
+        :meth:`from_file`).
         """
         path = Path(path)
         try:
@@ -381,11 +430,11 @@ class HeightField(Terrain):
         if not isinstance(z, np.ndarray) or z.dtype.kind not in "biuf":
             raise ConfigError(f"height field {path} must hold a numeric 2-D array, got "
                               f"dtype {getattr(z, 'dtype', type(z))}")
-        return cls._from_loaded(z, path, spacing, origin, **kw)
+        return cls._from_loaded(z, path, spacing, origin, nodata=_nodata_list(nodata), **kw)
 
     @classmethod
     def from_csv(cls, path, spacing, origin=(0.0, 0.0), *, delimiter: str = ",",
-                 **kw) -> HeightField:
+                 nodata=None, **kw) -> HeightField:
         """Load a CSV grid: one line per row ``i`` (y), one value per column ``j`` (x).
 
         The first line is the row at ``y0`` (the smallest y). The file is read as UTF-8,
@@ -393,7 +442,8 @@ class HeightField(Terrain):
         are skipped, and so are blank lines before and after the grid; a blank line inside
         it is refused (a missing row would shift the following rows in y). Raises
         :class:`~roverimpact.exceptions.ConfigError` naming the file's line (and column,
-        from 1) on blank lines inside the grid, ragged rows, non-numeric cells or NaN/inf.
+        from 1) on blank lines inside the grid, ragged rows, non-numeric cells, NaN/inf or
+        no-data cells (``nodata``, see :meth:`from_file`).
         """
         path = Path(path)
         try:
@@ -423,7 +473,7 @@ class HeightField(Terrain):
         except ValueError:
             cls._csv_diagnose(path, lines, delimiter)  # raises with the line and column
             raise  # pragma: no cover - _csv_diagnose always raises on what loadtxt rejects
-        return cls._from_loaded(z, path, spacing, origin,
+        return cls._from_loaded(z, path, spacing, origin, nodata=_nodata_list(nodata),
                                 where=lambda i, j: f"line {rows[i]}, column {j + 1}", **kw)
 
     @staticmethod
@@ -461,35 +511,63 @@ class HeightField(Terrain):
                                   f"{len(row)} values, line {first} has {width}")
         raise ConfigError(f"height field {path} is not a readable CSV grid")
 
-    @staticmethod
-    def _check_finite(z: np.ndarray, path, where=None) -> None:
-        """ConfigError on NaN/inf, naming the first in the order of ``z`` as
-        ``where(i, j)`` (the file's own numbering; default ``row i, column j``)."""
-        bad = ~np.isfinite(z)
-        if bad.any():
-            i, j = (int(k) for k in np.argwhere(bad)[0])
-            at = where(i, j) if where is not None else f"row {i}, column {j}"
-            raise ConfigError(f"height field {path} has {int(bad.sum())} NaN/inf value(s), "
-                              f"the first at {at}: fill the holes before use")
-
     @classmethod
-    def _from_loaded(cls, z, path, spacing, origin, *, where=None, **kw) -> HeightField:
-        """``where(i, j)``: the place of grid node (i, j) in the file's own numbering, for
-        the messages (default: ``row i, column j``, the array's)."""
-        z = np.asarray(z, dtype=float)
+    def _from_loaded(cls, z, path, spacing, origin, *, where=None, nodata=(), flip=False,
+                     **kw) -> HeightField:
+        """The grid ``z`` as read, in the file's order (``flip``: its rows run from north
+        to south, the reverse of the class's). Refuses NaN/inf and no-data cells: the
+        values ``nodata`` (each ``(value, what)``, compared in ``z``'s own dtype),
+        :data:`NODATA_VALUES` and :data:`NODATA_ABOVE`; ``where(i, j)`` names node (i, j)
+        of the file in its own numbering (default ``row i, column j``)."""
+        z = np.asarray(z)
         if z.size == 0:
             raise ConfigError(f"height field {path} is empty")
         if z.ndim != 2 or min(z.shape) < 2:
             raise ConfigError(f"height field {path} must be a 2-D grid of at least 2 x 2 "
                               f"nodes, got shape {z.shape}")
-        cls._check_finite(z, path, where)
-        try:
-            return cls(z, spacing, origin, **kw)
+        at = where if where is not None else (lambda i, j: f"row {i}, column {j}")
+        bad = ~np.isfinite(z) if z.dtype.kind == "f" else np.zeros(z.shape, bool)
+        if bad.any():
+            i, j = (int(k) for k in np.argwhere(bad)[0])
+            raise ConfigError(f"height field {path} has {int(bad.sum())} NaN/inf value(s), "
+                              f"the first at {at(i, j)}: fill the holes before use")
+        zf = z.astype(float)
+        hole = np.isin(zf, NODATA_VALUES) | (np.abs(zf) >= NODATA_ABOVE)
+        why = {}
+        for value, what in nodata:
+            with np.errstate(over="ignore"):  # in z's own type: float32's lowest however
+                v = np.asarray(value).astype(z.dtype) if z.dtype.kind == "f" else value
+            hit = z == v
+            if hit.any():
+                hole |= hit
+                why[float(v)] = what
+        if not hole.any():
+            out = zf[::-1] if flip else zf
+            try:
+                return cls(out, spacing, origin, **kw)
+            except InputError as exc:
+                raise ConfigError(f"height field {path}: {exc}") from None
+        i, j = (int(k) for k in np.argwhere(hole)[0])
+        value = float(zf[i, j])
+        what = why.get(value, "a value GIS tools write for a cell without data")
+        rows = (z.shape[0] - 1 - np.flatnonzero(hole.any(axis=1))) if flip else \
+            np.flatnonzero(hole.any(axis=1))
+        cols = np.flatnonzero(hole.any(axis=0))
+        try:   # where the holes are, in metres (the grid's spacing and origin checked)
+            g = cls(np.where(hole, 0.0, zf), spacing, origin, **kw)
         except InputError as exc:
             raise ConfigError(f"height field {path}: {exc}") from None
+        ii = z.shape[0] - 1 - i if flip else i
+        raise ConfigError(
+            f"height field {path} has {int(hole.sum())} no-data cell(s), the first at "
+            f"{at(i, j)}, (x, y) = ({g.x[j]:.6g}, {g.y[ii]:.6g}) m, holding {value:.8g} "
+            f"({what}); they lie in x in [{g.x[cols.min()]:.6g}, {g.x[cols.max()]:.6g}] m, "
+            f"y in [{g.y[rows.min()]:.6g}, {g.y[rows.max()]:.6g}] m. The terrain must be "
+            "complete: fill the holes (e.g. gdal_fillnodata.py) or crop the grid to the "
+            "part without them")
 
     @classmethod
-    def from_geotiff(cls, path, *, band: int = 0, **kw) -> HeightField:
+    def from_geotiff(cls, path, *, band: int = 0, nodata=None, **kw) -> HeightField:
         """Load a north-up GeoTIFF digital elevation model (needs the ``geotiff`` extra).
 
         Reads with ``tifffile``: the spacing from ``ModelPixelScaleTag``, the position
@@ -498,7 +576,9 @@ class HeightField(Terrain):
         corner; pixel-is-point: a pixel centre). Nodes are pixel centres in the file's
         projected coordinates (x east, y north); rows are flipped so that row 0 is the
         southernmost (the class convention). Heights are the file's values (assumed
-        metres); ``GDAL_NODATA`` cells raise a :class:`~roverimpact.exceptions.ConfigError`.
+        metres); cells at the ``GDAL_NODATA`` value (compared in the raster's own type, as
+        GDAL does: float32's lowest value matches however the tag rounds it) or at
+        ``nodata`` (see :meth:`from_file`) raise a :class:`~roverimpact.exceptions.ConfigError`.
         Rotated rasters and geographic (degree) coordinates are refused.
         """
         try:
@@ -507,7 +587,10 @@ class HeightField(Terrain):
             raise ConfigError("reading GeoTIFF needs tifffile: pip install "
                               "'roverimpact[geotiff]'") from None
         path = Path(path)
-        try:
+        log = logging.getLogger("tifffile")
+        level = log.level
+        log.setLevel(logging.ERROR)  # its warning that a float32 raster's GDAL_NODATA tag
+        try:                         # "-3.4028235e+38" is not castable to float32
             with tifffile.TiffFile(path) as tif:
                 page = tif.pages[0]
                 data = page.asarray()
@@ -516,9 +599,11 @@ class HeightField(Terrain):
                 tie = tags.valueof(33922)
                 trans = tags.valueof(34264)
                 gkd = tags.valueof(34735)
-                nodata = tags.valueof(42113)
+                tag = tags.valueof(42113)
         except (OSError, ValueError, tifffile.TiffFileError) as exc:
             raise ConfigError(f"cannot read GeoTIFF {path}: {exc}") from None
+        finally:
+            log.setLevel(level)
         data = np.asarray(data)
         if data.ndim == 3:
             if not 0 <= band < min(data.shape[0], data.shape[-1]):
@@ -552,27 +637,31 @@ class HeightField(Terrain):
         if not (sx > 0 and sy > 0):
             raise ConfigError(f"GeoTIFF {path}: pixel scale ({sx}, {sy}) is not north-up")
         half = 0.0 if keys.get(1025) == 2 else 0.5  # GTRasterTypeGeoKey: 2 = PixelIsPoint
-        z = data.astype(float)
-        if nodata is not None:
+        marks = _nodata_list(nodata)
+        if tag is not None:
             try:
-                nd = float(str(nodata).strip().strip("\x00"))
+                marks.append((float(str(tag).strip().strip("\x00")), "the file's GDAL_NODATA"))
             except ValueError:
-                nd = None
-            if nd is not None:
-                hole = z == nd
-                if hole.any():
-                    r, c = (int(k) for k in np.argwhere(hole)[0])
-                    raise ConfigError(f"GeoTIFF {path} has {int(hole.sum())} no-data cell(s), "
-                                      f"the first at row {r}, column {c} (from 0, row 0 at "
-                                      "the top of the file): fill the holes first")
-        nrow = z.shape[0]
+                pass
+        nrow = data.shape[0]
         # pixel (col c, row r) centre: X = X0 + (c + half - I0) sx, Y = Y0 - (r + half - J0) sy
         x0 = X0 + (half - I0) * sx
         y_last = Y0 - (nrow - 1 + half - J0) * sy
         # holes named as in the file (before the flip that puts row 0 south)
-        cls._check_finite(z, path, lambda r, c: f"row {r}, column {c} (from 0, row 0 at the "
-                          "top of the file)")
-        return cls._from_loaded(z[::-1], path, (sx, sy), (x0, y_last), **kw)
+        return cls._from_loaded(data, path, (sx, sy), (x0, y_last), nodata=marks, flip=True,
+                                where=lambda r, c: f"row {r}, column {c} (from 0, row 0 at "
+                                "the top of the file)", **kw)
+
+
+def _nodata_list(nodata) -> list[tuple[float, str]]:
+    """``nodata`` (None, a number or numbers) as ``[(value, what)]`` for the messages."""
+    if nodata is None:
+        return []
+    try:
+        vals = np.atleast_1d(np.asarray(nodata, dtype=float)).ravel()
+    except (TypeError, ValueError):
+        raise ConfigError(f"nodata must be a number or numbers, got {nodata!r}") from None
+    return [(float(v), "the no-data value given") for v in vals]
 
 
 def _other_separator(cell: str) -> str | None:

@@ -31,7 +31,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import no_file
 from ..exceptions import ConfigError, InputError
 from .schema import TerrainSpec
 
@@ -70,20 +69,7 @@ def _base_terrain(spec: TerrainSpec):
         except InputError as exc:
             raise ConfigError(f"terrain.plane: {exc}") from None
     if spec.file is not None:
-        f = spec.file
-        if not Path(f).is_file():
-            raise ConfigError(f"terrain.file {f!r}: {no_file(Path(f))}")
-        suffix = Path(f).suffix.lower()
-        kw = {} if spec.spacing is None else {
-            "spacing": spec.spacing,
-            "origin": spec.origin if spec.origin is not None else (0.0, 0.0)}
-        if suffix == ".npy":
-            return HeightField.from_npy(f, **kw)
-        if suffix == ".csv":
-            return HeightField.from_csv(f, **kw)
-        if suffix in (".tif", ".tiff"):
-            return HeightField.from_geotiff(f)
-        raise ConfigError(f"terrain.file: {f!r} is not a .npy, .csv or .tif height field")
+        return HeightField.from_file(spec.file, spec.spacing, spec.origin, nodata=spec.nodata)
     if spec.function is not None:
         return FunctionTerrain(_function(spec.function))
     return PlaneTerrain()

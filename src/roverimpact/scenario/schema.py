@@ -497,7 +497,9 @@ class TerrainSpec(StrictModel):
     One of ``plane`` (``{point, normal}``), ``file`` (a height field: ``.npy``, ``.csv``
     or ``.tif``/``.tiff`` GeoTIFF, with ``spacing`` [m] (one number or ``[dx, dy]``) and
     ``origin`` [m] of its first node, default (0, 0); rows are y, columns x, see
-    docs/terrain.md; a GeoTIFF carries its own spacing and origin: giving them is refused) or
+    docs/terrain.md; a GeoTIFF carries its own spacing and origin: giving them is refused;
+    ``nodata``: the value (or values) marking its cells without data, refused like -9999
+    and NaN, :meth:`~roverimpact.models.terrain.HeightField.from_file`) or
     ``function`` (a vectorised ``h(x, y)`` [m]: ``"package.module:name"`` importable, or
     ``"file.py:name"`` relative to the scenario's folder); else the plane z = 0.
     ``wheels``: a plane of its own under some wheels (:class:`WheelGroundSpec`), the
@@ -515,6 +517,7 @@ class TerrainSpec(StrictModel):
     file: str | None = None
     spacing: float | tuple[float, float] | None = None
     origin: tuple[float, float] | None = None
+    nodata: float | list[float] | None = None
     function: str | None = None
     wheels: dict[str, WheelGroundSpec] = Field(default_factory=dict)
     pose: bool = True
@@ -529,7 +532,7 @@ class TerrainSpec(StrictModel):
         if self.file is not None and self.spacing is None and not self.file.lower().endswith(
                 (".tif", ".tiff")):
             raise ValueError("terrain.file needs spacing (the grid step, m)")
-        for key in ("spacing", "origin"):
+        for key in ("spacing", "origin", "nodata"):
             if getattr(self, key) is not None and self.file is None:
                 raise ValueError(f"terrain.{key} applies to a height-field file only")
         if self.file is not None and self.file.lower().endswith((".tif", ".tiff")):
@@ -539,8 +542,8 @@ class TerrainSpec(StrictModel):
                                  f"({self.file!r}) carries its own grid spacing and origin "
                                  "(they would be ignored): remove them")
         sp = np.atleast_1d(np.asarray(self.spacing if self.spacing is not None else 1.0, float))
-        if not np.all(sp > 0.0):
-            raise ValueError(f"terrain.spacing must be > 0 m, got {self.spacing}")
+        if not np.all(np.isfinite(sp) & (sp > 0.0)):
+            raise ValueError(f"terrain.spacing must be > 0 m and finite, got {self.spacing}")
         if self.function is not None and ":" not in self.function:
             raise ValueError(f"terrain.function must be 'module:name', got {self.function!r}")
         return self

@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .._io import no_file
 from ..exceptions import ConfigError, InputError, ModelError
 from ..studies.store import atomic_parquet, atomic_write_bytes, check_out_dir, versions
 from .compute import evaluate_stations
@@ -58,16 +57,7 @@ def _terrain(spec_json: str):
                                   **spec.synthetic_params())
         except InputError as exc:
             raise ConfigError(f"terrain: {exc}") from None
-    f = Path(spec.file)
-    if not f.is_file():
-        raise ConfigError(f"terrain.file {f}: {no_file(f)}")
-    suffix = f.suffix.lower()
-    origin = spec.origin if spec.origin is not None else (0.0, 0.0)
-    if suffix == ".npy":
-        return HeightField.from_npy(f, spec.spacing, origin)
-    if suffix == ".csv":
-        return HeightField.from_csv(f, spec.spacing, origin)
-    return HeightField.from_geotiff(f)
+    return HeightField.from_file(spec.file, spec.spacing, spec.origin, nodata=spec.nodata)
 
 
 def build_terrain(spec: TerrainSpec):

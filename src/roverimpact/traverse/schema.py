@@ -137,11 +137,14 @@ class TerrainSpec(StrictModel):
     The synthetic terrain's keys (:data:`SYNTHETIC_DEFAULTS`, ``size``, ``seed``) are None
     when not given (:meth:`synthetic_params` fills in the defaults), so that a key that
     does not apply is refused rather than ignored: those with ``kind = "file"``, and
-    ``spacing`` and ``origin`` with a GeoTIFF (which carries its own)."""
+    ``spacing`` and ``origin`` with a GeoTIFF (which carries its own). A file's
+    ``spacing`` is one length or ``[dx, dy]`` [m]; ``nodata``: the value (or values) its
+    cells without data hold, refused like -9999 and NaN
+    (:meth:`~roverimpact.models.terrain.HeightField.from_file`)."""
 
     kind: Literal["synthetic", "file"] = "synthetic"
     size: Pair | None = None
-    spacing: float | None = Field(None, gt=0.0, allow_inf_nan=False)
+    spacing: float | Pair | None = None
     origin: Pair | None = None
     seed: int | None = Field(None, ge=0)
     rock_abundance: float | None = Field(None, ge=0.0, lt=1.0)
@@ -152,6 +155,7 @@ class TerrainSpec(StrictModel):
     d_max: float | None = Field(None, gt=0.0, allow_inf_nan=False)
     height_ratio: float | Pair | None = None
     file: str | None = None
+    nodata: float | list[float] | None = None
 
     def synthetic_params(self) -> dict:
         """``synthetic_mars``'s keyword arguments besides size, spacing and seed: the keys
@@ -167,13 +171,21 @@ class TerrainSpec(StrictModel):
     def _kind(self):
         if self.origin is not None:
             _finite_pair(self.origin, "terrain.origin")
+        if self.spacing is not None:
+            sp = self.spacing if isinstance(self.spacing, tuple) else (self.spacing,)
+            if not all(math.isfinite(d) and d > 0 for d in sp):
+                raise ValueError(f"terrain.spacing must be > 0 m and finite, got "
+                                 f"{self.spacing}")
         synth = ("size", "seed")
         if self.kind == "synthetic":
             missing = [k for k in (*synth, "spacing") if getattr(self, k) is None]
             if missing:
                 raise ValueError(f"a synthetic terrain needs {', '.join(missing)}")
-            if self.file is not None:
-                raise ValueError("terrain.file is for kind = 'file'")
+            if self.file is not None or self.nodata is not None:
+                raise ValueError("terrain.file and terrain.nodata are for kind = 'file'")
+            if isinstance(self.spacing, tuple):
+                raise ValueError(f"terrain.spacing of a synthetic terrain is one length (m), "
+                                 f"got {list(self.spacing)}")
             if not all(math.isfinite(s) and s > 0 for s in self.size):
                 raise ValueError(f"terrain.size must be two lengths > 0 m, got "
                                  f"{list(self.size)}")
