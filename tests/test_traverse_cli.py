@@ -627,3 +627,22 @@ def test_height_field_file_read_alike_by_scenario_and_traverse(tmp_path, capsys)
 TRAV_FILE = {"path": {"name": "a", "start": [-1.0, 0.0], "end": [1.0, 0.0]},
              "model": {"name": "rocker_bogie"}, "drive": {"speed": 0.1},
              "limits": {"T_allow": 0.01}}
+
+
+def test_height_field_file_written_again_is_read_again(tmp_path):
+    """In one Python session (a notebook), a DEM file saved again with other heights gives
+    the new terrain: before, build_terrain's per-process cache (keyed by the file's name)
+    kept the first heights, and run_traverse computed on them with no word of it. The
+    plane z = 0.2 x, then z = 0.2 x + 1, read back at x = 0.37."""
+    import os
+
+    from roverimpact.traverse.run import build_terrain
+    from roverimpact.traverse.schema import traverse_from_dict
+
+    x = np.arange(0.0, 2.01, 0.1)
+    raw = {**TRAV_FILE, "terrain": {"kind": "file", "file": "dem.npy", "spacing": 0.1}}
+    for k, lift in enumerate((0.0, 1.0)):
+        np.save(tmp_path / "dem.npy", np.tile(0.2 * x + lift, (5, 1)))
+        os.utime(tmp_path / "dem.npy", ns=(10**18 + k, 10**18 + k))  # mtime granularity
+        hf = build_terrain(traverse_from_dict(raw, base_dir=tmp_path).terrain)
+        assert float(hf.height(0.37, 0.2)) == pytest.approx(0.2 * 0.37 + lift, abs=1e-12)

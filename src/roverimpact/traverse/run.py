@@ -46,7 +46,9 @@ CONFIG_COPY, MANIFEST = "traverse.toml", "manifest.json"
 
 # ------------------------------------------------------------------------ inputs
 @functools.lru_cache(maxsize=4)
-def _terrain(spec_json: str):
+def _terrain(spec_json: str, stamp: tuple | None):
+    """``stamp``: the file's (size, modification time) in the key, so that a file
+    written again is read again."""
     spec = TerrainSpec.model_validate_json(spec_json)
     from ..models.terrain import HeightField
     from ..models.terrain_synth import synthetic_mars
@@ -61,8 +63,16 @@ def _terrain(spec_json: str):
 
 
 def build_terrain(spec: TerrainSpec):
-    """The terrain of ``[terrain]`` (cached per process: a Dask worker builds it once)."""
-    return _terrain(spec.model_dump_json())
+    """The terrain of ``[terrain]`` (cached per process: a Dask worker builds it once; a
+    height-field file is read again when it has changed)."""
+    stamp = None
+    if spec.file is not None:
+        try:
+            st = Path(spec.file).stat()
+            stamp = (st.st_size, st.st_mtime_ns)
+        except OSError:
+            pass   # from_file names the missing file
+    return _terrain(spec.model_dump_json(), stamp)
 
 
 @functools.lru_cache(maxsize=4)
