@@ -87,6 +87,30 @@ def test_full_scale_of_the_sensor(tmp_path):
     assert "full_scale 6" in f.message and "saturated" in f.message
 
 
+def test_sensor_reading_negative_under_compression_fails_the_trial(tmp_path):
+    """A 20 ms half-sine of 400 N (impulse 2 A T / pi = 5.093 N s) from a cell wired to
+    read negative under compression: before, the trial 'measured' the filter's ringing
+    lobes (F_peak 3.4 N, impulse -1.11 N s) with no error; now it fails naming the column
+    and the sign. The same recording with the sign right measures the closed form."""
+    t = np.arange(int(FS)) / FS
+    rng = np.random.default_rng(5)
+    v = _half_sine(t, 0.5, 0.02, 400.0) / 250.0 + 0.1 + rng.normal(0, 2e-4, len(t))
+    lines = ['[sensors]', 'channels = ["ch1"]', 'units = "V"', 'gains = [250.0]', '']
+    for i, sign in enumerate((-1.0, 1.0)):
+        pd.DataFrame({"time_s": t, "ch1_V": sign * v}).to_csv(tmp_path / f"s{i}.csv",
+                                                              index=False)
+        lines += ["[[trial]]", f'file = "s{i}.csv"', "beta_deg = 30", "speed = 0.3", ""]
+    (tmp_path / "trials.toml").write_text("\n".join(lines))
+    res = ex.run_experiment(tmp_path / "trials.toml")
+    assert [f.trial for f in res.failures] == [0]
+    msg = res.failures[0].message
+    assert "reads negative (column(s) ch1_V): its lowest -40" in msg
+    assert "negate the column" in msg
+    assert list(res.trials["file"]) == ["s1.csv"]
+    assert res.trials["F_peak"].iloc[0] == pytest.approx(400.0, rel=0.005)
+    assert res.trials["impulse"].iloc[0] == pytest.approx(2 * 400.0 * 0.02 / np.pi, rel=0.002)
+
+
 def test_infinite_sample_is_an_error_naming_the_row(tmp_path):
     t = np.arange(2500) / FS
     f = _half_sine(t, 0.2, 0.02, 1000.0) + np.random.default_rng(6).normal(0, 0.5, len(t))

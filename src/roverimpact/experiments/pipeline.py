@@ -24,6 +24,32 @@ __all__ = ["INPUT_COPIES", "ExperimentResult", "process_recording", "run_experim
 INPUT_COPIES = {"trials": "inputs_trials.toml", "scenario": "inputs_scenario.toml"}
 
 
+#: The force reads negative (the sensor's sign is wrong) when its lowest value is more than
+#: this many times its highest: a zero-phase low-pass undershoots a pulse by at most 14 %
+#: of its peak (a rigid mount's ringing by less than the peak).
+NEGATIVE_RATIO = 2.0
+
+
+def _check_sign(name: str, t, raw, F, thr: float, sensors) -> None:
+    """Raise :class:`TrialDataError` when the normal force is mostly a pull: a sensor that
+    reads negative under compression, whose impacts would otherwise be measured on the
+    filter's ringing (a few newtons, a negative impulse) with no error."""
+    lo, hi = float(np.min(F)), float(np.max(F))
+    if not (-lo > NEGATIVE_RATIO * max(hi, 0.0) and -lo > thr):
+        return
+    k = int(np.argmin(F))
+    x = np.asarray(raw, float) * np.asarray(sensors.gains, float)[None, :]
+    x = x - np.median(x, axis=0)
+    cols = [c for c, j in zip(sensors.columns, range(x.shape[1]), strict=True)
+            if -x[:, j].min() > NEGATIVE_RATIO * max(x[:, j].max(), 0.0)]
+    which = f" (column(s) {', '.join(cols)})" if cols else ""
+    raise TrialDataError(
+        f"{name}: the normal force reads negative{which}: its lowest {lo:.4g} N at "
+        f"t = {t[k]:.6g} s is more than {NEGATIVE_RATIO:g} times its highest {hi:.4g} N; "
+        "a compressive load must read positive (gains are newtons per raw unit, > 0): "
+        "negate the column of a sensor that reads negative under compression")
+
+
 def process_recording(path, cfg: TrialsFile):
     """Read, calibrate, filter and detect impacts in one recording.
 
@@ -37,7 +63,8 @@ def process_recording(path, cfg: TrialsFile):
     Raises
     ------
     TrialDataError
-        Unusable file, or no impact above the threshold.
+        Unusable file, a force that reads negative (lowest below -:data:`NEGATIVE_RATIO`
+        times the highest: the sensor's sign), or no impact above the threshold.
     """
     t, raw, fs, n_filled = read_recording(path, cfg.sensors,
                                           max_nan_run=cfg.detection.max_nan_run)
@@ -46,6 +73,7 @@ def process_recording(path, cfg: TrialsFile):
         F, thr, _ = normal_force(t, raw, cfg.sensors.gains, fs, cfg.filter, cfg.detection)
     except InputError as exc:
         raise TrialDataError(f"{name}: {exc}") from None
+    _check_sign(name, t, raw, F, thr, cfg.sensors)
     imp = detect_impacts(t, F, thr, min_separation_s=cfg.detection.min_separation_s,
                          split_fraction=cfg.detection.split_fraction,
                          cutoff_hz=cfg.filter.cutoff_hz)
