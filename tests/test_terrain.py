@@ -261,6 +261,11 @@ def test_npy_and_csv_round_trip(tmp_path):
      r"line 1: the values are separated by spaces, not ','.{0,150}$"),
     ("1;2;3\n4;5;6\n", r"separated by semicolons, not ','"),
     ("1\t2\t3\n4\t5\t6\n", r"separated by tabs, not ','"),
+    # a spreadsheet with a decimal comma: before, "'0;0' is not a number"
+    ("0;0,1;0,25\n1;1,1;1,25\n", r"line 1: the numbers have decimal commas \('0,5'\) and "
+                                 r"are separated by semicolons"),
+    ("# z\n0,5\t0,1\n1\t1,1\n", r"line 2: the numbers have decimal commas .* by tabs"),
+    ("1, 2, 3\n4, x, 6\n", r"line 2, column 2: 'x' is not a number"),  # not commas
     ("1,2,3,\n4,5,6,\n", r"line 1, column 4: the cell is empty \(a ',' at the end of the line"),
     ("1,,3\n4,5,6\n", r"line 1, column 2: the cell is empty$"),
     ("x" * 100 + "\n1\n", r"line 1, column 1: 'x{37}\.\.\.' is not a number"),

@@ -482,6 +482,13 @@ class HeightField(Terrain):
         for lineno, row in enumerate(csv.reader(lines, delimiter=delimiter), start=1):
             if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
                 continue
+            sep = _decimal_comma(lines[lineno - 1]) if delimiter == "," else None
+            if sep is not None:
+                raise ConfigError(
+                    f"height field {path}, line {lineno}: the numbers have decimal commas "
+                    f"('0,5') and are separated by {sep}, as a spreadsheet set to a language "
+                    "with a decimal comma saves them: save the grid with '.' as the decimal "
+                    "point and ',' between the values")
             for col, cell in enumerate(row, start=1):
                 try:
                     float(cell)
@@ -662,6 +669,25 @@ def _nodata_list(nodata) -> list[tuple[float, str]]:
     except (TypeError, ValueError):
         raise ConfigError(f"nodata must be a number or numbers, got {nodata!r}") from None
     return [(float(v), "the no-data value given") for v in vals]
+
+
+def _decimal_comma(line: str) -> str | None:
+    """The separator of a line of numbers written with decimal commas (``0,5;1,25``):
+    semicolons, tabs or spaces, or None (a line of comma-separated numbers: None)."""
+    try:
+        [float(q) for q in line.split(",")]
+        return None
+    except ValueError:
+        pass
+    for sep, name in ((";", "semicolons"), ("\t", "tabs"), (None, "spaces")):
+        parts = line.strip().split(sep)
+        if len(parts) > 1 and any("," in q for q in parts):
+            try:
+                [float(q.replace(",", ".")) for q in parts]
+            except ValueError:
+                continue
+            return name
+    return None
 
 
 def _other_separator(cell: str) -> str | None:
