@@ -426,6 +426,32 @@ def test_geotiff_nodata_tag_as_tools_round_it(tmp_path, caplog):
         HeightField.from_file(tmp_path / "untagged.tif")
 
 
+def test_geotiff_scale_offset_and_units(tmp_path):
+    """A packed integer DEM (GDAL_METADATA scale 0.1, offset -1000: heights = raw * 0.1 -
+    1000, GDAL's -a_scale/-a_offset) reads in metres: before, the raw counts 5000... were
+    taken for metres (5.5 km instead of -450 m). Feet, horizontal or vertical, are refused
+    (before, a foot was read as a metre)."""
+    tifffile = pytest.importorskip("tifffile")
+    raw = (np.arange(12).reshape(3, 4) * 100 + 5000).astype(np.uint16)   # row 0 = north
+    keys = [1, 1, 0, 2, 1024, 0, 1, 1, 1025, 0, 1, 1]
+    geo = [(33550, "d", 3, (2.0, 3.0, 0.0), False),
+           (33922, "d", 6, (0.0, 0.0, 0.0, 1000.0, 5000.0, 0.0), False)]
+    meta = ('<GDALMetadata>\n  <Item name="OFFSET" sample="0" role="offset">-1000</Item>\n'
+            '  <Item name="SCALE" sample="0" role="scale">0.1</Item>\n</GDALMetadata>\n')
+    tifffile.imwrite(tmp_path / "packed.tif", raw, extratags=[
+        *geo, (34735, "H", len(keys), keys, False), (42112, "s", 0, meta, False)])
+    hf = HeightField.from_file(tmp_path / "packed.tif")
+    for r, c in ((0, 0), (2, 3), (1, 2)):
+        x, y = 1000.0 + (c + 0.5) * 2.0, 5000.0 - (r + 0.5) * 3.0
+        assert hf.height(x, y) == pytest.approx(raw[r, c] * 0.1 - 1000.0, abs=1e-9)
+    for key, word in ((3076, "horizontal"), (4099, "vertical")):
+        k = [1, 1, 0, 3, *keys[4:], key, 0, 1, 9002]
+        tifffile.imwrite(tmp_path / "feet.tif", raw.astype(np.float32), extratags=[
+            *geo, (34735, "H", len(k), k, False)])
+        with pytest.raises(ConfigError, match=f"its {word} .* unit is the foot, not the metre"):
+            HeightField.from_file(tmp_path / "feet.tif")
+
+
 # --------------------------------------------------------------------------- resting wheel
 def _random_rotation(rng):
     q = rng.normal(size=4)

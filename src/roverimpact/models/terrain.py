@@ -520,12 +520,13 @@ class HeightField(Terrain):
 
     @classmethod
     def _from_loaded(cls, z, path, spacing, origin, *, where=None, nodata=(), flip=False,
-                     **kw) -> HeightField:
+                     scale: float = 1.0, offset: float = 0.0, **kw) -> HeightField:
         """The grid ``z`` as read, in the file's order (``flip``: its rows run from north
         to south, the reverse of the class's). Refuses NaN/inf and no-data cells: the
         values ``nodata`` (each ``(value, what)``, compared in ``z``'s own dtype),
         :data:`NODATA_VALUES` and :data:`NODATA_ABOVE`; ``where(i, j)`` names node (i, j)
-        of the file in its own numbering (default ``row i, column j``)."""
+        of the file in its own numbering (default ``row i, column j``). The heights are
+        ``z * scale + offset`` (a GeoTIFF's own; the no-data values are raw readings)."""
         z = np.asarray(z)
         if z.size == 0:
             raise ConfigError(f"height field {path} is empty")
@@ -550,6 +551,8 @@ class HeightField(Terrain):
                 why[float(v)] = what
         if not hole.any():
             out = zf[::-1] if flip else zf
+            if scale != 1.0 or offset != 0.0:
+                out = out * scale + offset
             try:
                 return cls(out, spacing, origin, **kw)
             except InputError as exc:
@@ -582,8 +585,10 @@ class HeightField(Terrain):
         honouring ``GTRasterTypeGeoKey`` (pixel-is-area: the tie point is a pixel
         corner; pixel-is-point: a pixel centre). Nodes are pixel centres in the file's
         projected coordinates (x east, y north); rows are flipped so that row 0 is the
-        southernmost (the class convention). Heights are the file's values (assumed
-        metres); cells at the ``GDAL_NODATA`` value (compared in the raster's own type, as
+        southernmost (the class convention). Heights are the file's values in metres,
+        ``raw * scale + offset`` when ``GDAL_METADATA`` gives a scale and offset; a
+        horizontal or vertical unit other than the metre (ProjLinearUnitsGeoKey,
+        VerticalUnitsGeoKey) is refused. Cells at the ``GDAL_NODATA`` value (compared in the raster's own type, as
         GDAL does: float32's lowest value matches however the tag rounds it) or at
         ``nodata`` (see :meth:`from_file`) raise a :class:`~roverimpact.exceptions.ConfigError`.
         Rotated rasters and geographic (degree) coordinates are refused.
@@ -607,6 +612,7 @@ class HeightField(Terrain):
                 trans = tags.valueof(34264)
                 gkd = tags.valueof(34735)
                 tag = tags.valueof(42113)
+                meta = tags.valueof(42112)
         except (OSError, ValueError, tifffile.TiffFileError) as exc:
             raise ConfigError(f"cannot read GeoTIFF {path}: {exc}") from None
         finally:
@@ -644,6 +650,16 @@ class HeightField(Terrain):
         if not (sx > 0 and sy > 0):
             raise ConfigError(f"GeoTIFF {path}: pixel scale ({sx}, {sy}) is not north-up")
         half = 0.0 if keys.get(1025) == 2 else 0.5  # GTRasterTypeGeoKey: 2 = PixelIsPoint
+        # ProjLinearUnitsGeoKey, VerticalUnitsGeoKey: 9001 = metre (EPSG unit codes)
+        for key, what in ((3076, "horizontal (ProjLinearUnitsGeoKey)"),
+                          (4099, "vertical (VerticalUnitsGeoKey)")):
+            unit = keys.get(key)
+            if unit is not None and unit not in (9001, 32767):
+                name = _UNITS.get(unit, f"EPSG unit {unit}")
+                raise ConfigError(f"GeoTIFF {path}: its {what} unit is the {name}, not the "
+                                  "metre: convert it to metres first (gdalwarp -t_srs with a "
+                                  "metric projection, gdal_calc.py for the heights)")
+        scale, offset = _gdal_scale(meta, band)
         marks = _nodata_list(nodata)
         if tag is not None:
             try:
@@ -656,8 +672,37 @@ class HeightField(Terrain):
         y_last = Y0 - (nrow - 1 + half - J0) * sy
         # holes named as in the file (before the flip that puts row 0 south)
         return cls._from_loaded(data, path, (sx, sy), (x0, y_last), nodata=marks, flip=True,
+                                scale=scale, offset=offset,
                                 where=lambda r, c: f"row {r}, column {c} (from 0, row 0 at "
                                 "the top of the file)", **kw)
+
+
+#: EPSG unit codes a GeoTIFF may state instead of the metre (9001)
+_UNITS = {9002: "foot", 9003: "US survey foot", 9005: "Clarke's foot", 9014: "fathom",
+          9030: "nautical mile", 9036: "kilometre", 9101: "radian", 9102: "degree"}
+
+
+def _gdal_scale(meta, band: int) -> tuple[float, float]:
+    """``(scale, offset)`` of ``band`` in a GeoTIFF's GDAL_METADATA XML (tag 42112): the
+    heights are ``raw * scale + offset`` (GDAL's ``-a_scale``/``-a_offset``, an integer DEM's
+    packing); (1, 0) without them."""
+    if not meta:
+        return 1.0, 0.0
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(str(meta).strip().strip("\x00"))
+    except ET.ParseError:
+        return 1.0, 0.0
+    out = {"scale": 1.0, "offset": 0.0}
+    for item in root.iter("Item"):
+        role = (item.get("role") or "").lower()
+        if role in out and int(item.get("sample", band)) == band:
+            try:
+                out[role] = float((item.text or "").strip())
+            except ValueError:
+                pass
+    return out["scale"], out["offset"]
 
 
 def _nodata_list(nodata) -> list[tuple[float, str]]:
