@@ -203,3 +203,24 @@ def test_missing_scenario_is_told_before_the_recordings(tmp_path, capsys, monkey
     err = capsys.readouterr().err
     assert "nope.toml: no such scenario file" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_units_row_and_a_bad_cell_are_named(tmp_path):
+    """A DAQ export's units row under the header ('s,V') and a corrupt cell: named by
+    column, data row and value (before: "non-numeric value (Unable to parse string 's' at
+    position 0)", pandas' words, no column)."""
+    from roverimpact.experiments.recording import TrialDataError, read_recording
+    from roverimpact.experiments.trials import SensorsConfig
+
+    t = np.arange(200) / FS
+    body = [f"{a:.6f},{0.1 + 0.01 * np.sin(a):.6f}" for a in t]
+    sensors = SensorsConfig(channels=["ch1"], gains=[250.0])
+    (tmp_path / "u.csv").write_text("\n".join(["time_s,ch1_V", "s,V", *body]) + "\n")
+    with pytest.raises(TrialDataError, match=r"column 'time_s', data row 1: 's' is not a "
+                                             r"number: a units row under the header"):
+        read_recording(tmp_path / "u.csv", sensors)
+    body[40] = body[40].split(",")[0] + ",0.1O3"
+    (tmp_path / "c.csv").write_text("\n".join(["time_s,ch1_V", *body]) + "\n")
+    with pytest.raises(TrialDataError, match=r"column 'ch1_V', data row 41: '0.1O3' is not "
+                                             r"a number$"):
+        read_recording(tmp_path / "c.csv", sensors)

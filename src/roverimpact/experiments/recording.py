@@ -185,11 +185,19 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
         )
     if len(df) == 0:
         raise TrialDataError(f"{path.name}: header but no data rows")
-    try:
-        numeric = df[["time_s", *cols]].apply(pd.to_numeric, errors="raise")
-        data = np.array(numeric, dtype=float)
-    except (ValueError, TypeError) as exc:
-        raise TrialDataError(f"{path.name}: non-numeric value ({exc})") from None
+    numeric = df[["time_s", *cols]].apply(pd.to_numeric, errors="coerce")
+    text = df[["time_s", *cols]].astype(str).apply(lambda c: c.str.strip().str.lower())
+    # a cell that is not a number: coerced to NaN, but not empty, not 'nan'
+    bad = numeric.isna() & df[["time_s", *cols]].notna() & ~text.isin(["nan", "", "na"])
+    if bad.to_numpy().any():
+        i, j = (int(k) for k in np.argwhere(bad.to_numpy())[0])
+        col = bad.columns[j]
+        cell = str(df[col].iloc[i]).strip()
+        hint = (": a units row under the header? Put the units in the column names "
+                "(time_s, ch1_V) or start the row with '#'") if i == 0 else ""
+        raise TrialDataError(f"{path.name}: column {col!r}, data row {i + 1}: "
+                             f"{cell[:40]!r} is not a number{hint}")
+    data = np.array(numeric, dtype=float)
     t, raw = data[:, 0], data[:, 1:]
     if len(t) < 16:
         raise TrialDataError(f"{path.name}: only {len(t)} samples; need at least 16")
