@@ -588,8 +588,9 @@ class HeightField(Terrain):
         southernmost (the class convention). Heights are the file's values in metres,
         ``raw * scale + offset`` when ``GDAL_METADATA`` gives a scale and offset; a
         horizontal or vertical unit other than the metre (ProjLinearUnitsGeoKey,
-        VerticalUnitsGeoKey) is refused. Cells at the ``GDAL_NODATA`` value (compared in the raster's own type, as
-        GDAL does: float32's lowest value matches however the tag rounds it) or at
+        VerticalUnitsGeoKey) is refused. Cells at the ``GDAL_NODATA`` value (compared in
+        the raster's own type, as GDAL does: float32's lowest value matches however the
+        tag rounds it) or at
         ``nodata`` (see :meth:`from_file`) raise a :class:`~roverimpact.exceptions.ConfigError`.
         Rotated rasters and geographic (degree) coordinates are refused.
         """
