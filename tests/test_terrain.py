@@ -426,6 +426,27 @@ def test_geotiff_nodata_tag_as_tools_round_it(tmp_path, caplog):
         HeightField.from_file(tmp_path / "untagged.tif")
 
 
+@pytest.mark.parametrize("suffix", [".csv", ".npy"])
+def test_xyz_point_list_is_not_taken_for_a_grid(tmp_path, suffix):
+    """x, y, z triplets of the plane z = 0.1 x (gdal_translate -of XYZ, commas, no header)
+    loaded as a grid 3 nodes wide and 1071 long (the rover then fell 'outside the height
+    field' at -0.1 m); now refused, and the recipe in the message gives the grid back."""
+    x, y = np.arange(0.0, 2.01, 0.1), np.arange(0.0, 5.01, 0.1)
+    X, Y = np.meshgrid(x, y)
+    a = np.c_[X.ravel(), Y.ravel(), 0.1 * X.ravel()]
+    a = a[np.random.default_rng(0).permutation(len(a))]
+    p = tmp_path / f"pts{suffix}"
+    if suffix == ".csv":
+        np.savetxt(p, a, delimiter=",")
+    else:
+        np.save(p, a)
+    with pytest.raises(ConfigError, match=r"3 columns and 1071 rows whose first two columns "
+                                          r"hold 21 x 51 \(x, y\) points: an XYZ point list"):
+        HeightField.from_file(p, 0.1)
+    z = a[np.lexsort((a[:, 0], a[:, 1])), 2].reshape(51, 21)   # the message's recipe
+    np.testing.assert_allclose(z, 0.1 * X, atol=1e-15)
+
+
 def test_geotiff_scale_offset_and_units(tmp_path):
     """A packed integer DEM (GDAL_METADATA scale 0.1, offset -1000: heights = raw * 0.1 -
     1000, GDAL's -a_scale/-a_offset) reads in metres: before, the raw counts 5000... were

@@ -533,6 +533,15 @@ class HeightField(Terrain):
         if z.ndim != 2 or min(z.shape) < 2:
             raise ConfigError(f"height field {path} must be a 2-D grid of at least 2 x 2 "
                               f"nodes, got shape {z.shape}")
+        if z.shape[1] == 3 and z.shape[0] > 4:
+            nx, ny = (np.unique(z[:, k]).size for k in (0, 1))
+            if nx >= 2 and ny >= 2 and nx * ny == z.shape[0]:
+                raise ConfigError(
+                    f"height field {path} has 3 columns and {z.shape[0]} rows whose first two "
+                    f"columns hold {nx} x {ny} (x, y) points: an XYZ point list (as "
+                    "gdal_translate -of XYZ writes), not a grid of heights. Write the grid, one "
+                    "row per y and one column per x (numpy: z = a[np.lexsort((a[:, 0], "
+                    f"a[:, 1])), 2].reshape({ny}, {nx}), rows by increasing y)")
         at = where if where is not None else (lambda i, j: f"row {i}, column {j}")
         bad = ~np.isfinite(z) if z.dtype.kind == "f" else np.zeros(z.shape, bool)
         if bad.any():
