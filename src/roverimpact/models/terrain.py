@@ -548,8 +548,8 @@ class HeightField(Terrain):
             i, j = (int(k) for k in np.argwhere(bad)[0])
             raise ConfigError(f"height field {path} has {int(bad.sum())} NaN/inf value(s), "
                               f"the first at {at(i, j)}: fill the holes before use")
-        zf = z.astype(float)
-        hole = np.isin(zf, NODATA_VALUES) | (np.abs(zf) >= NODATA_ABOVE)
+        zf = np.asarray(z, dtype=float)   # no copy of a float64 grid (a large DEM)
+        hole = np.isin(zf, NODATA_VALUES) | (zf >= NODATA_ABOVE) | (zf <= -NODATA_ABOVE)
         why = {}
         for value, what in nodata:
             with np.errstate(over="ignore"):  # in z's own type: float32's lowest however
