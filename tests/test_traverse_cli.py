@@ -646,3 +646,32 @@ def test_height_field_file_written_again_is_read_again(tmp_path):
         os.utime(tmp_path / "dem.npy", ns=(10**18 + k, 10**18 + k))  # mtime granularity
         hf = build_terrain(traverse_from_dict(raw, base_dir=tmp_path).terrain)
         assert float(hf.height(0.37, 0.2)) == pytest.approx(0.2 * 0.37 + lift, abs=1e-12)
+
+
+def test_report_redraws_on_the_height_field_of_the_run(tmp_path, monkeypatch, capsys):
+    """The copy traverse.toml says file = "dem.npy", relative to the traverse file; the
+    report read it from the working folder: 'height field dem.npy: no such file' from
+    anywhere else (or another dem.npy of that name). The manifest now keeps the file's
+    absolute path and SHA-256: the report works from any folder, and refuses a DEM
+    changed since the run."""
+    src = tmp_path / "in"
+    src.mkdir()
+    np.save(src / "dem.npy", np.zeros((61, 81)))
+    (src / "t.toml").write_text(
+        '[terrain]\nkind = "file"\nfile = "dem.npy"\nspacing = 0.05\norigin = [-2.0, -1.5]\n'
+        '[path]\nstart = [-0.2, 0.0]\nend = [0.0, 0.0]\nspacing = 0.1\n'
+        '[model]\nname = "rocker_bogie"\n[drive]\nspeed = 0.1\n[limits]\nT_allow = 0.01\n')
+    out = tmp_path / "out"
+    assert main(["traverse", str(src / "t.toml"), "-o", str(out)]) == 0
+    man = json.loads((out / "manifest.json").read_text())
+    assert man["terrain_file"]["path"] == str((src / "dem.npy").resolve())
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    (out / "report.html").unlink()
+    capsys.readouterr()
+    assert main(["traverse-report", str(out)]) == 0
+    assert (out / "report.html").is_file()
+    np.save(src / "dem.npy", np.full((61, 81), 0.1))
+    assert main(["traverse-report", str(out)]) == 2
+    assert "dem.npy changed since the traverse ran" in capsys.readouterr().err

@@ -294,6 +294,30 @@ def statistics(poses: pd.DataFrame, wheels: pd.DataFrame, segments: pd.DataFrame
     return out
 
 
+def _terrain_file_of_the_run(folder: Path, config, man: dict):
+    """``config`` with the height-field file the run read (``terrain_file`` of
+    ``manifest.json``: its absolute path): the copy's ``file = "dem.npy"`` is relative to
+    the traverse file, not to the output folder nor to the working folder. A file changed
+    since the run is refused (the map would not be the terrain of the tables)."""
+    from ..traverse.run import file_sha256
+
+    rec = man.get("terrain_file")
+    if config.terrain.file is None or not isinstance(rec, dict) or "path" not in rec:
+        return config            # a synthetic terrain, or a folder written before
+    f = Path(rec["path"])
+    if not f.is_file():
+        raise ConfigError(f"{folder}: the traverse ran on the height field {f}, which is "
+                          "gone: cannot redraw the map (put it back, or run the traverse "
+                          "again)")
+    if rec.get("sha256") not in (None, file_sha256(f)):
+        raise ConfigError(f"{folder}: the height field {f} changed since the traverse ran "
+                          "(its SHA-256 differs from terrain_file in manifest.json): a map "
+                          "drawn on it would not be the terrain of the tables; restore it, or "
+                          "run the traverse again")
+    return config.model_copy(update={"terrain": config.terrain.model_copy(
+        update={"file": str(f)})})
+
+
 def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
     """Draw ``map.png/svg`` and ``speed.png/svg`` (per path: ``map-<path>``..., the path's
     name made a file name by :func:`~roverimpact.traverse.schema.file_tag`: "route 1/a"
@@ -328,6 +352,7 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
                 "the original, so a report from the edited file would contradict them; "
                 "restore it, or run `roverimpact traverse` on the edited file")
         config = traverse_from_dict(raw, where=str(folder / "traverse.toml"))
+        config = _terrain_file_of_the_run(folder, config, man)
     if terrain is None:
         terrain = build_terrain(config.terrain)
     names = list(dict.fromkeys(poses["path"]))

@@ -599,6 +599,17 @@ def _run_dask(address, cfg_dict, chunks, parts, progress, total) -> int:
     return done
 
 
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 (hex) of a file's bytes, read in blocks (a DEM may be large)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with Path(path).open("rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
 def config_fingerprint(text: str) -> str:
     """SHA-256 (hex) of the traverse file copy's text, stored in ``manifest.json`` as
     ``config_sha256``: ``traverse-report`` refuses a copy edited since the run. Line
@@ -632,6 +643,9 @@ def _write(res: TraverseResult, text: str | None, csv: bool) -> None:
                 "executor": res.executor,
                 "config_sha256": config_fingerprint(text),
                 "versions": versions()}
+    if cfg.terrain.file is not None:   # traverse-report redraws the map on it from any folder
+        f = Path(cfg.terrain.file).resolve()
+        manifest["terrain_file"] = {"path": str(f), "sha256": file_sha256(f)}
     atomic_write_bytes(out / MANIFEST, json.dumps(manifest, indent=2).encode())
     files["config"], files["manifest"] = out / CONFIG_COPY, out / MANIFEST
     res.files = files
