@@ -447,6 +447,33 @@ def test_xyz_point_list_is_not_taken_for_a_grid(tmp_path, suffix):
     np.testing.assert_allclose(z, 0.1 * X, atol=1e-15)
 
 
+@pytest.mark.parametrize(("code", "name"), [(5, "LZW"), (50000, "ZSTD")])
+def test_geotiff_compression_without_its_codec(tmp_path, code, name):
+    """A GeoTIFF compressed by LZW (GDAL's usual) or ZSTD, without imagecodecs (which the
+    'geotiff' extra does not bring): one ConfigError naming the codec and the way out
+    (before: ZSTD raised ModuleNotFoundError 'compression', a traceback from the CLI)."""
+    tifffile = pytest.importorskip("tifffile")
+    import importlib.util
+
+    if importlib.util.find_spec("imagecodecs") is not None:
+        pytest.skip("imagecodecs is installed: the codecs are there")
+    tags = [(33550, "d", 3, (1.0, 1.0, 0.0), False),
+            (33922, "d", 6, (0.0, 0.0, 0.0, 0.0, 3.0, 0.0), False),
+            (34735, "H", 8, (1, 1, 0, 1, 1025, 0, 1, 1), False)]
+    p = tmp_path / "c.tif"
+    tifffile.imwrite(p, np.ones((4, 4), np.float32), extratags=tags, compression="zlib")
+    with tifffile.TiffFile(p, mode="r+b") as tif:
+        tif.pages[0].tags["Compression"].overwrite(code)
+    try:
+        HeightField.from_file(p)
+    except ConfigError as exc:
+        if name == "ZSTD" and "imagecodecs" not in str(exc):
+            return   # Python 3.14's compression.zstd read it (and found no valid data)
+        assert f"its {name} compression needs the imagecodecs package" in str(exc)
+    else:  # pragma: no cover - a codec read the bytes as valid
+        assert name == "ZSTD"
+
+
 def test_geotiff_scale_offset_and_units(tmp_path):
     """A packed integer DEM (GDAL_METADATA scale 0.1, offset -1000: heights = raw * 0.1 -
     1000, GDAL's -a_scale/-a_offset) reads in metres: before, the raw counts 5000... were

@@ -615,7 +615,16 @@ class HeightField(Terrain):
         try:                         # "-3.4028235e+38" is not castable to float32
             with tifffile.TiffFile(path) as tif:
                 page = tif.pages[0]
-                data = page.asarray()
+                codec = getattr(page.compression, "name", str(page.compression))
+                try:
+                    data = page.asarray()
+                except (ImportError, KeyError, ValueError) as exc:
+                    if not (isinstance(exc, ImportError) or "imagecodecs" in str(exc)):
+                        raise
+                    raise ConfigError(
+                        f"cannot read GeoTIFF {path}: its {codec} compression needs the "
+                        "imagecodecs package (pip install imagecodecs), or save it "
+                        "uncompressed (gdal_translate -co COMPRESS=NONE)") from None
                 tags = page.tags
                 scale = tags.valueof(33550)
                 tie = tags.valueof(33922)
@@ -623,7 +632,9 @@ class HeightField(Terrain):
                 gkd = tags.valueof(34735)
                 tag = tags.valueof(42113)
                 meta = tags.valueof(42112)
-        except (OSError, ValueError, tifffile.TiffFileError) as exc:
+        except ConfigError:
+            raise
+        except (OSError, ValueError, IndexError, tifffile.TiffFileError) as exc:
             raise ConfigError(f"cannot read GeoTIFF {path}: {exc}") from None
         finally:
             log.setLevel(level)
