@@ -112,6 +112,31 @@ def test_same_terrain_as_plane_file_function_and_per_wheel_planes(tmp_path):
     assert _T({**RB, "terrain": {"wheels": wheels}}) == pytest.approx(want, rel=1e-9)
 
 
+def test_north_up_geotiff_in_projected_coordinates(tmp_path):
+    """A north-up GeoTIFF of the plane z = 1500 + 0.1 (x - X0) + 0.05 (y - Y0) in UTM-like
+    coordinates (rows from north to south) gives the T_c^- of the same plane as a
+    PlaneTerrain (the y slope flipped would give 0.109 J, not 0.098 J: the row order is
+    checked); with the rover left at its nominal (0, 0) the error says to place it by
+    [configuration.base] x, y (before, only 'outside the height field (... y in
+    [4.19999e+06, 4.2e+06] m)', the extent rounded to 6 digits)."""
+    tifffile = pytest.importorskip("tifffile")
+    X0, Ytop, s, nx, ny = 500000.0, 4200000.0, 0.05, 200, 160
+    xc = X0 + (np.arange(nx) + 0.5) * s
+    yc = Ytop - (np.arange(ny) + 0.5) * s            # row 0 = north
+    Z = 1500.0 + 0.1 * (xc[None, :] - X0) + 0.05 * (yc[:, None] - Ytop)
+    tifffile.imwrite(tmp_path / "dem.tif", Z, extratags=[
+        (33550, "d", 3, (s, s, 0.0), False), (33922, "d", 6, (0, 0, 0, X0, Ytop, 0), False),
+        (34735, "H", 8, (1, 1, 0, 1, 1025, 0, 1, 1), False)])
+    with pytest.raises(ConfigError, match=r"y in \[4199992.025, 4199999.975\] m.*give x and "
+                                          r"y inside the terrain"):
+        _T({**RB, "terrain": {"file": str(tmp_path / "dem.tif")}})
+    at = {"base": {"x": X0 + 5.0, "y": Ytop - 4.0}}
+    got = _T({**RB, "configuration": at, "terrain": {"file": str(tmp_path / "dem.tif")}})
+    plane = {"point": [X0, Ytop, 1500.0], "normal": [-0.1, -0.05, 1.0]}
+    assert got == pytest.approx(_T({**RB, "configuration": at, "terrain": {"plane": plane}}),
+                                rel=1e-7)
+
+
 def _write(path, raw):
     import tomli_w
 

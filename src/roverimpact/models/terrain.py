@@ -319,14 +319,14 @@ class HeightField(Terrain):
     def __repr__(self) -> str:
         (xa, xb), (ya, yb) = self.extent
         return (f"HeightField({self.ny} x {self.nx} nodes, spacing ({self.dx:g}, {self.dy:g}) "
-                f"m, x in [{xa:g}, {xb:g}], y in [{ya:g}, {yb:g}] m)")
+                f"m, x in [{xa:.10g}, {xb:.10g}], y in [{ya:.10g}, {yb:.10g}] m)")
 
     def _outside_error(self, x, y, bad) -> InputError:
         k = int(np.flatnonzero(bad)[0])
         (xa, xb), (ya, yb) = self.extent
         return InputError(
-            f"point (x, y) = ({x[k]:.6g}, {y[k]:.6g}) m is outside the height field "
-            f"(x in [{xa:.6g}, {xb:.6g}] m, y in [{ya:.6g}, {yb:.6g}] m); "
+            f"point (x, y) = ({x[k]:.10g}, {y[k]:.10g}) m is outside the height field "
+            f"(x in [{xa:.10g}, {xb:.10g}] m, y in [{ya:.10g}, {yb:.10g}] m); "
             f"{int(bad.sum())} of {x.size} query point(s) are outside: extend the grid or "
             "build it with outside='nan'")
 
@@ -579,9 +579,9 @@ class HeightField(Terrain):
         ii = z.shape[0] - 1 - i if flip else i
         raise ConfigError(
             f"height field {path} has {int(hole.sum())} no-data cell(s), the first at "
-            f"{at(i, j)}, (x, y) = ({g.x[j]:.6g}, {g.y[ii]:.6g}) m, holding {value:.8g} "
-            f"({what}); they lie in x in [{g.x[cols.min()]:.6g}, {g.x[cols.max()]:.6g}] m, "
-            f"y in [{g.y[rows.min()]:.6g}, {g.y[rows.max()]:.6g}] m. The terrain must be "
+            f"{at(i, j)}, (x, y) = ({g.x[j]:.10g}, {g.y[ii]:.10g}) m, holding {value:.8g} "
+            f"({what}); they lie in x in [{g.x[cols.min()]:.10g}, {g.x[cols.max()]:.10g}] m, "
+            f"y in [{g.y[rows.min()]:.10g}, {g.y[rows.max()]:.10g}] m. The terrain must be "
             "complete: fill the holes (e.g. gdal_fillnodata.py) or crop the grid to the "
             "part without them")
 
@@ -823,8 +823,8 @@ class FunctionTerrain(Terrain):
                                  "points") from None
         if not np.isfinite(z).all():
             k = int(np.flatnonzero(~np.isfinite(z))[0])
-            raise InputError(f"terrain {what} is not finite at (x, y) = ({x[k]:.6g}, "
-                             f"{y[k]:.6g})")
+            raise InputError(f"terrain {what} is not finite at (x, y) = ({x[k]:.10g}, "
+                             f"{y[k]:.10g})")
         return z
 
     def _g(self, x, y):

@@ -121,7 +121,12 @@ def pose_scenario(mbm, terrain, q, spec: TerrainSpec) -> np.ndarray:
     except PoseError as exc:
         raise ConfigError(f"terrain: the rover cannot be placed on the terrain: {exc}") from None
     except InputError as exc:
-        raise ConfigError(f"terrain: {exc}") from None
+        hint = ""
+        if "outside the height field" in str(exc):
+            hint = ("; the rover stands at [configuration.base] x, y (default: the model's "
+                    "nominal place, near (0, 0)): give x and y inside the terrain (a DEM in "
+                    "projected coordinates has them in its own)")
+        raise ConfigError(f"terrain: {exc}{hint}") from None
 
 
 def _contacts(mbm, terrain, q):

@@ -159,8 +159,8 @@ def _check_inputs(cfg: TraverseConfig, where: str) -> None:
             raise ConfigError(
                 f"{where}: path {p.name!r} leaves the terrain: station {k} at (x, y) = "
                 f"({st.x[k]:.3f}, {st.y[k]:.3f}) m is within {m:.3f} m (the rover's reach "
-                f"and look-ahead) of the edge of the terrain (x in [{xa:g}, {xb:g}] m, y in "
-                f"[{ya:g}, {yb:g}] m); {int(out.sum())} of {len(st)} stations are")
+                f"and look-ahead) of the edge of the terrain (x in [{xa:.10g}, {xb:.10g}] m, y in "
+                f"[{ya:.10g}, {yb:.10g}] m); {int(out.sum())} of {len(st)} stations are")
 
 
 # ------------------------------------------------------------------------ one chunk
