@@ -224,3 +224,23 @@ def test_units_row_and_a_bad_cell_are_named(tmp_path):
     with pytest.raises(TrialDataError, match=r"column 'ch1_V', data row 41: '0.1O3' is not "
                                              r"a number$"):
         read_recording(tmp_path / "c.csv", sensors)
+
+
+@pytest.mark.parametrize(("header", "named"), [("time_ms,ch1_V", "'time_ms'"),
+                                               ("Time [s],ch1_V", "'Time [s]'"),
+                                               ("t,ch1_V", None)])
+def test_time_column_named_otherwise(tmp_path, header, named):
+    """A time column named time_ms or 'Time [s]': the message points at it (before: 'the
+    first column must be the time in seconds', though the time is read from any column
+    named time_s)."""
+    from roverimpact.experiments.recording import TrialDataError, read_recording
+    from roverimpact.experiments.trials import SensorsConfig
+
+    (tmp_path / "r.csv").write_text(header + "\n" + "\n".join(
+        f"{k},{0.1}" for k in range(40)) + "\n")
+    with pytest.raises(TrialDataError) as info:
+        read_recording(tmp_path / "r.csv", SensorsConfig(channels=["ch1"], gains=[250.0]))
+    msg = str(info.value)
+    assert "must be a column named 'time_s'" in msg and "first column" not in msg
+    if named:
+        assert f"; {named} looks like the time: give it in seconds" in msg

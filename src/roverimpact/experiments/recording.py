@@ -163,9 +163,12 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
                     f"{_header(df.columns)}), not commas: save it as comma-separated CSV "
                     "with '.' as the decimal point (a spreadsheet with a decimal comma "
                     "writes ';' and '0,5')")
+        timeish = [c for c in df.columns if c.lower().startswith(("time", "t_", "t "))]
+        hint = (f"; {timeish[0]!r} looks like the time: give it in seconds in a column "
+                "named 'time_s'") if timeish else ""
         raise TrialDataError(
-            f"{path.name}: no 'time_s' column (header is {_header(df.columns)}); the first "
-            "column must be the time in seconds"
+            f"{path.name}: no 'time_s' column (header is {_header(df.columns)}): the time in "
+            f"seconds must be a column named 'time_s'{hint}"
         )
     cols = []
     for ch, unit, col in zip(sensors.channels, sensors.unit_list, sensors.columns,
