@@ -387,6 +387,19 @@ def test_nodata_cells_refused_with_count_and_place(tmp_path, value, dtype, nodat
     assert hf.height(11.3, -1.1) == pytest.approx(0.1 * 11.3 + 0.05 * -1.1, abs=1e-6)
 
 
+def test_nodata_grid_refused_by_the_constructor():
+    """An array read by rasterio/GDAL (src.read(1)) with its -9999 holes, given to
+    HeightField directly: refused like NaN (before: a 10 km deep pit)."""
+    z = np.zeros((4, 5))
+    z[2, 3] = -9999.0
+    with pytest.raises(InputError, match=r"1 no-data value\(s\), the first -9999 at row 2, "
+                                         r"column 3"):
+        HeightField(z, 0.1)
+    z[2, 3] = np.finfo(np.float32).min
+    with pytest.raises(InputError, match="no-data"):
+        HeightField(z, 0.1)
+
+
 def test_from_file_refuses_what_would_be_ignored(tmp_path):
     np.save(tmp_path / "z.npy", np.zeros((3, 3)))
     with pytest.raises(ConfigError, match="needs the grid spacing"):

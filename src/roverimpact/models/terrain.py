@@ -251,7 +251,8 @@ class HeightField(Terrain):
     Parameters
     ----------
     z : (ny, nx) array_like
-        Heights [m], ``ny, nx >= 2``, finite.
+        Heights [m], ``ny, nx >= 2``, finite, none of the no-data markers
+        :data:`NODATA_VALUES` nor :data:`NODATA_ABOVE` or more in magnitude.
     spacing : float or (dx, dy)
         Grid spacing [m], > 0.
     origin : (x0, y0)
@@ -280,6 +281,13 @@ class HeightField(Terrain):
             i, j = (int(k) for k in np.argwhere(bad)[0])
             raise InputError(f"height grid has {int(bad.sum())} NaN/inf value(s), the first "
                              f"at row {i}, column {j}: fill the holes before use")
+        hole = np.isin(z, NODATA_VALUES) | (z >= NODATA_ABOVE) | (z <= -NODATA_ABOVE)
+        if hole.any():
+            i, j = (int(k) for k in np.argwhere(hole)[0])
+            raise InputError(f"height grid has {int(hole.sum())} no-data value(s), the first "
+                             f"{z[i, j]:g} at row {i}, column {j} (-9999, -32768 or "
+                             "-3.4e+38: what GIS tools write for a cell without data): fill "
+                             "the holes before use")
         sp = np.broadcast_to(as_array(spacing, "spacing"), (2,)).astype(float)
         if not (np.isfinite(sp).all() and (sp > 0).all()):
             raise InputError(f"spacing must be positive and finite, got {sp.tolist()}")
