@@ -266,6 +266,10 @@ def test_npy_and_csv_round_trip(tmp_path):
                                  r"are separated by semicolons"),
     ("# z\n0,5\t0,1\n1\t1,1\n", r"line 2: the numbers have decimal commas .* by tabs"),
     ("1, 2, 3\n4, x, 6\n", r"line 2, column 2: 'x' is not a number"),  # not commas
+    # a header row; quoted values (before: "'x0' is not a number", "not a readable CSV grid")
+    ("# z\nx0,x1,x2\n1,2,3\n4,5,6\n", r"line 2 is a header \('x0,x1,x2'\): .* start the "
+                                       r"line with '#'"),
+    ('"1","2","3"\n"4","5","6"\n', r"its values are in quotes"),
     ("1,2,3,\n4,5,6,\n", r"line 1, column 4: the cell is empty \(a ',' at the end of the line"),
     ("1,,3\n4,5,6\n", r"line 1, column 2: the cell is empty$"),
     ("x" * 100 + "\n1\n", r"line 1, column 1: 'x{37}\.\.\.' is not a number"),

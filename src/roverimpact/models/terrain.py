@@ -487,9 +487,16 @@ class HeightField(Terrain):
     @staticmethod
     def _csv_diagnose(path: Path, lines: list[str], delimiter: str):
         width = None
+        seen = False   # a row of the grid before this line
         for lineno, row in enumerate(csv.reader(lines, delimiter=delimiter), start=1):
             if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
                 continue
+            if not seen and len(row) > 1 and not any(_is_number(c) for c in row):
+                raise ConfigError(
+                    f"height field {path}, line {lineno} is a header ({lines[lineno - 1][:40]!r}"
+                    "): a CSV grid holds numbers only; start the line with '#' to keep it as "
+                    "a comment (the first row of numbers is at y0)")
+            seen = True
             sep = _decimal_comma(lines[lineno - 1]) if delimiter == "," else None
             if sep is not None:
                 raise ConfigError(
@@ -524,6 +531,9 @@ class HeightField(Terrain):
             elif len(row) != width:
                 raise ConfigError(f"height field {path} is ragged: line {lineno} has "
                                   f"{len(row)} values, line {first} has {width}")
+        if any('"' in line for line in lines):
+            raise ConfigError(f"height field {path}: its values are in quotes (\"0.5\"): a "
+                              "CSV grid holds plain numbers; save it without quotes")
         raise ConfigError(f"height field {path} is not a readable CSV grid")
 
     @classmethod
@@ -743,6 +753,14 @@ def _nodata_list(nodata) -> list[tuple[float, str]]:
     except (TypeError, ValueError):
         raise ConfigError(f"nodata must be a number or numbers, got {nodata!r}") from None
     return [(float(v), "the no-data value given") for v in vals]
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _decimal_comma(line: str) -> str | None:
