@@ -675,3 +675,31 @@ def test_report_redraws_on_the_height_field_of_the_run(tmp_path, monkeypatch, ca
     np.save(src / "dem.npy", np.full((61, 81), 0.1))
     assert main(["traverse-report", str(out)]) == 2
     assert "dem.npy changed since the traverse ran" in capsys.readouterr().err
+
+
+def test_model_file_written_again_is_read_again(tmp_path):
+    """As the terrain: build_model's per-process cache was keyed by the [model] table, so a
+    URDF saved again (a heavier chassis) in the same Python session kept the first model.
+    The total mass read back: the file's masses summed, then with the chassis + 5 kg."""
+    import os
+
+    import tomllib
+
+    from roverimpact.traverse.run import build_model
+    from roverimpact.traverse.schema import traverse_from_dict
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    urdf = (ex / "models" / "sawppy_like.urdf").read_text()
+    model = tomllib.loads((ex / "sawppy_like_beta.toml").read_text())["model"]
+    model["file"] = "rover.urdf"
+    raw = {**TRAV_FILE, "model": model, "terrain": {"kind": "file", "file": "dem.npy",
+                                                    "spacing": 0.1}}
+    masses = [float(m) for m in re.findall(r'<mass value="([^"]+)"', urdf)]
+    first = re.search(r'<mass value="([^"]+)"', urdf)
+    heavier = urdf.replace(first.group(0), f'<mass value="{float(first.group(1)) + 5.0}"', 1)
+    for k, (text, total) in enumerate(((urdf, sum(masses)), (heavier, sum(masses) + 5.0))):
+        (tmp_path / "rover.urdf").write_text(text)
+        os.utime(tmp_path / "rover.urdf", ns=(10**18 + k, 10**18 + k))
+        mbm = build_model(traverse_from_dict(raw, base_dir=tmp_path))
+        got = sum(i.mass for i in mbm.model.inertias)
+        assert got == pytest.approx(total, rel=1e-12)

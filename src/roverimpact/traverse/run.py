@@ -45,6 +45,18 @@ CONFIG_COPY, MANIFEST = "traverse.toml", "manifest.json"
 
 
 # ------------------------------------------------------------------------ inputs
+def _stamp(file: str | None) -> tuple | None:
+    """(size, modification time) of a file, for the caches' keys: a file written again is
+    read again (None: no file, or not one on disk)."""
+    if file is None:
+        return None
+    try:
+        st = Path(file).stat()
+    except OSError:
+        return None   # the loader names the missing file
+    return (st.st_size, st.st_mtime_ns)
+
+
 @functools.lru_cache(maxsize=4)
 def _terrain(spec_json: str, stamp: tuple | None):
     """``stamp``: the file's (size, modification time) in the key, so that a file
@@ -65,18 +77,11 @@ def _terrain(spec_json: str, stamp: tuple | None):
 def build_terrain(spec: TerrainSpec):
     """The terrain of ``[terrain]`` (cached per process: a Dask worker builds it once; a
     height-field file is read again when it has changed)."""
-    stamp = None
-    if spec.file is not None:
-        try:
-            st = Path(spec.file).stat()
-            stamp = (st.st_size, st.st_mtime_ns)
-        except OSError:
-            pass   # from_file names the missing file
-    return _terrain(spec.model_dump_json(), stamp)
+    return _terrain(spec.model_dump_json(), _stamp(spec.file))
 
 
 @functools.lru_cache(maxsize=4)
-def _model(model_json: str, loops_json: str):
+def _model(model_json: str, loops_json: str, stamp: tuple | None):
     from ..scenario.build import make_model
     from ..scenario.schema import LoopSpec, ModelSpec
 
@@ -89,9 +94,11 @@ def _model(model_json: str, loops_json: str):
 
 
 def build_model(cfg: TraverseConfig):
-    """The rover of ``[model]`` (with ``[[contacts.loops]]``), cached per process."""
+    """The rover of ``[model]`` (with ``[[contacts.loops]]``), cached per process; a
+    ``model.file`` written again is read again (the meshes it names are not followed)."""
     return _model(cfg.model.model_dump_json(),
-                  json.dumps([lp.model_dump() for lp in cfg.contacts.loops]))
+                  json.dumps([lp.model_dump() for lp in cfg.contacts.loops]),
+                  _stamp(cfg.model.file))
 
 
 def path_stations(cfg: TraverseConfig, i: int) -> Stations:
