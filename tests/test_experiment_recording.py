@@ -244,3 +244,28 @@ def test_time_column_named_otherwise(tmp_path, header, named):
     assert "must be a column named 'time_s'" in msg and "first column" not in msg
     if named:
         assert f"; {named} looks like the time: give it in seconds" in msg
+
+
+def test_time_printed_with_too_few_decimals_is_uniform(tmp_path):
+    """2048 Hz with the time printed to 0.1 ms (steps of 0.4 and 0.5 ms, 20 % apart) was
+    refused as 'irregular sampling'; it is the uniform k / 2048 s rounded, and is now read
+    as such (times within 1e-7 s of k / 2048, fs within 1e-4 Hz). A dropped sample in the
+    same file is still refused. The impulse of a 20 ms half-sine of 400 N is its closed
+    form 2 A T / pi."""
+    from roverimpact.experiments.recording import TrialDataError, read_recording
+    from roverimpact.experiments.trials import SensorsConfig
+
+    fs, n = 2048.0, 2048
+    t = np.arange(n) / fs
+    v = _half_sine(t, 0.5, 0.02, 400.0) / 250.0 + 0.1
+    lines = ["time_s,ch1_V", *(f"{a:.4f},{b:.7f}" for a, b in zip(t, v, strict=True))]
+    (tmp_path / "r.csv").write_text("\n".join(lines) + "\n")
+    sensors = SensorsConfig(channels=["ch1"], gains=[250.0])
+    tt, raw, got_fs, _ = read_recording(tmp_path / "r.csv", sensors)
+    assert np.max(np.abs(tt - t)) < 1e-7 and got_fs == pytest.approx(fs, abs=1e-4)
+    J = np.trapezoid(raw[:, 0] * 250.0 - 25.0, tt)
+    assert J == pytest.approx(2 * 400.0 * 0.02 / np.pi, rel=1e-3)
+    del lines[700]
+    (tmp_path / "d.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(TrialDataError, match="irregular sampling at row 700"):
+        read_recording(tmp_path / "d.csv", sensors)

@@ -118,17 +118,36 @@ def _check_not_clipped(name: str, t, x, col: str, full_scale: float | None) -> N
             "saturated and the peak is lost; re-record with a larger range")
 
 
+def _printed_uniform(t: np.ndarray) -> np.ndarray | None:
+    """The uniform times ``t0 + k dt`` (least squares) that ``t`` is when it was printed
+    with too few decimals (2048 Hz written to 0.1 ms: steps of 0.4 and 0.5 ms), or None
+    when ``t`` is not that: every time within half a unit of its last decimal of the line
+    (0.55: the fitted line is not quite the true one)."""
+    for d in range(10):   # the resolution the times were printed with
+        r = 10.0 ** -d
+        if np.max(np.abs(t / r - np.round(t / r))) < 1e-6:
+            break
+    else:
+        return None
+    k = np.arange(len(t), dtype=float)
+    b, a = np.polyfit(k, t, 1)
+    line = a + b * k
+    return line if b > 0 and np.max(np.abs(t - line)) <= 0.55 * r else None
+
+
 def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int = 3):
     """Read one CSV recording and check it.
 
     Returns
     -------
     t : (N,) ndarray
-        Time [s], strictly increasing, uniformly sampled.
+        Time [s], strictly increasing, uniformly sampled (times printed with too few
+        decimals for the rate, e.g. 2048 Hz to 0.1 ms, are replaced by the uniform times
+        they round).
     raw : (N, n_channels) ndarray
         Raw channel values in their unit (short NaN gaps interpolated).
     fs : float
-        Sampling rate [Hz].
+        Sampling rate [Hz]: samples over the span, (N - 1) / (t[-1] - t[0]).
     n_filled : int
         Number of samples that were NaN and got interpolated.
 
@@ -216,12 +235,15 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
         )
     dt_med = float(np.median(dt))
     if np.max(np.abs(dt - dt_med)) > 0.05 * dt_med:
-        i = int(np.argmax(np.abs(dt - dt_med)))
-        raise TrialDataError(
-            f"{path.name}: irregular sampling at row {i + 2} (step {dt[i]:.3g} s, median "
-            f"{dt_med:.3g} s); resample the recording to a uniform rate"
-        )
-    fs = 1.0 / dt_med
+        uniform = _printed_uniform(t)
+        if uniform is None:
+            i = int(np.argmax(np.abs(dt - dt_med)))
+            raise TrialDataError(
+                f"{path.name}: irregular sampling at row {i + 2} (step {dt[i]:.3g} s, median "
+                f"{dt_med:.3g} s); resample the recording to a uniform rate"
+            )
+        t = uniform
+    fs = (len(t) - 1) / float(t[-1] - t[0])   # the mean step: unbiased by the print's rounding
     if sensors.sample_rate_hz is not None and abs(fs - sensors.sample_rate_hz) > (
         0.01 * sensors.sample_rate_hz
     ):
