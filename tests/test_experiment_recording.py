@@ -269,3 +269,17 @@ def test_time_printed_with_too_few_decimals_is_uniform(tmp_path):
     (tmp_path / "d.csv").write_text("\n".join(lines) + "\n")
     with pytest.raises(TrialDataError, match="irregular sampling at row 700"):
         read_recording(tmp_path / "d.csv", sensors)
+
+
+def test_rows_of_bare_commas_are_no_samples(tmp_path):
+    """A spreadsheet saves its formatted empty rows as ',,': they were samples with a NaN
+    time ('time_s is NaN or inf at row 201'); they hold nothing and are skipped."""
+    from roverimpact.experiments.recording import read_recording
+    from roverimpact.experiments.trials import SensorsConfig
+
+    t = np.arange(200) / FS
+    body = [f"{a:.6f},{0.1:.6f}" for a in t]
+    (tmp_path / "r.csv").write_text("\n".join(["time_s,ch1_V", *body, ",", ","]) + "\n")
+    tt, raw, fs, _ = read_recording(tmp_path / "r.csv",
+                                    SensorsConfig(channels=["ch1"], gains=[250.0]))
+    assert len(tt) == 200 and raw.shape == (200, 1) and fs == pytest.approx(FS)

@@ -174,6 +174,7 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
     except UnicodeDecodeError as exc:
         raise TrialDataError(f"{path.name}: not a readable CSV file ({exc})") from None
     df.columns = [str(c).strip() for c in df.columns]
+    df = df.dropna(how="all")   # rows of bare commas (',,' : a spreadsheet's empty rows)
     if "time_s" not in df.columns:
         for sep, said in ((";", "semicolons"), ("\t", "tabs")):
             if any(sep in c for c in df.columns):
