@@ -360,7 +360,8 @@ def test_geotiff(tmp_path):
 @pytest.mark.parametrize(("value", "dtype", "nodata"), [
     (-9999.0, np.float64, None), (-32768.0, np.float64, None),
     (-3.4028235e38, np.float32, None),   # float32's lowest, GDAL's float default
-    (-1e38, np.float64, None), (-1.0, np.float64, -1.0), (250.0, np.float64, [7.0, 250.0])])
+    (-1e38, np.float64, None), (-1.0, np.float64, -1.0), (250.0, np.float64, [7.0, 250.0]),
+    (1e20, np.float64, None), (999999.0, np.float64, None)])   # np.ma.filled's fills
 @pytest.mark.parametrize("suffix", [".npy", ".csv"])
 def test_nodata_cells_refused_with_count_and_place(tmp_path, value, dtype, nodata, suffix):
     """A grid of the plane z = 0.1 x + 0.05 y with no-data cells at (i, j) = (3, 5) and

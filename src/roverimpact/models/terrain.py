@@ -70,14 +70,17 @@ __all__ = [
 _CHUNK = 1 << 15
 
 #: Heights that GIS tools write for a cell without data: GDAL's and QGIS's usual -9999,
-#: ArcGIS's -99999, an integer DEM's -32768 / -32767 (SRTM). No terrain reaches them
-#: (Mars spans -8.2 to +21.2 km), so a height-field file holding one is refused
-#: (:meth:`HeightField.from_file`); so is any :data:`NODATA_ABOVE` or more in magnitude.
-NODATA_VALUES = (-9999.0, -99999.0, -32768.0, -32767.0)
+#: ArcGIS's -99999, an integer DEM's -32768 / -32767 (SRTM), and numpy's fill of a masked
+#: integer array, 999999 (``np.ma.filled``). No terrain reaches them (Mars spans -8.2 to
+#: +21.2 km), so a height field holding one is refused (:meth:`HeightField.from_file`);
+#: so is any :data:`NODATA_ABOVE` or more in magnitude.
+NODATA_VALUES = (-9999.0, -99999.0, -32768.0, -32767.0, 999999.0)
 
 #: A height of this magnitude [m] or more is a no-data marker: float32's lowest value
-#: -3.4028235e+38 (written by GDAL, ArcGIS and QGIS, in whatever rounding), float64's.
-NODATA_ABOVE = 1e30
+#: -3.4028235e+38 (written by GDAL, ArcGIS and QGIS, in whatever rounding), float64's, the
+#: fill of a masked float array, 1e20 (``np.ma.filled``); a radius-based DEM (3.4e6 m on
+#: Mars) stays far below it.
+NODATA_ABOVE = 1e15
 
 
 # --------------------------------------------------------------------------- terrains
