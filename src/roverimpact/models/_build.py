@@ -236,6 +236,8 @@ class LinearLoopClosure:
     idx_q: tuple[int, ...]
     idx_v: tuple[int, ...]
     nv: int
+    #: ``J`` does not depend on ``q`` (no bias term ``J_dot v`` in the simulator).
+    constant_jacobian = True
 
     @classmethod
     def from_model(cls, model: pin.Model, joints, coefficients) -> LinearLoopClosure:

@@ -34,6 +34,7 @@ __all__ = [
     "LockedJoint",
     "LoopClosure",
     "PointContact",
+    "loop_jdot_v",
     "mass_matrix",
     "point_jacobian",
     "wheel_contact_point",
@@ -66,6 +67,28 @@ def point_jacobian(model, data, frame_id: int, r_world) -> np.ndarray:
     # pinocchio returns a 1-D array for nv = 1: keep the (6, nv) shape
     J = np.asarray(pin.getFrameJacobian(model, data, frame_id, _LWA)).reshape(6, model.nv)
     return J[:3] - _skew(np.asarray(r_world, dtype=float)) @ J[3:]
+
+
+def loop_jdot_v(closure, model, q, v, k: int | None = None) -> np.ndarray:
+    r"""The bias term :math:`\dot J_l v` (k,) of a loop closure ``q -> (phi (k,), J_l (k, nv))``.
+
+    ``0`` for a closure whose ``J_l`` does not depend on ``q`` (attribute
+    ``constant_jacobian``); a closure's own ``jdot_v(q, v)`` if it has one; else the central
+    difference of ``J_l`` along ``v`` on the manifold,
+    ``(J_l(q + eps v) - J_l(q - eps v)) v / (2 eps)``, ``eps = 1e-6 / max(1, |v|_inf)``.
+    ``k``: the number of rows, if known (spares an evaluation of a constant closure).
+    """
+    if getattr(closure, "constant_jacobian", False):
+        if k is None:
+            k = np.atleast_1d(np.asarray(closure(q)[0])).shape[0]
+        return np.zeros(k)
+    own = getattr(closure, "jdot_v", None)
+    if own is not None:
+        return own(q, v)
+    eps = 1e-6 / max(1.0, float(np.max(np.abs(v))))
+    Jp = np.atleast_2d(np.asarray(closure(pin.integrate(model, q, eps * v))[1], float))
+    Jm = np.atleast_2d(np.asarray(closure(pin.integrate(model, q, -eps * v))[1], float))
+    return (Jp - Jm) @ v / (2 * eps)
 
 
 def _unit(x, what: str) -> np.ndarray:

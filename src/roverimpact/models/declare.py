@@ -20,7 +20,7 @@ point Jacobians (:func:`roverimpact.models.constraints.point_jacobian`):
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,8 +30,8 @@ from ..exceptions import ConfigError, ModelError
 from .base import MultibodyModel, Wheel
 from .constraints import point_jacobian
 
-__all__ = ["BaseInfo", "FrameLoop", "attach_frame_loops", "base_info", "declare_wheels",
-           "detect_base", "joint_axis", "placed_axis", "warn_site_twin"]
+__all__ = ["BaseInfo", "FrameLoop", "FrameLoopClosure", "attach_frame_loops", "base_info",
+           "declare_wheels", "detect_base", "joint_axis", "placed_axis", "warn_site_twin"]
 
 
 @dataclass(frozen=True)
@@ -408,6 +408,60 @@ def _structural_axes(model, data, fa, ra, fb, rb, q_ref, seed=0) -> np.ndarray:
     return np.flatnonzero(size > 1e-12 * max(size.max(), 1e-300))
 
 
+class FrameLoopClosure:
+    """``q -> (phi (k,), J (k, nv))``: the rows of a model's own closure ``own`` (if any),
+    then those of frame loops (:func:`attach_frame_loops`, which builds it).
+
+    ``jdot_v(q, v)``: the bias term ``J_dot v`` (k,) of these rows for the simulator, the
+    central difference of the frame rows' ``J`` along ``v`` and the own closure's
+    (:func:`~roverimpact.models.constraints.loop_jdot_v`).
+    """
+
+    def __init__(self, model, data, loops, ids, lengths, axes, own):
+        self.model, self.data, self.own = model, data, own
+        self.loops = list(zip(loops, ids, lengths, axes, strict=True))
+
+    def _frame_rows(self, q, phis, rows):
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        for lp, (fa, ra, fb, rb), L, ax in self.loops:
+            pa, pb, Ja, Jb = _points(model, data, fa, ra, fb, rb)
+            if lp.kind == "point":
+                phis.append((pa - pb)[ax])
+                rows.append((Ja - Jb)[ax])
+            else:
+                d = pa - pb
+                nd = float(np.linalg.norm(d))
+                u = d / nd if nd > 1e-12 else np.zeros(3)
+                phis.append(np.array([nd - L]))
+                rows.append((u @ (Ja - Jb))[None, :])
+
+    def __call__(self, q):
+        q = np.asarray(q, float)
+        phis, rows = [], []
+        if self.own is not None:
+            phi0, J0 = self.own(q)
+            phis.append(np.atleast_1d(np.asarray(phi0, float)))
+            rows.append(np.atleast_2d(np.asarray(J0, float)))
+        self._frame_rows(q, phis, rows)
+        return np.concatenate(phis), np.vstack(rows)
+
+    def jdot_v(self, q, v):
+        from .constraints import loop_jdot_v
+
+        q = np.asarray(q, float)
+        out = [] if self.own is None else [loop_jdot_v(self.own, self.model, q, v)]
+        eps = 1e-6 / max(1.0, float(np.max(np.abs(v))))
+        J = []
+        for s in (eps, -eps):
+            rows = []
+            self._frame_rows(pin.integrate(self.model, q, s * v), [], rows)
+            J.append(np.vstack(rows))
+        out.append((J[0] - J[1]) @ v / (2 * eps))
+        return np.concatenate(out)
+
+
 def attach_frame_loops(mbm: MultibodyModel, loops: Sequence[FrameLoop], q_ref) -> None:
     """Add the rows of ``loops`` to ``mbm.loop_closure`` (after the model's own rows).
 
@@ -463,31 +517,8 @@ def attach_frame_loops(mbm: MultibodyModel, loops: Sequence[FrameLoop], q_ref) -
         lengths.append(L)
     axes = [_structural_axes(model, data, *ids_k, q_ref) if lp.kind == "point" else None
             for lp, ids_k in zip(loops, ids, strict=True)]
-    own: Callable | None = mbm.loop_closure
-
-    def closure(q):
-        q = np.asarray(q, float)
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        phis, rows = [], []
-        if own is not None:
-            phi0, J0 = own(q)
-            phis.append(np.atleast_1d(np.asarray(phi0, float)))
-            rows.append(np.atleast_2d(np.asarray(J0, float)))
-        for lp, (fa, ra, fb, rb), L, ax in zip(loops, ids, lengths, axes, strict=True):
-            pa, pb, Ja, Jb = _points(model, data, fa, ra, fb, rb)
-            if lp.kind == "point":
-                phis.append((pa - pb)[ax])
-                rows.append((Ja - Jb)[ax])
-            else:
-                d = pa - pb
-                nd = float(np.linalg.norm(d))
-                u = d / nd if nd > 1e-12 else np.zeros(3)
-                phis.append(np.array([nd - L]))
-                rows.append((u @ (Ja - Jb))[None, :])
-        return np.concatenate(phis), np.vstack(rows)
-
-    mbm.loop_closure = closure
+    mbm.loop_closure = FrameLoopClosure(model, data, loops, ids, lengths, axes,
+                                        mbm.loop_closure)
     names = list(mbm.loop_names)
     for lp, ax in zip(loops, axes, strict=True):
         labels = lp.labels()

@@ -49,6 +49,7 @@ __all__ = [
     "attach_couplings",
     "check_configuration",
     "joint_coordinate",
+    "joint_reader",
     "joint_value",
     "lock_row",
     "set_joint_rate",
@@ -226,6 +227,22 @@ def joint_value(mbm, q, name: str):
     jc = _one_dof(mbm, name, "joint value")
     out = _theta(jc, _as(q, _model(mbm).nq, "q"))
     return float(out) if np.ndim(out) == 0 else out
+
+
+def joint_reader(mbm, name: str, *, what: str = "joint value"):
+    """``q -> joint_value(mbm, q, name)`` for a ``q`` of shape (nq,), with the joint looked
+    up and checked once (for the simulator's right-hand side, called thousands of times).
+
+    Raises
+    ------
+    ModelError
+        As :func:`joint_value`: unknown joint or not a 1-DoF joint.
+    """
+    jc = _one_dof(mbm, name, what)
+    i = jc.idx_q
+    if jc.kind == "continuous":
+        return lambda q: float(np.arctan2(q[i + 1], q[i]))
+    return lambda q: float(q[i])
 
 
 def _leader_chain(mimic: dict, name: str, what: str):

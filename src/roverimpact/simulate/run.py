@@ -15,7 +15,6 @@ re-anchors (free-flyer rotations stay far from the chart's singularity at pi).
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -64,7 +63,7 @@ def build_system(mbm, cfg: SimulationConfig, *, law=None, ground_law=None,
     :class:`~roverimpact.models.terrain.Terrain` or ``{wheel: Terrain}``): the ground of
     every wheel comes from it (:mod:`roverimpact.simulate.terrain`), else the plane z = 0.
     """
-    from ..models.joints import joint_value, lock_row
+    from ..models.joints import joint_reader, joint_value, lock_row
 
     model = mbm.model
     if not mbm.wheels:
@@ -75,7 +74,7 @@ def build_system(mbm, cfg: SimulationConfig, *, law=None, ground_law=None,
     for name, sp in cfg.springs.items():
         iv = int(np.flatnonzero(lock_row(mbm, name, what="simulation.springs"))[0])
         q0 = joint_value(mbm, q_nominal, name) if sp.q0 is None else sp.q0
-        springs.append((iv, functools.partial(joint_value, mbm, name=name), sp.k, sp.c, q0))
+        springs.append((iv, joint_reader(mbm, name, what="simulation.springs"), sp.k, sp.c, q0))
     loop = _with_locks(mbm, mbm.loop_closure, cfg.contacts.locked, q_ref)
     planes = []
     if cfg.ground:
@@ -121,20 +120,42 @@ def _with_locks(mbm, loop, locked, q_ref):
     (held at its value in ``q_ref``, Baumgarte-stabilised like the loops), ``J = e_j``."""
     if not locked:
         return loop
-    from ..models.joints import joint_value, lock_row
+    from ..models.joints import joint_reader, joint_value, lock_row
 
     rows = np.array([lock_row(mbm, jn, what="contacts.locked") for jn in locked])
     ref = np.array([joint_value(mbm, q_ref, jn) for jn in locked])
+    return _LockedClosure(loop, [joint_reader(mbm, jn, what="contacts.locked")
+                                 for jn in locked], ref, rows, mbm.model)
 
-    def closure(q):
-        phi = np.array([joint_value(mbm, q, jn) for jn in locked]) - ref
-        if loop is None:
-            return phi, rows
-        phi_l, J_l = loop(q)
+
+class _LockedClosure:
+    """``q -> (phi, J)``: the rows of ``loop`` (or none), then ``theta_j(q) - theta_ref``
+    with the constant rows ``e_j`` of the locked joints (:func:`_with_locks`).
+
+    ``jdot_v``: the locked rows have no bias term (``J`` constant), the loop's own is
+    :func:`~roverimpact.models.constraints.loop_jdot_v` (central differences unless the
+    loop says better); ``constant_jacobian`` when the loop's ``J`` is constant too.
+    """
+
+    def __init__(self, loop, readers, ref, rows, model):
+        self.loop, self.readers, self.ref, self.rows, self.model = loop, readers, ref, rows, model
+        self.constant_jacobian = loop is None or bool(getattr(loop, "constant_jacobian", False))
+
+    def __call__(self, q):
+        phi = np.array([r(q) for r in self.readers]) - self.ref
+        if self.loop is None:
+            return phi, self.rows
+        phi_l, J_l = self.loop(q)
         return (np.concatenate([np.atleast_1d(phi_l), phi]),
-                np.vstack([np.atleast_2d(J_l), rows]))
+                np.vstack([np.atleast_2d(J_l), self.rows]))
 
-    return closure
+    def jdot_v(self, q, v):
+        from ..models.constraints import loop_jdot_v
+
+        zero = np.zeros(len(self.readers))
+        if self.loop is None:
+            return zero
+        return np.concatenate([loop_jdot_v(self.loop, self.model, q, v), zero])
 
 
 # ---------------------------------------------------------------------- initial state
@@ -200,8 +221,7 @@ def _settle(sys: ContactSystem, mbm, q, cfg: SimulationConfig, mass: float, *, u
     def residual(x):
         qq = pin.integrate(sys.model, q, x[: sys.nv] * scale_x)
         zero = np.zeros(sys.nv)
-        cs = sys.contacts(qq, zero)
-        r = cs.tau + sys.spring_torque(qq, zero) - pin.computeGeneralizedGravity(
+        r = sys.applied_force(qq, zero).tau - pin.computeGeneralizedGravity(
             sys.model, sys.data, qq)
         if nd:      # rigid acceleration along the ground (x[nv + kloop:] in units of g)
             r = r - sys.mass_matrix(qq) @ (free(qq) @ x[nv + kloop:]) * cfg.g
@@ -340,9 +360,9 @@ def _run_phase(sys, q_ref, v, imp, t0, t1, cfg, v_i, obstacle_event, direction, 
                 "loosen integrator.rtol or shorten t_max / t_after")
         dq, vv = y[:nv], y[nv:2 * nv]
         q = sys.config(q_ref_box[0], dq)
-        cs, tau = sys.generalized_forces(q, vv, v_i)
-        a = sys.acceleration(q, vv, tau)
-        return np.concatenate([sys.chart_rate(q_ref_box[0], dq, vv), a, cs.f_n[io]])
+        cf = sys.applied_force(q, vv, v_i)
+        a = sys.acceleration(q, vv, cf.tau)
+        return np.concatenate([sys.chart_rate(q_ref_box[0], dq, vv), a, cf.f_n[io]])
 
     def ev_gap(t, y):
         q = sys.config(q_ref_box[0], y[:nv])
@@ -646,7 +666,7 @@ def _history(sys: ContactSystem, segs: _Segments, names_w, v_i, i_contact: int, 
     for i, (yk, k) in enumerate(zip(Y, segs.seg, strict=True)):
         qk = sys.config(segs.anchors[k], yk[:sys.nv])
         vk = yk[sys.nv: 2 * sys.nv]
-        csk = sys.contacts(qk, vk, v_i if i >= i_contact else None)
+        csk = sys.applied_force(qk, vk, v_i if i >= i_contact else None)
         fn[i], ft[i], de[i] = csk.f_n, csk.f_t, csk.delta
         rows_q.append(qk)
         rows_v.append(vk)
@@ -672,7 +692,7 @@ def _peaks(sys: ContactSystem, segs: _Segments, fn, names_w, v_i, i_contact: int
 
     def f_obst(t, k, w=None):
         qk, vk = _state_at(sys, segs, k, t)
-        f = sys.contacts(qk, vk, v_i).f_n[io]
+        f = sys.applied_force(qk, vk, v_i).f_n[io]
         return f.sum() if w is None else f[w]
 
     def refine(series, w):

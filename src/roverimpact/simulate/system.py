@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelError
+from ..models.constraints import loop_jdot_v
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _EUCLIDEAN_JOINTS = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX",
@@ -71,6 +72,22 @@ class ContactState:
     Jp: np.ndarray           # (planes, wheels, 3, nv) contact-point Jacobians
     tau: np.ndarray          # (nv,) generalized contact force
     n: np.ndarray | None = None   # (planes, wheels, 3) contact normals
+
+
+@dataclass(frozen=True)
+class ContactForces:
+    """What the equations of motion need at one instant (:meth:`ContactSystem.applied_force`).
+
+    ``gap``, ``delta`` (indentation ``max(-gap, 0)``), ``f_n``, ``f_t``: (planes, wheels)
+    as in :class:`ContactState`; ``tau`` (nv,) the generalized force of the contacts and
+    the joint springs, ``sum_i J_p,i^T F_i + tau_s``.
+    """
+
+    gap: np.ndarray
+    delta: np.ndarray
+    f_n: np.ndarray
+    f_t: np.ndarray
+    tau: np.ndarray
 
 
 @dataclass
@@ -132,6 +149,7 @@ class ContactSystem:
                                  "(axes, one per wheel)")
             self.axes = np.asarray(self.axes, dtype=float)
             self.axes = self.axes / np.linalg.norm(self.axes, axis=1)[:, None]
+        self._lower = np.tril_indices(self.nv, -1)
         self.euclidean = self.nq == self.nv and all(
             j.shortname() in _EUCLIDEAN_JOINTS for j in list(self.model.joints)[1:])
         self._set_planes()
@@ -144,6 +162,7 @@ class ContactSystem:
         self.touch = np.array([np.ones(nw, bool) if p.wheels is None
                                else np.asarray(p.wheels, bool) for p in self.planes])
         self.bounded = bool(np.isfinite(self.z_max).any() or not self.touch.all())
+        self._plane_range = np.arange(len(self.planes) + 1)
         # contact point = centre - r n: J_p = J_lin - skew(-r n) J_ang = J_lin + r skew(n) J_ang
         self.rSn = self.radii[None, :, None, None] * _skew(self.N)[:, None, :, :]
 
@@ -253,6 +272,57 @@ class ContactSystem:
         vn = (vp * self.N[:, None, :]).sum(axis=-1)
         return self._forces(gap, Jp, vp, vn, self.N[:, None, :], v_i)
 
+    def applied_force(self, q, v, v_i=None) -> ContactForces:
+        """The contact forces and the generalized force of contacts and springs at (q, v):
+        :meth:`generalized_forces` (same equations), without the quantities of the pairs
+        out of contact (their point Jacobians, velocities and forces are not formed). The
+        simulator's right-hand side."""
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        if self.terrain is not None:
+            N_all, D, gap = self._geometry(*self._centres_axes())
+        else:
+            oMf = data.oMf
+            gap = self._gaps(np.array([oMf[f].translation for f in self.fids]).reshape(-1, 3))
+        f_n = np.zeros(gap.shape)
+        f_t = np.zeros(gap.shape)
+        tau = self.spring_torque(q, v)
+        kk, ww = np.nonzero(gap < 0.0)                       # pairs in contact, by plane
+        if kk.size == 0:
+            return ContactForces(gap, np.maximum(-gap, 0.0), f_n, f_t, tau)
+        nv = self.nv
+        J = np.array([pin.getFrameJacobian(model, data, self.fids[w], _LWA) for w in ww])
+        J = J.reshape(-1, 6, nv)
+        if self.terrain is not None:
+            N = N_all[kk, ww]
+            Jp = J[:, :3, :] - _skew(D[kk, ww]) @ J[:, 3:, :]   # (K, 3, nv)
+        else:
+            N = self.N[kk]
+            Jp = J[:, :3, :] + self.rSn[kk, ww] @ J[:, 3:, :]
+        vp = Jp @ v                                              # (K, 3)
+        vn = (vp * N).sum(axis=-1)
+        delta = -gap[kk, ww]
+        fn = np.empty(kk.size)
+        v_i = [p.v_i for p in self.planes] if v_i is None else v_i
+        bounds = np.searchsorted(kk, self._plane_range).tolist()
+        for k, p in enumerate(self.planes):
+            i0, i1 = bounds[k], bounds[k + 1]
+            if i1 > i0:
+                raw = np.asarray(p.law.force(delta[i0:i1], -vn[i0:i1], v_i[k]), float)
+                fn[i0:i1] = np.maximum(raw, 0.0)
+        F = fn[:, None] * N
+        if self.mu > 0.0:
+            vt = vp - vn[:, None] * N
+            s = np.sqrt((vt * vt).sum(axis=-1))
+            ft = self.mu * fn * np.tanh(s / self.v_slip)
+            F = F - (ft / np.maximum(s, 1e-300))[:, None] * vt
+            f_t[kk, ww] = ft
+        f_n[kk, ww] = fn
+        # summed in the order of ContactState.tau (pairs row-major): the same bits
+        tau += (Jp * F[:, :, None]).sum(axis=(0, 1))
+        return ContactForces(gap, np.maximum(-gap, 0.0), f_n, f_t, tau)
+
     def _forces(self, gap, Jp, vp, vn, N, v_i) -> ContactState:
         """Normal and friction forces from the gaps, point Jacobians, contact-point
         velocities ``vp`` and normal velocities ``vn`` (``N``: normals, broadcastable to
@@ -302,12 +372,9 @@ class ContactSystem:
             return pin.aba(self.model, self.data, q, v, tau)
         a0 = pin.aba(self.model, self.data, q, v, tau)          # unconstrained
         Minv = pin.computeMinverse(self.model, self.data, q)
-        Minv = np.triu(Minv) + np.triu(Minv, 1).T
+        Minv[self._lower] = Minv.T[self._lower]                 # the upper triangle is set
         phi, Jl = self.loop(q)
-        eps = 1e-6 / max(1.0, float(np.max(np.abs(v))))
-        Jp_ = self.loop(pin.integrate(self.model, q, eps * v))[1]
-        Jm_ = self.loop(pin.integrate(self.model, q, -eps * v))[1]
-        Jdv = (Jp_ - Jm_) @ v / (2 * eps)
+        Jdv = loop_jdot_v(self.loop_closure, self.model, q, v, phi.shape[0])
         a = self.baumgarte
         gamma = -Jdv - 2 * a * (Jl @ v) - a * a * phi
         MinvJT = Minv @ Jl.T

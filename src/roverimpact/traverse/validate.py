@@ -193,7 +193,7 @@ def simulate_station_impact(mbm, q, v, support, support_normal, wheel: int, poin
 
     def rhs(t, y):
         qq = sysm.config(q0, y[:nv])
-        _, tau = sysm.generalized_forces(qq, y[nv:], v_i)
+        tau = sysm.applied_force(qq, y[nv:], v_i).tau
         return np.concatenate([sysm.chart_rate(q0, y[:nv], y[nv:]),
                                sysm.acceleration(qq, y[nv:], tau)])
 
@@ -204,7 +204,7 @@ def simulate_station_impact(mbm, q, v, support, support_normal, wheel: int, poin
 
     def force(y):
         qq = sysm.config(q0, y[:nv])
-        return float(sysm.contacts(qq, y[nv:], v_i).f_n[-1, wheel])
+        return float(sysm.applied_force(qq, y[nv:], v_i).f_n[-1, wheel])
 
     # the run starts in contact (gap 0, closing): step off the event's zero first
     y0 = np.concatenate([np.zeros(nv), v0])

@@ -1,0 +1,133 @@
+"""The simulator's right-hand side on a file model, against a slow evaluation written here.
+
+The tutorial's Sawppy-like URDF rover (examples/sawppy_like_beta.toml: floating base, six
+wheels, two turnbuckle point loops, four locked steering joints), obstacle face in contact
+with its left front wheel, friction on. The reference takes nothing from the simulator
+but the plane data: per wheel/plane pair the sphere's contact point ``c - r n``, its
+Jacobian from ``pin.getFrameJacobian`` and the law's force, summed in a Python loop;
+``M`` by ``pin.crba`` and ``h`` by ``pin.nonLinearEffects``; the constrained acceleration
+from the KKT system ``[M J^T; J 0] [a; -lam] = [tau - h; gamma]`` with ``gamma`` the
+Baumgarte right-hand side and ``J_dot v`` by central differences of the loop's ``J``
+(``pin.integrate``). The simulator's lean path (:meth:`ContactSystem.applied_force`,
+used by the integrator) must also give the same bits as the full
+:meth:`ContactSystem.contacts` path, so a run does not depend on which one it takes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from roverimpact.scenario import load_scenario
+from roverimpact.scenario.build import configuration, scenario_model
+from roverimpact.simulate import SimulationConfig, build_system, initial_state
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+@pytest.fixture(scope="module")
+def sawppy():
+    sc = load_scenario(EXAMPLES / "sawppy_like_beta.toml")
+    mbm = scenario_model(sc)
+    cfg = SimulationConfig.from_scenario(sc).model_copy(update={"mu": 0.4})
+    q, v = initial_state(mbm, cfg, q0=configuration(mbm, sc.configuration))
+    sys_ = build_system(mbm, cfg, q_ref=q)
+    # the obstacle face 2 mm into the left front wheel; a disturbed velocity
+    w = [x.name for x in mbm.wheels].index("left_front")
+    ob = sys_.planes[-1]
+    ob.p0 = sys_.wheel_centres(q)[w] - (sys_.radii[w] - 2e-3) * ob.n
+    ob.v_i = 0.3
+    sys_._set_planes()
+    v = v + 0.05 * np.random.default_rng(1).standard_normal(v.size)
+    return mbm, cfg, sys_, q, v
+
+
+def reference_rhs(mbm, cfg, sys_, q, v):
+    """(tau (nv,), f_n (planes, wheels), a (nv,)) evaluated the slow way."""
+    model = sys_.model
+    data = model.createData()
+    nv = model.nv
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    tau = np.zeros(nv)
+    f_n = np.zeros((len(sys_.planes), len(mbm.wheels)))
+    for k, plane in enumerate(sys_.planes):
+        n = np.asarray(plane.n, float)
+        for w, wheel in enumerate(mbm.wheels):
+            fid = model.getFrameId(wheel.frame)
+            c = data.oMf[fid].translation
+            if plane.wheels is not None and not plane.wheels[w]:
+                continue
+            p = c - wheel.radius * n
+            if p[2] > plane.z_max:
+                continue
+            gap = float(n @ (c - plane.p0)) - wheel.radius
+            if gap >= 0.0:
+                continue
+            J = pin.getFrameJacobian(model, data, fid, LWA)
+            r = p - c
+            Jp = J[:3] - np.cross(r[:, None], J[3:], axis=0)   # v_p = v_c + w x r
+            vp = Jp @ v
+            vn = float(n @ vp)
+            fn = max(float(plane.law.force(np.array([-gap]), np.array([-vn]), plane.v_i)[0]),
+                     0.0)
+            vt = vp - vn * n
+            s = float(np.linalg.norm(vt))
+            F = fn * n - cfg.mu * fn * np.tanh(s / cfg.v_slip) * vt / max(s, 1e-300)
+            tau += Jp.T @ F
+            f_n[k, w] = fn
+    for iv, value, k_s, c_s, q0 in sys_.springs:
+        tau[iv] -= k_s * (value(q) - q0) + c_s * v[iv]
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    h = pin.nonLinearEffects(model, data, q, v)
+    phi, Jl = sys_.loop_closure(q)
+    eps = 1e-6 / max(1.0, float(np.max(np.abs(v))))
+    Jdv = (sys_.loop_closure(pin.integrate(model, q, eps * v))[1]
+           - sys_.loop_closure(pin.integrate(model, q, -eps * v))[1]) @ v / (2 * eps)
+    alpha = sys_.baumgarte
+    gamma = -Jdv - 2 * alpha * (Jl @ v) - alpha ** 2 * phi
+    m = Jl.shape[0]
+    K = np.block([[M, Jl.T], [Jl, np.zeros((m, m))]])
+    sol = np.linalg.lstsq(K, np.concatenate([tau - h, gamma]), rcond=None)[0]
+    return tau, f_n, sol[:nv]
+
+
+def test_the_right_hand_side_is_the_slow_evaluation(sawppy):
+    mbm, cfg, sys_, q, v = sawppy
+    tau_ref, fn_ref, a_ref = reference_rhs(mbm, cfg, sys_, q, v)
+    cf = sys_.applied_force(q, v)
+    assert (fn_ref[-1] > 0).sum() == 1 and (fn_ref[0] > 0).sum() == 6  # obstacle + ground
+    np.testing.assert_allclose(cf.f_n, fn_ref, rtol=1e-12, atol=0.0)
+    scale = np.max(np.abs(tau_ref))
+    np.testing.assert_allclose(cf.tau, tau_ref, rtol=0.0, atol=1e-12 * scale)
+    a = sys_.acceleration(q, v, cf.tau)
+    np.testing.assert_allclose(a, a_ref, rtol=0.0, atol=1e-8 * np.max(np.abs(a_ref)))
+
+
+def test_the_lean_path_gives_the_bits_of_the_full_one(sawppy):
+    _, _, sys_, q, v = sawppy
+    cs = sys_.contacts(q, v)
+    cf = sys_.applied_force(q, v)
+    assert np.array_equal(cf.tau, cs.tau + sys_.spring_torque(q, v))
+    assert np.array_equal(cf.f_n, cs.f_n) and np.array_equal(cf.f_t, cs.f_t)
+    assert np.array_equal(cf.delta, cs.delta) and np.array_equal(cf.gap, cs.gap)
+
+
+def test_the_loop_bias_term_is_the_central_difference_of_the_whole_closure(sawppy):
+    """The closure's own ``jdot_v`` (frame rows by differences, locked rows 0) gives the
+    bits of the central difference of all rows the simulator took before."""
+    from roverimpact.models.constraints import loop_jdot_v
+
+    _, _, sys_, q, v = sawppy
+    lc = sys_.loop_closure
+    eps = 1e-6 / max(1.0, float(np.max(np.abs(v))))
+    whole = (lc(pin.integrate(sys_.model, q, eps * v))[1]
+             - lc(pin.integrate(sys_.model, q, -eps * v))[1]) @ v / (2 * eps)
+    got = loop_jdot_v(lc, sys_.model, q, v)
+    assert np.array_equal(got, whole)
+    assert np.abs(whole[:6]).max() > 0.0 and not whole[6:].any()   # loops, then locks
