@@ -8,12 +8,21 @@ the 2-D rover with a sprung rocker. For each: the time of one evaluation of the 
 side on states of the contact phase (best of ``--repeat``), and one impact run
 (``simulate_impact`` from a settled state) with its number of evaluations.
 
-    python benchmarks/bench_rhs.py [--repeat 5]
+``--against SRC`` runs the same cases with the package in ``SRC`` (e.g. an export of an
+older commit: ``git archive OLD src | tar -x -C /tmp/old``, then ``--against /tmp/old/src``)
+and with this one, in turns (``--rounds``, one fresh process each), and prints the best
+of each and their ratio, with the peak force and the number of evaluations of both.
+
+    python benchmarks/bench_rhs.py [--repeat 3] [--only NAME]
+    python benchmarks/bench_rhs.py --against /tmp/old/src [--rounds 3]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -96,20 +105,56 @@ def case(name, mbm, cfg, q0, repeat):
             for _ in range(n_call):
                 f(yk)
             best = min(best, (time.perf_counter() - t) / n_call)
-    print(f"{name}: nq = {nq}, nv = {nv}, loops/locks = {s.loop_closure is not None}, "
-          f"F_max = {r.F_max_total!r} N, nfev = {r.stats['nfev']}")
-    print(f"  one right-hand side   {1e3 * best:8.3f} ms")
-    print(f"  impact run            {1e3 * t_run:8.1f} ms   ({1e3 * t_run / r.stats['nfev']:.3f} "
-          "ms per evaluation, all included)")
-    return best, t_run
+    return {"nq": nq, "nv": nv, "loops": s.loop_closure is not None,
+            "F_max": r.F_max_total, "nfev": r.stats["nfev"], "rhs": best, "run": t_run}
+
+
+def show(name, f):
+    print(f"{name}: nq = {f['nq']}, nv = {f['nv']}, loops/locks = {f['loops']}, "
+          f"F_max = {f['F_max']!r} N, nfev = {f['nfev']}")
+    print(f"  one right-hand side   {1e3 * f['rhs']:8.3f} ms")
+    print(f"  impact run            {1e3 * f['run']:8.1f} ms   "
+          f"({1e3 * f['run'] / f['nfev']:.3f} ms per evaluation, all included)")
+
+
+def in_turns(against, rounds, extra):
+    """Best figures of this package and of the one in ``against``, one process per round."""
+    here = str(Path(__import__("roverimpact").__file__).resolve().parents[1])
+    best = {}
+    for _ in range(rounds):
+        for which, src in (("old", against), ("new", here)):
+            env = dict(os.environ, PYTHONPATH=src)
+            out = subprocess.run([sys.executable, __file__, "--json", *extra], env=env,
+                                 capture_output=True, text=True, check=True).stdout
+            for name, f in json.loads(out.splitlines()[-1]).items():
+                b = best.setdefault(name, {}).setdefault(which, f)
+                for key in ("rhs", "run"):
+                    b[key] = min(b[key], f[key])
+    print(f"old: {against}\nnew: {here}\nbest of {rounds} rounds in turns")
+    print(f"{'case':22s} {'RHS old':>9s} {'RHS new':>9s} {'ratio':>6s} {'run old':>9s} "
+          f"{'run new':>9s} {'ratio':>6s}  same F_max, nfev")
+    for name, b in best.items():
+        o, n = b["old"], b["new"]
+        same = o["F_max"] == n["F_max"] and o["nfev"] == n["nfev"]
+        print(f"{name:22s} {1e3 * o['rhs']:7.3f}ms {1e3 * n['rhs']:7.3f}ms "
+              f"{o['rhs'] / n['rhs']:5.2f}x {1e3 * o['run']:7.1f}ms {1e3 * n['run']:7.1f}ms "
+              f"{o['run'] / n['run']:5.2f}x  {same} ({n['F_max']:.10g} N, {n['nfev']})")
 
 
 def main():
-    print(reference())
+    if "--json" not in sys.argv:
+        print(reference())
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", default=None)
+    ap.add_argument("--against", default=None, help="src folder of another version")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--json", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.against:
+        extra = ["--repeat", str(a.repeat)] + (["--only", a.only] if a.only else [])
+        in_turns(a.against, a.rounds, extra)
+        return
     base = dict(speed=0.3, obstacle={"k": 1e7, "e": 0.5}, t_after=0.1)
     cases = {
         "sawppy-like URDF": lambda: scenario_case("sawppy_like_beta.toml"),
@@ -119,11 +164,15 @@ def main():
             rover2d(suspension="rocker"),
             SimulationConfig(**base, springs={"rocker": {"k": 50.0, "c": 2.0}}), None),
     }
+    out = {}
     for name, make in cases.items():
         if a.only and a.only not in name:
             continue
-        case(name, *make(), a.repeat)
-    sys.stdout.flush()
+        out[name] = case(name, *make(), a.repeat)
+        if not a.json:
+            show(name, out[name])
+    if a.json:
+        print(json.dumps(out))
 
 
 if __name__ == "__main__":

@@ -131,3 +131,32 @@ def test_the_loop_bias_term_is_the_central_difference_of_the_whole_closure(sawpp
     got = loop_jdot_v(lc, sys_.model, q, v)
     assert np.array_equal(got, whole)
     assert np.abs(whole[:6]).max() > 0.0 and not whole[6:].any()   # loops, then locks
+
+
+def test_planes_sharing_a_law_give_the_bits_of_one_call_per_plane():
+    """Consecutive planes with one law object (a support per wheel, as the traverse check
+    builds them) are evaluated in one call of the law: the bits of one call per plane."""
+    from roverimpact.contact import HuntCrossley
+    from roverimpact.models import rocker_bogie
+    from roverimpact.simulate import ContactSystem, Plane
+
+    mbm = rocker_bogie()
+    q = np.asarray(mbm.params["q_nominal"])
+    v = 0.1 * np.random.default_rng(2).standard_normal(mbm.model.nv)
+    ground = HuntCrossley(k=1e6, e=0.7)
+    nw = len(mbm.wheels)
+    planes = [Plane(f"support_{w}", np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, 1e-3 * w]),
+                    ground, 0.1, wheels=np.arange(nw) == w) for w in range(nw)]
+    planes.append(Plane("face", np.array([-1.0, 0.0, 0.0]), np.zeros(3),
+                        HuntCrossley(k=1e7, e=0.5), 0.3))
+    sys_ = ContactSystem(model=mbm.model, wheel_frames=[w.frame for w in mbm.wheels],
+                         radii=[w.radius for w in mbm.wheels], planes=planes,
+                         gravity=np.array([0.0, 0.0, -9.81]), mu=0.3)
+    c = sys_.wheel_centres(q)
+    planes[-1].p0 = c[0] + np.array([0.9 * mbm.wheels[0].radius, 0.0, 0.0])
+    sys_._set_planes()
+    assert sys_._law_runs == [(0, nw), (nw, nw + 1)]
+    cs, cf = sys_.contacts(q, v), sys_.applied_force(q, v)
+    assert (cf.f_n[:nw] > 0).sum() >= 4 and cf.f_n[-1, 0] > 0
+    assert np.array_equal(cf.f_n, cs.f_n) and np.array_equal(cf.f_t, cs.f_t)
+    assert np.array_equal(cf.tau, cs.tau)

@@ -33,6 +33,8 @@ from .constraints import point_jacobian
 __all__ = ["BaseInfo", "FrameLoop", "FrameLoopClosure", "attach_frame_loops", "base_info",
            "declare_wheels", "detect_base", "joint_axis", "placed_axis", "warn_site_twin"]
 
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
 
 @dataclass(frozen=True)
 class BaseInfo:
@@ -380,6 +382,15 @@ class FrameLoop:
         return [f"loop:{self.name}"]
 
 
+def _skew(r: np.ndarray) -> np.ndarray:
+    """Skew matrices (..., 3, 3) of vectors (..., 3): ``skew(r) w = r x w``."""
+    S = np.zeros((*r.shape[:-1], 3, 3))
+    S[..., 0, 1], S[..., 0, 2] = -r[..., 2], r[..., 1]
+    S[..., 1, 0], S[..., 1, 2] = r[..., 2], -r[..., 0]
+    S[..., 2, 0], S[..., 2, 1] = -r[..., 1], r[..., 0]
+    return S
+
+
 def _points(model, data, fa, ra, fb, rb):
     pa = data.oMf[fa].act(ra)
     pb = data.oMf[fb].act(rb)
@@ -420,13 +431,27 @@ class FrameLoopClosure:
     def __init__(self, model, data, loops, ids, lengths, axes, own):
         self.model, self.data, self.own = model, data, own
         self.loops = list(zip(loops, ids, lengths, axes, strict=True))
+        # the two points of every loop, a then b: (frame id, point in the frame)
+        self._points = [pt for fa, ra, fb, rb in ids for pt in ((fa, ra), (fb, rb))]
 
     def _frame_rows(self, q, phis, rows):
+        """Append the frame loops' residuals and rows at ``q`` to ``phis``, ``rows``: the
+        arithmetic of :func:`_points` and
+        :func:`~roverimpact.models.constraints.point_jacobian`, every point at once."""
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        for lp, (fa, ra, fb, rb), L, ax in self.loops:
-            pa, pb, Ja, Jb = _points(model, data, fa, ra, fb, rb)
+        oMf, P, R, J = data.oMf, [], [], []
+        for f, r in self._points:
+            M = oMf[f]
+            p = M.act(r)
+            P.append(p)
+            R.append(p - M.translation)
+            J.append(pin.getFrameJacobian(model, data, f, _LWA))
+        J = np.array(J).reshape(len(P), 6, model.nv)
+        Jp = J[:, :3] - _skew(np.array(R)) @ J[:, 3:]          # (points, 3, nv)
+        for i, (lp, _, L, ax) in enumerate(self.loops):
+            pa, pb, Ja, Jb = P[2 * i], P[2 * i + 1], Jp[2 * i], Jp[2 * i + 1]
             if lp.kind == "point":
                 phis.append((pa - pb)[ax])
                 rows.append((Ja - Jb)[ax])

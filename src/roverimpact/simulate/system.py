@@ -84,10 +84,13 @@ class ContactForces:
     """
 
     gap: np.ndarray
-    delta: np.ndarray
     f_n: np.ndarray
     f_t: np.ndarray
     tau: np.ndarray
+
+    @property
+    def delta(self) -> np.ndarray:
+        return np.maximum(-self.gap, 0.0)
 
 
 @dataclass
@@ -163,6 +166,16 @@ class ContactSystem:
                                else np.asarray(p.wheels, bool) for p in self.planes])
         self.bounded = bool(np.isfinite(self.z_max).any() or not self.touch.all())
         self._plane_range = np.arange(len(self.planes) + 1)
+        runs = []                         # [k0, k1): consecutive planes of one law object
+        for k, p in enumerate(self.planes):
+            if runs and self.planes[runs[-1][0]].law is p.law:
+                runs[-1][1] = k + 1
+            else:
+                runs.append([k, k + 1])
+        self._law_runs = [tuple(r) for r in runs]
+        self._offsets_col, self._z_max_col = self.offsets[:, None], self.z_max[:, None]
+        self._radii_row = self.radii[None, :]
+        self._r_nz = self.radii[None, :] * self.N[:, None, 2]   # height of c - r n over c
         # contact point = centre - r n: J_p = J_lin - skew(-r n) J_ang = J_lin + r skew(n) J_ang
         self.rSn = self.radii[None, :, None, None] * _skew(self.N)[:, None, :, :]
 
@@ -215,13 +228,13 @@ class ContactSystem:
         return self._gaps(np.asarray(c, dtype=float))
 
     def _gaps(self, c):
-        g = self.N @ c.T - self.offsets[:, None] - self.radii[None, :]   # (np, nw)
+        g = self.N @ c.T - self._offsets_col - self._radii_row            # (np, nw)
         if not self.bounded:
             return g
         # contact points above the top of a finite face, and wheels the face is not in
         # front of, do not touch it
-        z_cp = c[None, :, 2] - self.radii[None, :] * self.N[:, None, 2]
-        return np.where((z_cp <= self.z_max[:, None]) & self.touch, g, np.inf)
+        z_cp = c[:, 2] - self._r_nz                                       # (np, nw)
+        return np.where((z_cp <= self._z_max_col) & self.touch, g, np.inf)
 
     # ------------------------------------------------------------------ terrain
     def _centres_axes(self):
@@ -290,7 +303,7 @@ class ContactSystem:
         tau = self.spring_torque(q, v)
         kk, ww = np.nonzero(gap < 0.0)                       # pairs in contact, by plane
         if kk.size == 0:
-            return ContactForces(gap, np.maximum(-gap, 0.0), f_n, f_t, tau)
+            return ContactForces(gap, f_n, f_t, tau)
         nv = self.nv
         J = np.array([pin.getFrameJacobian(model, data, self.fids[w], _LWA) for w in ww])
         J = J.reshape(-1, 6, nv)
@@ -306,11 +319,15 @@ class ContactSystem:
         fn = np.empty(kk.size)
         v_i = [p.v_i for p in self.planes] if v_i is None else v_i
         bounds = np.searchsorted(kk, self._plane_range).tolist()
-        for k, p in enumerate(self.planes):
-            i0, i1 = bounds[k], bounds[k + 1]
-            if i1 > i0:
-                raw = np.asarray(p.law.force(delta[i0:i1], -vn[i0:i1], v_i[k]), float)
-                fn[i0:i1] = np.maximum(raw, 0.0)
+        for k0, k1 in self._law_runs:
+            # one call for planes in a row that share a law and v_i (a law is elementwise)
+            runs = [(k0, k1)] if all(x == v_i[k0] for x in v_i[k0 + 1:k1]) else [
+                (k, k + 1) for k in range(k0, k1)]
+            for a, b in runs:
+                i0, i1 = bounds[a], bounds[b]
+                if i1 > i0:
+                    raw = self.planes[a].law.force(delta[i0:i1], -vn[i0:i1], v_i[a])
+                    fn[i0:i1] = np.maximum(np.asarray(raw, float), 0.0)
         F = fn[:, None] * N
         if self.mu > 0.0:
             vt = vp - vn[:, None] * N
@@ -321,7 +338,7 @@ class ContactSystem:
         f_n[kk, ww] = fn
         # summed in the order of ContactState.tau (pairs row-major): the same bits
         tau += (Jp * F[:, :, None]).sum(axis=(0, 1))
-        return ContactForces(gap, np.maximum(-gap, 0.0), f_n, f_t, tau)
+        return ContactForces(gap, f_n, f_t, tau)
 
     def _forces(self, gap, Jp, vp, vn, N, v_i) -> ContactState:
         """Normal and friction forces from the gaps, point Jacobians, contact-point
