@@ -18,10 +18,11 @@ from .run import (
     initial_state,
     simulate_impact,
 )
-from .system import ContactSystem, Plane
+from .system import ContactForces, ContactSystem, Plane
 
 __all__ = [
     "GRAVITY",
+    "ContactForces",
     "ContactLawSpec",
     "ContactSystem",
     "IntegratorSpec",
