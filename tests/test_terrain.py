@@ -11,6 +11,7 @@ References (independent of the code under test):
 
 from __future__ import annotations
 
+import importlib
 import itertools
 from types import SimpleNamespace
 
@@ -466,15 +467,19 @@ def test_xyz_point_list_is_not_taken_for_a_grid(tmp_path, suffix):
 
 
 @pytest.mark.parametrize(("code", "name"), [(5, "LZW"), (50000, "ZSTD")])
-def test_geotiff_compression_without_its_codec(tmp_path, code, name):
-    """A GeoTIFF compressed by LZW (GDAL's usual) or ZSTD, without imagecodecs (which the
-    'geotiff' extra does not bring): one ConfigError naming the codec and the way out
+def test_geotiff_compression_without_its_codec(tmp_path, monkeypatch, code, name):
+    """A GeoTIFF compressed by LZW (GDAL's usual) or ZSTD, without imagecodecs (installed
+    apart from the 'geotiff' extra, which brings it): one ConfigError naming the codec and the way out
     (before: ZSTD raised ModuleNotFoundError 'compression', a traceback from the CLI)."""
     tifffile = pytest.importorskip("tifffile")
-    import importlib.util
-
-    if importlib.util.find_spec("imagecodecs") is not None:
-        pytest.skip("imagecodecs is installed: the codecs are there")
+    importlib.import_module("tifffile._imagecodecs")
+    importlib.import_module("tifffile.tifffile")
+    # tifffile without imagecodecs falls back on its own few codecs (no LZW): as installed
+    # by the 'geotiff' extra imagecodecs is there, so take it away as a missing one does
+    monkeypatch.setattr(tifffile.tifffile, "imagecodecs", tifffile._imagecodecs)
+    # and a table of decoders of its own for this test: tifffile keeps those it looked up
+    monkeypatch.setattr(tifffile.tifffile.TIFF, "DECOMPRESSORS",
+                        tifffile.tifffile.CompressionCodec(encode=False))
     tags = [(33550, "d", 3, (1.0, 1.0, 0.0), False),
             (33922, "d", 6, (0.0, 0.0, 0.0, 0.0, 3.0, 0.0), False),
             (34735, "H", 8, (1, 1, 0, 1, 1025, 0, 1, 1), False)]
@@ -490,6 +495,29 @@ def test_geotiff_compression_without_its_codec(tmp_path, code, name):
         assert f"its {name} compression needs the imagecodecs package" in str(exc)
     else:  # pragma: no cover - a codec read the bytes as valid
         assert name == "ZSTD"
+
+
+@pytest.mark.parametrize("compression", ["lzw", "zstd", "zlib", None])
+def test_compressed_geotiff_reads_as_the_plain_one(tmp_path, compression):
+    """DEMs are distributed compressed, most with LZW (GDAL's usual) and a predictor: with
+    the 'geotiff' extra (tifffile and imagecodecs) they read as the uncompressed grid of a
+    plane z = 0.1 x - 0.05 y written here, north row first."""
+    tifffile = pytest.importorskip("tifffile")
+    pytest.importorskip("imagecodecs")
+    x0, y_north, d = 500.0, 4000.0, 2.0
+    x = x0 + d * np.arange(7)
+    y = y_north - d * np.arange(5)                        # file rows run north to south
+    z = (0.1 * x[None, :] - 0.05 * y[:, None]).astype(np.float32)
+    keys = [1, 1, 0, 2, 1024, 0, 1, 1, 1025, 0, 1, 2]     # projected, pixel is point
+    tags = [(33550, "d", 3, (d, d, 0.0), False),
+            (33922, "d", 6, (0.0, 0.0, 0.0, x0, y_north, 0.0), False),
+            (34735, "H", len(keys), keys, False)]
+    p = tmp_path / "dem.tif"
+    kw = {"predictor": True} if compression in ("lzw", "zlib") else {}
+    tifffile.imwrite(p, z, extratags=tags, compression=compression, **kw)
+    hf = HeightField.from_file(p)
+    xq, yq = np.array([504.3, 510.0]), np.array([3993.1, 3999.0])
+    np.testing.assert_allclose(hf.height(xq, yq), 0.1 * xq - 0.05 * yq, rtol=1e-6)
 
 
 def test_geotiff_scale_offset_and_units(tmp_path):

@@ -644,8 +644,9 @@ class HeightField(Terrain):
                         raise
                     raise ConfigError(
                         f"cannot read GeoTIFF {path}: its {codec} compression needs the "
-                        "imagecodecs package (pip install imagecodecs), or save it "
-                        "uncompressed (gdal_translate -co COMPRESS=NONE)") from None
+                        "imagecodecs package (pip install 'roverimpact[geotiff]' brings "
+                        "it), or save it uncompressed (gdal_translate -co COMPRESS=NONE)"
+                    ) from None
                 tags = page.tags
                 scale = tags.valueof(33550)
                 tie = tags.valueof(33922)
