@@ -318,3 +318,46 @@ def test_cli_exit_codes(tmp_path, capsys):
     assert main(["experiment", str(bad / "broken.toml")]) == 2
     err = capsys.readouterr().err
     assert "malformed TOML" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("how", ["--no-simulate", "simulate = false"])
+def test_no_simulate_ranks_the_peaks_by_T_c_alone(tmp_path, capsys, monkeypatch, how):
+    """The indicator needs no contact parameters and no integration, so neither does the
+    comparison with it: ``--no-simulate`` or ``[model] simulate = false`` gives T_c^- (as
+    ``energy_of`` gives it for each condition) and no F_max, never calls the simulator, and
+    writes strict JSON (the F_max statistics are null, not NaN)."""
+    import json
+
+    import roverimpact as ri
+    from roverimpact.cli import main
+    from roverimpact.studies import evaluate
+
+    def no_simulation(*a, **k):
+        raise AssertionError("simulated")
+
+    monkeypatch.setattr(evaluate, "simulate_scenario", no_simulation)
+    d = tmp_path / "exp"
+    shutil.copytree(EXAMPLE, d)
+    argv = ["experiment", str(d / "trials.toml"), "-o", str(tmp_path / "out"), "--no-plot"]
+    if how == "--no-simulate":
+        argv.append(how)
+    else:
+        text = (d / "trials.toml").read_text()
+        (d / "trials.toml").write_text(text.replace('scenario = "rover.toml"',
+                                                    'scenario = "rover.toml"\n' + how))
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "not simulated" in printed and "F_max" not in printed
+    assert "Kendall tau = 0.956, Spearman rho = 0.991" in printed
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text(),
+                         parse_constant=lambda c: pytest.fail(f"{c} in summary.json"))
+    assert summary["model"]["simulate"] is False
+    assert summary["rank_agreement"]["spearman_rho_Fmax"] is None
+    table = pd.read_csv(tmp_path / "out" / "comparison.csv")
+    assert table["F_max"].isna().all() and len(table) == 14
+    sc = ri.load_scenario(d / "rover.toml")
+    for r in table.iloc[[0, 7, 13]].itertuples():
+        case = sc.model_copy(update={
+            "obstacle": sc.obstacle.model_copy(update={"beta_deg": r.beta_deg}),
+            "velocity": sc.velocity.model_copy(update={"u": r.speed})})
+        assert r.T_c_minus == pytest.approx(float(ri.energy_of(case).T_c_minus), rel=1e-12)

@@ -46,6 +46,9 @@ def experiment_cmd(
                                  "and the failures as JSON."),
     as_csv: bool = typer.Option(False, "--csv", help="Print the per-trial table as CSV "
                                 "(duration in s)."),
+    no_simulate: bool = typer.Option(False, "--no-simulate", help="Compare the peaks with "
+                                     "the model's T_c^- alone: no simulation, no F_max "
+                                     "(as [model] simulate = false)."),
 ) -> int:
     """Detect impacts in force recordings, measure peak/impulse/duration, compare with the model.
 
@@ -64,6 +67,8 @@ def experiment_cmd(
     check_output(outdir, folder=True)
     cfg, base = load_trials(trials)
     # a missing or invalid scenario is told before the recordings are processed
+    if no_simulate and cfg.model is not None:  # as the file's simulate = false (summary)
+        cfg = cfg.model_copy(update={"model": cfg.model.model_copy(update={"simulate": False})})
     model = scenario_model(cfg.model, base) if cfg.model is not None else None
     with staged_folder(outdir, EXPERIMENT_FILES, ("trials.csv", "summary.json"),
                        "experiment") as work:
@@ -106,12 +111,15 @@ def experiment_cmd(
     console.print(tab)
     if comparison is not None:
         s = comparison.stats
-        ct = new_table(f"Model comparison ({cfg.model.scenario}: scenario T_c^- and "
-                       "simulated F_max)", "beta [deg]", "speed [m/s]", "n",
-                       "F_peak mean [N]", "T_c^- [J]", "F_max model [N]", "measured/model")
+        simulated = model.simulate
+        ct = new_table(f"Model comparison ({cfg.model.scenario}: scenario T_c^-"
+                       + (" and simulated F_max)" if simulated else ", not simulated)"),
+                       "beta [deg]", "speed [m/s]", "n", "F_peak mean [N]", "T_c^- [J]",
+                       *(("F_max model [N]", "measured/model") if simulated else ()))
         for r in comparison.table.itertuples():
             ct.add_row(f"{r.beta_deg:g}", f"{r.speed:g}", str(r.n), f"{r.F_peak_mean:.1f}",
-                       f"{r.T_c_minus:.4g}", f"{r.F_max:.1f}", f"{r.F_ratio:.3f}")
+                       f"{r.T_c_minus:.4g}",
+                       *((f"{r.F_max:.1f}", f"{r.F_ratio:.3f}") if simulated else ()))
         console.print(ct)
 
         def fmt(x):
@@ -119,8 +127,9 @@ def experiment_cmd(
 
         console.print(
             f"rank agreement, peak vs T_c^-: Kendall tau = {fmt(s['kendall_tau_Tc'])}, "
-            f"Spearman rho = {fmt(s['spearman_rho_Tc'])}; peak vs model F_max: Kendall tau = "
-            f"{fmt(s['kendall_tau_Fmax'])}, Spearman rho = {fmt(s['spearman_rho_Fmax'])}",
+            f"Spearman rho = {fmt(s['spearman_rho_Tc'])}"
+            + (f"; peak vs model F_max: Kendall tau = {fmt(s['kendall_tau_Fmax'])}, "
+               f"Spearman rho = {fmt(s['spearman_rho_Fmax'])}" if simulated else ""),
             highlight=False,
         )
         if comparison.indicators is not None:

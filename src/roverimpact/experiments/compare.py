@@ -44,13 +44,17 @@ class ScenarioModel:
         The scenario as read from TOML (with its optional ``simulation`` table).
     source : str
         Where it came from (for messages).
+    simulate : bool
+        Simulate each condition for F_max (default); ``False``: T_c^- and the simpler
+        indicators only, ``F_max`` and ``contact_duration`` NaN (no contact law needed).
     """
 
     scenario: dict
     source: str = "scenario"
+    simulate: bool = True
 
     @classmethod
-    def from_file(cls, path: str | Path) -> ScenarioModel:
+    def from_file(cls, path: str | Path, *, simulate: bool = True) -> ScenarioModel:
         """Read a scenario TOML file; a relative ``model.file`` is taken from its folder.
 
         Raises
@@ -62,11 +66,13 @@ class ScenarioModel:
         if not path.is_file():
             raise ConfigError(f"{path}: no such scenario file (model.scenario of the trials "
                               "file, relative to the trials file)")
-        return cls.from_dict(read_toml(path), source=str(path), base_dir=path.parent)
+        return cls.from_dict(read_toml(path), source=str(path), base_dir=path.parent,
+                             simulate=simulate)
 
     @classmethod
     def from_dict(cls, raw: dict, *, source: str = "scenario",
-                  base_dir: str | Path | None = None) -> ScenarioModel:
+                  base_dir: str | Path | None = None, simulate: bool = True
+                  ) -> ScenarioModel:
         """Validate a scenario dict (schema and simulation settings; the model is built
         on the first call)."""
         from ..models.robot_data import is_example_robot
@@ -78,7 +84,7 @@ class ScenarioModel:
             f = model["file"]
             if not is_example_robot(f) and not Path(f).is_absolute():
                 raw["model"] = model | {"file": str(Path(base_dir) / f)}
-        out = cls(raw, source)
+        out = cls(raw, source, bool(simulate))
         try:
             ScenarioEvaluator().validate(out.case(math.radians(45.0), 0.5))
         except ConfigError as exc:
@@ -96,10 +102,13 @@ class ScenarioModel:
     def __call__(self, beta: float, speed: float) -> dict:
         """``{"T_c_minus": J, "F_max": N, "m_eff": kg, "v_n": m/s, "contact_duration": s,
         "sim_error": str}`` for ``beta`` [rad] and ``speed`` [m/s]; F_max is NaN and
-        ``sim_error`` says why if the simulation failed."""
+        ``sim_error`` says why if the simulation failed (NaN and ``""`` without
+        :attr:`simulate`)."""
         from ..studies.evaluate import evaluate_case
 
-        out = evaluate_case(self.case(beta, speed), simulate=True)
+        out = evaluate_case(self.case(beta, speed), simulate=self.simulate)
+        if not self.simulate:
+            out = out | {"F_max": math.nan, "contact_duration": math.nan, "sim_error": ""}
         keys = ("T_c_minus", "F_max", "m_eff", "v_n", "contact_duration", "sim_error",
                 "m_total", "m_eff_free", "T_n_total", "T_c_obstacle")
         return {k: out[k] for k in keys}
@@ -197,5 +206,6 @@ def compare_with_model(trials_df: pd.DataFrame, model_fn: Callable[[float, float
 
 
 def scenario_model(cfg: ScenarioModelConfig, base_dir: str | Path = ".") -> ScenarioModel:
-    """The :class:`ScenarioModel` of a trials file's ``[model]`` (``base_dir / scenario``)."""
-    return ScenarioModel.from_file(Path(base_dir) / cfg.scenario)
+    """The :class:`ScenarioModel` of a trials file's ``[model]`` (``base_dir / scenario``,
+    simulated unless ``simulate = false``)."""
+    return ScenarioModel.from_file(Path(base_dir) / cfg.scenario, simulate=cfg.simulate)

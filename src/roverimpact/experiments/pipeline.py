@@ -227,7 +227,7 @@ def write_outputs(result: ExperimentResult, outdir, *, comparison: ModelComparis
     if comparison is not None:
         files["comparison"] = out / "comparison.csv"
         comparison.table.to_csv(files["comparison"], index=False)
-        summary["rank_agreement"] = comparison.stats
+        summary["rank_agreement"] = _finite(comparison.stats)
         ind = getattr(comparison, "indicators", None)
         summary["baselines"] = _finite(ind.as_dict()) if ind is not None else None
         summary["model"] = (result.config.model.model_dump() if result.config.model else None)

@@ -127,11 +127,14 @@ class ScenarioModelConfig(StrictModel):
     """``[model]`` with ``kind = "scenario"``: the rover model of the comparison.
 
     ``scenario`` is a scenario TOML file (path relative to the trials file) with an
-    optional ``[simulation]`` table; see :class:`ScenarioModel`.
+    optional ``[simulation]`` table; see :class:`ScenarioModel`. ``simulate = false``
+    compares the measured peaks with T_c^- (and the simpler indicators) alone: no
+    compliant-contact simulation, no F_max.
     """
 
     kind: Literal["scenario"]
     scenario: str
+    simulate: bool = True
 
 
 class TrialsFile(StrictModel):

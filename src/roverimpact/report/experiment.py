@@ -13,7 +13,8 @@ __all__ = ["plot_overlay"]
 
 
 def plot_overlay(trials_df: pd.DataFrame, comparison: ModelComparison | None, path):
-    """Peak force vs beta (measured points, model F_max) with T_c^- on a second, scaled axis.
+    """Peak force vs beta (measured points, model F_max if simulated) with T_c^- on a
+    second, scaled axis.
 
     The right axis is scaled so that the largest T_c^- sits at the height of the largest
     measured mean peak: equal shapes overlay.
@@ -31,10 +32,12 @@ def plot_overlay(trials_df: pd.DataFrame, comparison: ModelComparison | None, pa
     if comparison is not None:
         tab = comparison.table
         ax2 = ax.twinx()
+        simulated = bool(tab["F_max"].notna().any())  # not without simulation
         for i, sp in enumerate(speeds):
             d = tab[tab["speed"] == sp]
-            ax.plot(d["beta_deg"], d["F_max"], "-", color=f"C{i}",
-                    label=f"model $F_{{max}}$, {sp:g} m/s")
+            if simulated:
+                ax.plot(d["beta_deg"], d["F_max"], "-", color=f"C{i}",
+                        label=f"model $F_{{max}}$, {sp:g} m/s")
             ax2.plot(d["beta_deg"], d["T_c_minus"], "--", color=f"C{i}", alpha=0.8,
                      label=f"model $T_c^-$, {sp:g} m/s")
         fmax = float(tab["F_peak_mean"].max())
