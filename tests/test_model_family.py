@@ -199,6 +199,7 @@ def test_impact_block_refuses_scenarios_of_two_blocks():
                                           "obstacle": {"wheel": "front", "beta_deg": 30.0}})])
 
 
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.PullingContactWarning")  # noslip
 def test_evaluator_blocks_match_evaluate_case():
     """Cases of their own in two blocks (two obstacle wheels), wheel radius and lengths
     changed, no-slip ground: the evaluator's outputs equal evaluate_case per case."""

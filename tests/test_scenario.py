@@ -314,6 +314,56 @@ def test_held_rows_heavier_than_the_vehicle_warn():
                                  np.radians([30.0, 60.0]))
 
 
+@pytest.mark.filterwarnings("ignore:m_eff = .* exceeds")  # the set jams the rover too
+def test_noslip_held_contact_that_pulls_warns():
+    """ground = "noslip" on the bumps example at beta = 60 deg: the frictionless active set,
+    with the no-slip rows of its holding wheels kept as bilateral rows, needs a pulling
+    normal impulse at the right middle wheel. Reference: G p = -A v with G = A M^-1 A^T
+    (plain numpy, the 11 held rows independent; restitution 0, the default) gives
+    p_n = -5.47 N s against the obstacle's 6.53 N s, T_c^- = 0.84 J; Coulomb friction with
+    mu = inf (the no-slip rows in the impact problem) holds no pulling wheel, 0.265 J.
+    A PullingContactWarning names the wheel and the impulse; the default ground, Coulomb
+    and sweep_energy's batch over beta agree."""
+    import warnings
+    from pathlib import Path
+
+    from roverimpact.exceptions import HeldRowsWarning, PullingContactWarning
+
+    path = Path(__file__).parents[1] / "examples" / "rocker_bogie_on_bumps.toml"
+    base = load_scenario(path).model_dump()
+    base["obstacle"]["beta_deg"] = 60.0
+
+    def with_ground(**contacts):
+        d = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
+        d["contacts"] = {**d["contacts"], **contacts}
+        return Scenario.model_validate(d)
+
+    noslip = ri.ImpactSetup.from_scenario(with_ground(ground="noslip"))
+    M, A, v = noslip.M, noslip.A, noslip.v
+    p = np.linalg.solve(A @ np.linalg.solve(M, A.T), -(A @ v))
+    i = noslip.labels.index("ground:right_middle:normal")
+    assert p[i] == pytest.approx(-5.475, abs=2e-3)
+    assert p[noslip.obstacle_row] == pytest.approx(6.532, abs=2e-3)
+    with pytest.warns(PullingContactWarning,
+                      match=r"ground:right_middle .*-5\.47 N s.*6\.53 N s.*coulomb.*mu = inf"):
+        en = noslip.partition()
+    assert float(en.T_c_minus) == pytest.approx(0.8402, abs=1e-4)
+    with pytest.warns(PullingContactWarning, match=r"ground:right_middle .*-5\.47 N s"):
+        sweep_energy(with_ground(ground="noslip"), np.radians([60.0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", HeldRowsWarning)  # the pulling warning's base class
+        for sc_ in (with_ground(ground="coulomb", mu=float("inf")), with_ground()):
+            setup = ri.ImpactSetup.from_scenario(sc_)
+            q = np.linalg.solve(setup.A @ np.linalg.solve(setup.M, setup.A.T),
+                                -(setup.A @ setup.v))
+            normal = [k for k, lb in enumerate(setup.labels) if lb.endswith(":normal")]
+            assert q[normal].min() >= 0.0
+            energy_of(setup)
+            sweep_energy(sc_, np.radians([10.0, 30.0, 45.0, 60.0, 80.0]))
+        assert float(energy_of(with_ground(ground="coulomb", mu=float("inf"))).T_c_minus
+                     ) == pytest.approx(0.2646, abs=1e-4)
+
+
 @pytest.mark.parametrize("model", [{"name": "rocker_bogie"},
                                    {"name": "rover2d", "params": {"suspension": "rocker"}}])
 def test_T_c_at_equals_evaluate_then_partition(model):

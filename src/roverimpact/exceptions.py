@@ -36,6 +36,14 @@ class HeldRowsWarning(UserWarning):
     every wheel), and T_c^- is then near T whatever the face."""
 
 
+class PullingContactWarning(HeldRowsWarning):
+    """A contact held through the impact (``contacts.ground = "noslip"``: the frictionless
+    active set, then the no-slip rows of every holding contact kept as bilateral rows)
+    needs a negative, pulling normal impulse to hold: the held set is not a possible one,
+    and T_c^- is too high. ``ground = "coulomb"`` with ``mu = inf`` decides the set with
+    the no-slip rows in it."""
+
+
 class GroundGapWarning(UserWarning):
     """A ground wheel of a scenario on flat ground (no ``[terrain]``) is off the plane
     z = 0 in its configuration: its ground rows treat it as touching all the same."""
@@ -46,4 +54,4 @@ class StudyInterrupted(KeyboardInterrupt):
 
 
 __all__ = ["ConfigError", "GroundGapWarning", "HeldRowsWarning", "InputError", "ModelError",
-           "RoverImpactError", "SolverError", "StudyInterrupted"]
+           "PullingContactWarning", "RoverImpactError", "SolverError", "StudyInterrupted"]

@@ -163,6 +163,8 @@ class ImpactSetup:
         total mass."""
         en = _energy(self.M, self.A, self.v, self.obstacle_row)
         warn_if_jammed(self.model, en.m_eff, self.labels, self.obstacle_row)
+        if self.constraints == "auto" and self.contacts.ground == "noslip":
+            warn_if_pulling(self.M, self.A, self.v, self.labels, self.obstacle_row)
         return en
 
     def evaluate(self, q=None) -> tuple[np.ndarray, np.ndarray]:
@@ -1104,6 +1106,99 @@ def warn_jammed(m_max: float, total: float, labels, obstacle_row: int,
             f"held rows {held} brace it; if they do not all hold through the impact "
             '(constraints = "auto" decides; contacts.ground = "noslip" holds every wheel '
             "bilaterally), T_c^- is too high"), stacklevel=stacklevel)
+
+
+def pulling_contact(M, A, v, labels, obstacle_row: int, tol: float = 1e-6):
+    """``(contact, impulse)`` of the held contact whose normal impulse is most negative
+    when every row of ``A`` (m, n) holds through the impact (restitution 0, the obstacle
+    approaching), or None when no held contact pulls (to ``tol`` times the obstacle's
+    impulse). One :func:`roverimpact.impulsive_impact` solve; with dependent rows (an
+    impulse not unique) a small linear program looks for impulses, among those that
+    give the same velocity after impact, with no negative normal among them."""
+    from ..impulse import impulsive_impact
+
+    A = np.asarray(A, dtype=float)
+    nz = np.flatnonzero(np.max(np.abs(A), axis=-1) > 0.0)  # a zero row takes no impulse
+    if obstacle_row not in nz or float(A[obstacle_row] @ v) >= 0.0:
+        return None
+    A = A[nz]
+    labels = [labels[i] for i in nz]
+    obs = int(np.flatnonzero(nz == obstacle_row)[0])
+    normal = np.array([i for i, lb in enumerate(labels)
+                       if i != obs and lb.endswith(":normal")], dtype=np.int64)
+    if not normal.size:
+        return None
+    res = impulsive_impact(M, A, v, restitution=0.0)
+    p = np.asarray(res.impulse, dtype=float)
+    floor = -tol * abs(float(p[obs]))
+    if np.min(p[normal]) >= floor:
+        return None
+    if int(res.rank) < len(labels):  # p + N z, N spanning the null space of A^T
+        from scipy.optimize import linprog
+
+        Vt = np.linalg.svd(A.T)[2]
+        N = Vt[int(res.rank):].T
+        k = N.shape[1]
+        # max t: p_i + N_i z >= t on the normal rows, t <= 0
+        lp = linprog(np.r_[np.zeros(k), -1.0],
+                     A_ub=np.c_[-N[normal], np.ones(len(normal))], b_ub=p[normal],
+                     bounds=[(None, None)] * k + [(None, 0.0)], method="highs")
+        if lp.status == 0:
+            if -lp.fun >= floor:
+                return None
+            p = p + N @ lp.x[:k]
+    i = int(normal[np.argmin(p[normal])])
+    return labels[i].rpartition(":")[0], float(p[i]), float(p[obs])
+
+
+def pulling_contact_of(M, A, v, labels, obstacle_row: int, keep):
+    """:func:`pulling_contact` of a stack ``A`` (k, m, n) whose held rows are ``keep``
+    (k, m): the first item found to pull, or None. One batched impulse solve per distinct
+    held set; then :func:`pulling_contact` on the items whose impulse pulls, the most
+    pulling (relative to the obstacle's impulse) first, until one is confirmed."""
+    from ..impulse import impulsive_impact
+
+    todo = []  # (relative pull, rows, labels, obstacle row)
+    for mask in np.unique(keep, axis=0):
+        sub = A[(keep == mask).all(axis=-1)][:, mask]
+        ob = int(np.sum(mask[:obstacle_row]))
+        lab = [lb for lb, k in zip(labels, mask, strict=True) if k]
+        normal = [i for i, lb in enumerate(lab) if i != ob and lb.endswith(":normal")]
+        sub = sub[sub[:, ob] @ v < 0.0]
+        if not (len(sub) and normal):
+            continue
+        if (np.max(np.abs(sub), axis=-1) > 0.0).all():
+            p = np.asarray(impulsive_impact(M, sub, v, restitution=0.0).impulse)
+            rel = np.min(p[:, normal], axis=-1) / np.abs(p[:, ob])
+        else:  # a zero row: pulling_contact drops it
+            rel = np.full(len(sub), -np.inf)
+        todo += [(r, Ai, lab, ob) for r, Ai in zip(rel, sub, strict=True) if r < -1e-6]
+    for _, Ai, lab, ob in sorted(todo, key=lambda t: t[0]):
+        hit = pulling_contact(M, Ai, v, lab, ob)
+        if hit is not None:
+            return hit
+    return None
+
+
+def warn_if_pulling(M, A, v, labels, obstacle_row: int, keep=None,
+                    stacklevel: int = 4) -> None:
+    """:class:`~roverimpact.exceptions.PullingContactWarning` when a held contact of
+    ``contacts.ground = "noslip"`` needs a pulling normal impulse (:func:`pulling_contact`;
+    with ``keep``, :func:`pulling_contact_of` a stack)."""
+    import warnings
+
+    from ..exceptions import PullingContactWarning
+
+    hit = (pulling_contact(M, A, v, labels, obstacle_row) if keep is None
+           else pulling_contact_of(M, A, v, labels, obstacle_row, keep))
+    if hit is not None:
+        contact, p_n, p_obs = hit
+        warnings.warn(PullingContactWarning(
+            f"held contact {contact} needs a pulling normal impulse ({p_n:.3g} N s against "
+            f"the obstacle's {p_obs:.3g} N s) to keep its no-slip rows "
+            '(contacts.ground = "noslip"): it cannot hold, and T_c^- is too high; '
+            'contacts.ground = "coulomb" with mu = inf decides which wheels hold'),
+            stacklevel=stacklevel)
 
 
 def _energy(M, A, v, obstacle_row: int) -> ImpactEnergy:

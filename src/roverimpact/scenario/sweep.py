@@ -14,6 +14,7 @@ from .build import (
     no_approach,
     normal_from_beta,
     warn_if_jammed,
+    warn_if_pulling,
 )
 from .schema import Scenario
 
@@ -105,4 +106,6 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
         warn_if_jammed(setup.model, en.m_eff,
                      [lb for lb, k in zip(setup.candidate_labels, keep[worst], strict=True) if k],
                      int(np.sum(keep[worst][:obs])))
+    if setup.constraints == "auto" and setup.contacts.ground == "noslip":
+        warn_if_pulling(setup.M, A, setup.v, setup.candidate_labels, obs, keep, stacklevel=3)
     return en
