@@ -112,7 +112,11 @@ def _plain_fields(cls) -> frozenset:
 #: a number followed by a unit, e.g. "0.35 m", "45 deg"
 UNIT_RE = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[A-Za-z°%/\^\d]+\s*$")
 # pydantic's own location parts: "function-after[_order(), Uniform]", "list[float]", ...
-_INTERNAL_LOC = re.compile(r"^[a-z][a-z_-]*\[.*\]$")
+_INTERNAL_LOC = re.compile(r"^([a-z][a-z_-]*\[.*\]|float|int|str|bool)$")
+# a union member refusing the value's whole kind (a string for a pair, a list for a
+# number): not the member meant when another member took the value's kind
+_KIND_MISMATCH = {"float_type", "int_type", "string_type", "bool_type", "tuple_type",
+                  "list_type", "dict_type", "set_type", "model_type", "model_attributes_type"}
 
 
 def _schema_names() -> set[str]:
@@ -151,6 +155,19 @@ def _intended_members(errors: list[dict], schema_names) -> list[dict]:
         base, member = split(err)
         if base is not None and err["type"] == "value_error":
             meant.setdefault(base, set()).add(member)
+    # no validator spoke: the members that took the value's kind ("5cm" for float | pair:
+    # the number; [0.05, "x"]: the pair), when some member did
+    members: dict[tuple, dict] = {}
+    for err in errors:
+        base, member = split(err)
+        if base is not None and base not in meant:
+            whole = len(err["loc"]) == len(base) + 1
+            kind = members.setdefault(base, {}).setdefault(member, True)
+            members[base][member] = kind and whole and err["type"] in _KIND_MISMATCH
+    for base, kinds in members.items():
+        took = {m for m, mismatch in kinds.items() if not mismatch}
+        if took and len(took) < len(kinds):
+            meant[base] = took
     out = []
     for err in errors:
         base, member = split(err)
