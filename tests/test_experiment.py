@@ -176,8 +176,10 @@ def _corrupt_set(tmp_path):
                                                                            dtype=np.uint8)))
     (tmp_path / "wide.csv").write_text(",".join(f"c{i}" for i in range(300)) + "\n"
                                        + ",".join("0" * 300) + "\n")
+    # a good recording saved as UTF-16 (Excel's "Unicode text", PowerShell's '>')
+    (tmp_path / "utf16.csv").write_bytes(df.to_csv(index=False).encode("utf-16"))
     files = [*good, "missing_col.csv", "time_back.csv", "nan_run.csv", "units.csv",
-             "empty.csv", "absent.csv", "one_nan.csv", "binary.csv", "wide.csv"]
+             "empty.csv", "absent.csv", "one_nan.csv", "binary.csv", "wide.csv", "utf16.csv"]
     return _trials_toml(tmp_path / "trials.toml", files)
 
 
@@ -187,8 +189,10 @@ def test_corrupted_files_reported_per_file(tmp_path):
         ["trial_00_beta30_v0.3_r1.csv", "trial_05_beta80_v0.3_r1.csv", "one_nan.csv"])
     msgs = {f.file: f.message for f in res.failures}
     assert set(msgs) == {"missing_col.csv", "time_back.csv", "nan_run.csv", "units.csv",
-                         "empty.csv", "absent.csv", "binary.csv", "wide.csv"}
+                         "empty.csv", "absent.csv", "binary.csv", "wide.csv", "utf16.csv"}
     assert msgs["binary.csv"] == "binary.csv: not a text CSV file (binary data)"
+    # before: "not a text CSV file (binary data)" too
+    assert msgs["utf16.csv"] == "utf16.csv: the file is UTF-16: save it as UTF-8"
     assert "no 'time_s' column" in msgs["wide.csv"] and "(300 columns)" in msgs["wide.csv"]
     assert all(len(m) < 400 for m in msgs.values())  # the binary file's bytes were echoed
     assert "missing column 'ch2_V'" in msgs["missing_col.csv"]
@@ -303,7 +307,7 @@ def test_cli_exit_codes(tmp_path, capsys):
     cfg = _corrupt_set(d)
     assert main(["experiment", str(cfg), "-o", str(tmp_path / "o2"), "--no-plot"]) == 0
     err = capsys.readouterr().err
-    assert "8 trial(s) failed" in err and "units.csv" in err
+    assert "9 trial(s) failed" in err and "units.csv" in err  # the corrupt set, utf16.csv included
 
     # nothing ran: exit 2
     bad = tmp_path / "bad"

@@ -254,6 +254,9 @@ def test_npy_and_csv_round_trip(tmp_path):
                                  r"lines 1 and 3\)"),
     ("1,2,3\n# c\n4,5,6\n \t\n7,8,9\n", r"line 4 is blank inside the grid"),
     (b"\x89PNG\r\n\x1a\n\x00\xff", r"not a text CSV file"),
+    # Excel's "Unicode text", PowerShell's '>': before, "byte 0 is not UTF-8"
+    ("1,2,3\n4,5,6\n".encode("utf-16"), r"bad\.csv: the file is UTF-16: save it as UTF-8$"),
+    ("1,2,3\n4,5,6\n".encode("utf-16-be").join([b"\xfe\xff", b""]), r"is UTF-16: save it"),
     ("1,2,3\n", r"at least 2 x 2"),
     ("", r"empty"),
     # numpy.savetxt's default (spaces), semicolons, tabs: the separator named, in one

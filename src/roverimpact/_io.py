@@ -38,18 +38,44 @@ def no_file(path: Path) -> str:
     return "a folder, not a file" if path.is_dir() else "no such file"
 
 
+def utf16_problem(head: bytes) -> str | None:
+    """What to say of a file whose first bytes ``head`` are a UTF-16 (or UTF-32)
+    byte-order mark (Excel's "Unicode text", PowerShell's ``>``), or None."""
+    if head.startswith((b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff")):
+        return "the file is UTF-32: save it as UTF-8"
+    if head.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return "the file is UTF-16: save it as UTF-8"
+    return None
+
+
+def read_text_utf8(path: str | Path) -> str:
+    """The text of a UTF-8 file, a byte-order mark (Notepad's "UTF-8 with BOM") dropped.
+
+    Raises :class:`ConfigError` for a UTF-16 or UTF-32 file (:func:`utf16_problem`) and
+    for bytes that are not UTF-8, naming the file; ``OSError`` as it comes."""
+    path = Path(path)
+    data = path.read_bytes()
+    problem = utf16_problem(data[:4])
+    if problem:
+        raise ConfigError(f"{path}: {problem}")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not a text (UTF-8) file (byte {exc.start} is not "
+                          "UTF-8)") from None
+
+
 def read_toml(path: str | Path) -> dict:
-    """Read a TOML file, turning syntax errors into :class:`ConfigError`."""
+    """Read a TOML file (UTF-8, with or without a byte-order mark), turning syntax errors
+    and other encodings into :class:`ConfigError`."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"{path}: {no_file(path)}")
+    text = read_text_utf8(path)
     try:
-        with path.open("rb") as fh:
-            return tomllib.load(fh)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: malformed TOML: {exc}") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"{path}: not a text (UTF-8) TOML file") from None
 
 
 def check_writable(path: str | Path, *, folder: bool, option: str | None = "-o",

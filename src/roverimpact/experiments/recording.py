@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .._io import no_file
+from .._io import no_file, utf16_problem
 from ..exceptions import InputError
 from .trials import SensorsConfig
 
@@ -163,6 +163,9 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
         raise TrialDataError(f"{path.name}: {no_file(path)}")
     with path.open("rb") as fh:
         head = fh.read(4096)
+    problem = utf16_problem(head)
+    if problem:
+        raise TrialDataError(f"{path.name}: {problem}")
     if b"\x00" in head or _UNPRINTABLE.search(head.decode("utf-8", "replace")):
         raise TrialDataError(f"{path.name}: not a text CSV file (binary data)")
     try:

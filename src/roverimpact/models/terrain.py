@@ -457,7 +457,13 @@ class HeightField(Terrain):
         no-data cells (``nodata``, see :meth:`from_file`).
         """
         path = Path(path)
+        from .._io import utf16_problem
+
         try:
+            with path.open("rb") as fh:
+                problem = utf16_problem(fh.read(4))
+            if problem:
+                raise ConfigError(f"height field {path}: {problem}")
             text = path.read_text(encoding="utf-8-sig")
         except OSError as exc:
             raise ConfigError(f"cannot read height field {path}: {exc}") from None

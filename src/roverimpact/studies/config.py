@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from .._io import read_toml
+from .._io import read_text_utf8, read_toml
 from .._schema import UNIT_RE, StrictModel, validation_message
 from ..exceptions import ConfigError, InputError
 
@@ -242,7 +242,7 @@ def load_study(path: str | Path) -> tuple[Study, str]:
         raise ConfigError(f"{path}: a scenario file, not a study: a study names its scenario "
                           "in [base] (or base = \"scenario.toml\") and what varies in [grid], "
                           "[[cases]] or [random] (docs/studies.md)")
-    text = path.read_text(encoding="utf-8")
+    text = read_text_utf8(path)
     if isinstance(raw.get("base"), str):
         # the base lives in another file: the copy written next to results inlines it
         base_path = (path.parent / raw["base"]).resolve()

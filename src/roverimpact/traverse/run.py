@@ -511,7 +511,9 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         # started in another folder read them from its own
         cfg, text = traverse_from_dict(source, base_dir=Path.cwd()), None
     else:
-        cfg, text = load_traverse(source), Path(source).read_text()
+        from .._io import read_text_utf8
+
+        cfg, text = load_traverse(source), read_text_utf8(source)
     where = str(source) if isinstance(source, (str, Path)) else "traverse"
     if out_dir is not None:          # refused before any work; created only to write
         from .._io import check_writable
