@@ -212,3 +212,42 @@ def test_a_unit_in_a_swept_value_is_explained_once(tmp_path, capsys):
     assert main(["sweep", str(f), "-o", str(tmp_path / "r")]) == 2
     err = capsys.readouterr().err
     assert err.count("write a plain number") == 1 and "'0.2 m'" in err
+
+
+def test_study_copy_names_its_files_by_absolute_path(tmp_path, monkeypatch):
+    """A study file with a [base] table naming its model relative to its folder was copied
+    as given into the output folder: run from there (``--resume``, or the copy as a study
+    file elsewhere) it read <out>/mjcf_rover.xml, "no such URDF/MJCF file". The copy now
+    names the file by absolute path: read from another folder, it is the same study (the
+    manifest's fingerprint) and resumes."""
+    import json
+    import shutil
+
+    from roverimpact.studies.config import load_study
+
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(Path(__file__).parents[1] / "examples" / "mjcf_rover.xml", src)
+    (src / "study.toml").write_text(textwrap.dedent("""\
+        name = "relative model file"
+        x = "obstacle.beta_deg"
+        [base]
+        velocity = { u = 0.5 }
+        obstacle = { wheel = "front", beta_deg = 45.0 }
+        [base.model]
+        file = "mjcf_rover.xml"
+        base = { kind = "planar" }
+        wheels = { front = { frame = "front_tire" }, rear = { frame = "rear_wheel" } }
+        [grid]
+        "obstacle.beta_deg" = [30.0, 60.0]
+        """))
+    out = tmp_path / "out"
+    first = run_study(src / "study.toml", out)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    study, _ = load_study(out / "study.toml")
+    assert study.base["model"]["file"] == str((src / "mjcf_rover.xml").resolve())
+    assert study.fingerprint() == json.loads((out / "manifest.json").read_text())["fingerprint"]
+    again = run_study(out / "study.toml", out, resume=True)
+    pd.testing.assert_frame_equal(again.table, first.table)

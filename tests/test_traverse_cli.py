@@ -703,3 +703,30 @@ def test_model_file_written_again_is_read_again(tmp_path):
         mbm = build_model(traverse_from_dict(raw, base_dir=tmp_path))
         got = sum(i.mass for i in mbm.model.inertias)
         assert got == pytest.approx(total, rel=1e-12)
+
+
+def test_copy_of_the_traverse_file_runs_from_the_output_folder(tmp_path, monkeypatch, capfd):
+    """The copy of a traverse file next to its results kept ``file = "flat.npy"``, a name
+    relative to the traverse file: run from the output folder it read <out>/flat.npy, "no
+    such file". The copy now names the file by absolute path: the same traverse, wherever
+    it is read from, and the report of the folder is still drawn."""
+    src = tmp_path / "in"
+    src.mkdir()
+    np.save(src / "flat.npy", np.zeros((201, 301)))
+    f = src / "t.toml"
+    f.write_text('[terrain]\nkind = "file"\nfile = "flat.npy"\nspacing = 0.01\n'
+                 'origin = [-1.0, -1.0]\n[path]\nname = "p"\n'
+                 'waypoints = [[0.0, 0.0], [0.33, 0.0]]\nspacing = 0.1\n'
+                 '[model]\nname = "rover2d"\n[drive]\nspeed = 0.1\n[limits]\nT_allow = 0.01\n')
+    monkeypatch.chdir(src)
+    assert main(["traverse", "t.toml", "-o", "../out", "--json", "--no-report"]) == 0
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    copy = tmp_path / "out" / "traverse.toml"
+    assert load_traverse(copy) == load_traverse(f)
+    assert load_traverse(copy).terrain.file == str(src / "flat.npy")
+    capfd.readouterr()
+    assert main(["traverse", str(copy), "-o", str(tmp_path / "again"), "--json",
+                 "--no-report"]) == 0, capfd.readouterr().err
+    assert main(["traverse-report", str(tmp_path / "out")]) == 0, capfd.readouterr().err

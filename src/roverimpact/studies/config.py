@@ -229,7 +229,8 @@ def load_study(path: str | Path) -> tuple[Study, str]:
     ``None``: the study is self-contained only once the base is inlined). A relative
     ``model.file``, ``terrain.file`` or ``terrain.function`` file is read relative to the
     file that names it (the base file, or the study file for a ``[base]`` table), as a
-    scenario file's is.
+    scenario file's is; the text is then ``None`` too, so that the copy written next to
+    the results names the files by absolute path and runs (``--resume``) from there.
 
     Raises
     ------
@@ -249,8 +250,14 @@ def load_study(path: str | Path) -> tuple[Study, str]:
         raw["base"] = _files_from(read_toml(base_path), base_path.parent)
         text = None
     elif isinstance(raw.get("base"), dict):
-        raw["base"] = _files_from(raw["base"], path.parent)
-    raw = _case_files_from(raw, path.parent)
+        base = _files_from(raw["base"], path.parent)
+        if base != raw["base"]:
+            text = None
+        raw["base"] = base
+    resolved = _case_files_from(raw, path.parent)
+    if resolved != raw:
+        text = None
+    raw = resolved
     try:
         study = Study.model_validate(raw)
     except ValidationError as exc:

@@ -511,9 +511,13 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         # started in another folder read them from its own
         cfg, text = traverse_from_dict(source, base_dir=Path.cwd()), None
     else:
-        from .._io import read_text_utf8
+        from .._io import read_text_utf8, tomllib
 
         cfg, text = load_traverse(source), read_text_utf8(source)
+        if cfg != traverse_from_dict(tomllib.loads(text), where=str(source)):
+            # file names relative to the traverse file: the copy written next to the
+            # results names them by absolute path, so that it runs from there too
+            text = None
     where = str(source) if isinstance(source, (str, Path)) else "traverse"
     if out_dir is not None:          # refused before any work; created only to write
         from .._io import check_writable

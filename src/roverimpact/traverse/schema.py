@@ -504,4 +504,7 @@ def load_traverse(path: str | Path) -> TraverseConfig:
     from .._io import read_toml
 
     path = Path(path)
-    return traverse_from_dict(read_toml(path), where=str(path), base_dir=path.parent)
+    # absolute: a relative file name is read from the file's folder wherever the config
+    # goes (a copy next to the results, a Dask worker started in another folder)
+    return traverse_from_dict(read_toml(path), where=str(path),
+                              base_dir=path.absolute().parent)
