@@ -164,12 +164,15 @@ def part1(figures: bool, work: Path) -> None:
                 s2 = ImpactSetup.from_state(s_g.model, q, s_g.v, obstacle=sc.obstacle,
                                             contacts=c)
                 out.append(float(s2.partition().T_c_minus))
-        jammed = sum(issubclass(w.category, ri.exceptions.HeldRowsWarning) for w in caught)
+        jammed = sum(w.category is ri.exceptions.HeldRowsWarning for w in caught)
+        pulling = sum(w.category is ri.exceptions.PullingContactWarning for w in caught)
         print(f"ground = {ground!r}" + (f", mu = {mu:g}" if mu else "") + f": T_c^- = "
               f"{e_g.T_c_minus:.5f} J (rank {e_g.rank} of {len(s_g.labels)} rows); q moved "
               f"by 1e-6 (5 random steps): {min(out):.5f}..{max(out):.5f} J"
               + (f"; HeldRowsWarning (m_eff above the total mass) in {jammed} of 5"
-                 if jammed else ""))
+                 if jammed else "")
+              + (f"; PullingContactWarning (a held wheel pulls) in {pulling} of 5"
+                 if pulling else ""))
 
     import time
 
