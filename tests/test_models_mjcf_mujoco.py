@@ -894,3 +894,18 @@ def test_missing_texture_files_do_not_stop_the_load(tmp_path):
         mbm = load_robot(h)
     assert _pin_M(mbm.model, np.array([0.7]))[0, 0] == pytest.approx(_mj_M(m, d)[0, 0],
                                                                      rel=1e-14)
+
+
+@pytest.mark.parametrize("name, text", [
+    ("bad.xml", "<mujoco><worldbody><body><joint/><geom size='0.1'/></body></worldbody>"
+                "</mujoco>"),
+    ("bad.urdf", "<robot name='r'><link name='a'/></robot>"),
+])
+def test_utf16_robot_file_is_named(tmp_path, name, text):
+    """A URDF/MJCF file saved as UTF-16 (valid XML, but neither MuJoCo's nor Pinocchio's
+    parser reads it) said "MuJoCo cannot compile it (XML parse error 15 ...)" or
+    "Pinocchio cannot build a model from it (... XML_ERROR_PARSING ...)"."""
+    f = tmp_path / name
+    f.write_bytes(text.encode("utf-16"))
+    with pytest.raises(ModelError, match=rf"{name}: the file is UTF-16: save it as UTF-8$"):
+        load_robot(f)

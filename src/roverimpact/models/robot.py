@@ -713,6 +713,12 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         raise ModelError(f"{path}: a xacro file; expand it to URDF first: {XACRO_HINT}")
     if suffix not in (".urdf", ".xml", ".mjcf"):
         raise ModelError(f"{path}: unknown robot file type {suffix!r}; use .urdf, .xml or .mjcf")
+    from .._io import utf16_problem
+
+    with path.open("rb") as fh:
+        problem = utf16_problem(fh.read(4))
+    if problem:  # valid XML, but MuJoCo's and Pinocchio's parsers read UTF-8 only
+        raise ModelError(f"{path}: {problem}")
     meta = _parse_meta(path)
     floating = meta["floating"] if floating_base is None else bool(floating_base)
     extra: dict = {}
