@@ -227,6 +227,49 @@ def test_a_scheduler_gone_mid_study_is_one_line_and_the_study_resumes(tmp_path):
     assert np.array_equal(res.table["T_c_minus"].to_numpy(), serial["T_c_minus"].to_numpy())
 
 
+def test_every_worker_lost_mid_study_is_waited_for_a_bounded_time_and_resumes(
+        tmp_path, monkeypatch):
+    """Every worker of the scheduler killed mid-study (``kill -9`` of the ``dask worker``
+    processes): Dask holds the tasks until a worker joins, and the command waited for
+    ever at the chunks done (6 of 60 cases after 2 min). It now waits up to
+    WORKERS_WAIT_S for a worker, says so, then stops with one error; the manifest says
+    "failed" and --resume gives the serial table."""
+    import json
+
+    from dask.distributed import LocalCluster
+
+    from roverimpact.exceptions import RoverImpactError
+    from roverimpact.studies import executors
+
+    monkeypatch.setattr(executors, "WORKERS_WAIT_S", 1.0)
+    monkeypatch.setattr(executors, "WORKERS_CHECK_S", 0.2)
+    study = dict(STUDY, grid={"obstacle.beta_deg": [10.0, 20.0, 30.0, 40.0, 50.0, 60.0]},
+                 chunk_size=1)
+    serial = run_study(study, tmp_path / "s").table
+    notes: list[str] = []
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+
+        def lose_the_workers(done, total):
+            if done >= 2 and cluster.workers:
+                cluster.scale(0)
+
+        with pytest.raises(RoverImpactError) as err:
+            run_study(study, tmp_path / "d", evaluator=SlowRigidBody(),
+                      scheduler=cluster.scheduler_address, progress=lose_the_workers,
+                      note=notes.append)
+    msg = str(err.value)
+    assert msg.startswith(f"lost every Dask worker of the scheduler at {cluster.scheduler_address}"
+                          ", and none joined in 1 s: the finished chunks are kept: rerun with "
+                          "--resume"), msg
+    assert [n for n in notes if "every Dask worker" in n and "waiting up to 1 s" in n]
+    manifest = json.loads((tmp_path / "d" / "manifest.json").read_text())
+    assert manifest["status"] == "failed"
+    res = run_study(study, tmp_path / "d", resume=True)
+    assert 2 <= res.n_reused < 6
+    assert np.array_equal(res.table["T_c_minus"].to_numpy(), serial["T_c_minus"].to_numpy())
+
+
 def test_a_traverse_given_as_a_dict_names_its_files_absolute(tmp_path, monkeypatch):
     """``run_traverse(dict)`` with ``terrain.file = "dem.npy"`` kept the name relative, and
     its chunks (shipped as the config's dict) were read from each Dask worker's working

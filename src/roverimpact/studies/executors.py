@@ -34,10 +34,12 @@ __all__ = [
     "CLUSTER_CONFIG",
     "CLUSTER_START_S",
     "START_METHODS",
+    "WORKERS_CHECK_S",
     "WORKERS_WAIT_S",
     "WORKER_ENVIRON",
     "ChunkFile",
     "LazyCluster",
+    "as_finished",
     "check_scheduler",
     "compute_chunk",
     "compute_chunk_file",
@@ -46,6 +48,7 @@ __all__ = [
     "reworded",
     "run_dask",
     "run_serial",
+    "scheduler_workers",
     "why_serial",
     "worker_result",
     "worker_start_method",
@@ -582,9 +585,72 @@ def worker_result(fut, scheduler: str, then: str = "rerun once it runs again"):
 MISSING_FILE = re.compile(r"no such|not found|does not exist|No such file", re.IGNORECASE)
 
 
-def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store) -> None:
+#: How often [s] a command waiting for its tasks asks the scheduler how many workers it has
+#: (:func:`as_finished`)
+WORKERS_CHECK_S = 1.0
+
+
+def scheduler_workers(client, timeout: float = 5.0) -> int | None:
+    """The number of workers of ``client``'s scheduler; None if it does not answer within
+    ``timeout`` seconds (gone: the client's futures say so)."""
+    try:
+        info = client.sync(client.scheduler.identity, n_workers=0, callback_timeout=timeout)
+    except Exception:  # the scheduler gone, or too busy to answer now
+        return None
+    n = info.get("n_workers") if isinstance(info, dict) else None
+    return n if isinstance(n, int) else None
+
+
+def as_finished(queue, client, scheduler: str, *, then: str,
+                note: Callable[[str], None] | None = None,
+                workers_wait: float | None = None):
+    """The futures of ``queue`` (Dask's ``as_completed``, to which the caller may add while
+    iterating) as they finish. While none is ready the scheduler is asked every
+    :data:`WORKERS_CHECK_S` seconds how many workers it has: with every worker gone (killed,
+    its machine down), Dask holds the tasks until one joins, and the command waited for
+    ever at the chunks done so far. ``note`` says that it waits, and after ``workers_wait``
+    seconds (default :data:`WORKERS_WAIT_S`, as for a scheduler that has no worker at the
+    start) without a worker it stops with an error ending with ``then`` (what to do).
+
+    Raises
+    ------
+    RoverImpactError
+        No worker for ``workers_wait`` seconds.
+    """
+    wait = WORKERS_WAIT_S if workers_wait is None else workers_wait
+    gone_since = None  # when no worker was first seen
+    next_check = time.monotonic() + WORKERS_CHECK_S
+    while not queue.is_empty():
+        if queue.has_ready():
+            yield next(queue)
+            continue
+        now = time.monotonic()
+        if now >= next_check:
+            n = scheduler_workers(client)
+            now = time.monotonic()
+            next_check = now + WORKERS_CHECK_S
+            if n:
+                gone_since = None
+            elif n == 0 and gone_since is None:
+                gone_since = now
+                if note is not None:
+                    note(f"every Dask worker of the scheduler at {scheduler} is gone: waiting "
+                         f"up to {wait:.0f} s for one (start them with `dask worker "
+                         f"{scheduler}`)")
+            if n == 0 and now - gone_since >= wait:
+                raise RoverImpactError(
+                    f"lost every Dask worker of the scheduler at {scheduler}, and none "
+                    f"joined in {wait:.0f} s: {then}")
+        with queue.thread_condition:  # notified as a future finishes
+            queue.thread_condition.wait(timeout=0.1)
+
+
+def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store, *,
+             note: Callable[[str], None] | None = None) -> None:
     """Compute the ``pending`` chunks on the Dask scheduler at ``scheduler``; ``store`` each
-    as it returns (once, whatever happens to the workers)."""
+    as it returns (once, whatever happens to the workers). Every worker gone for
+    :data:`WORKERS_WAIT_S` seconds stops it (:func:`as_finished`; ``note`` says that it
+    waits)."""
     from dask.distributed import Client, as_completed, default_client
 
     try:  # a client of this process already connected to that scheduler (a notebook's)
@@ -622,10 +688,11 @@ def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store)
                     break
             written = set()
             queue = as_completed(list(futures))
-            for fut in queue:
+            then = "the finished chunks are kept: rerun with --resume once it runs again"
+            for fut in as_finished(queue, client, scheduler, note=note,
+                                   then=then.replace("it runs", "workers run")):
                 k = futures.pop(fut)
-                df = worker_result(fut, scheduler, "the finished chunks are kept: rerun "
-                                   "with --resume once it runs again")
+                df = worker_result(fut, scheduler, then)
                 if k not in written:  # a chunk is stored once, whatever happened to workers
                     store(k, df)
                     written.add(k)

@@ -380,11 +380,12 @@ def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv
             if not pending:
                 pass
             elif scheduler is not None:
-                run_dask(pending, chunks, args, params, simulate, scheduler, retries, store)
+                run_dask(pending, chunks, args, params, simulate, scheduler, retries, store,
+                         note=note)
                 manifest["executor"] = f"Dask scheduler at {scheduler}"
             elif cluster is not None:
                 executor = _local_or_serial(pending, chunks, args, params, simulate, store,
-                                            cluster, retries)
+                                            cluster, retries, note)
                 manifest["executor"] = executor
                 if note and executor.startswith("serial"):
                     note(executor)
@@ -441,7 +442,7 @@ PROBE_FRACTION = 1 / 16
 
 
 def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: LazyCluster,
-                     retries: int) -> str:
+                     retries: int, note=None) -> str:
     """Run all pending chunks on ``cluster`` if a probe of the first says that is worth it
     (:func:`~.executors.why_serial`: one case untimed, then one case and about
     :data:`PROBE_FRACTION` of the chunk, timed; rows discarded), else here. Returns what
@@ -457,7 +458,8 @@ def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: La
     if why is not None:
         run_serial(pending, chunks, args, params, simulate, store)
         return why
-    run_dask(pending, chunks, args, params, simulate, cluster.address(), retries, store)
+    run_dask(pending, chunks, args, params, simulate, cluster.address(), retries, store,
+             note=note)
     return f"local Dask cluster of {cluster.workers} workers"
 
 

@@ -595,13 +595,15 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
 def _run_dask(address, cfg_dict, chunks, parts, progress, total) -> int:
     from dask.distributed import Client, as_completed
 
-    from ..studies.executors import worker_result
+    from ..studies.executors import as_finished, worker_result
 
     done = 0
     with Client(address, timeout="10s") as client:
         futures = {client.submit(traverse_chunk, cfg_dict, i, a, b, retries=2, pure=False): n
                    for n, (i, a, b) in enumerate(chunks)}
-        for fut in as_completed(list(futures)):
+        # every worker gone: a bounded wait for one, not for ever
+        for fut in as_finished(as_completed(list(futures)), client, address,
+                               then="rerun once workers run again"):
             n = futures[fut]
             parts[n] = worker_result(fut, address)
             _, a, b = chunks[n]
