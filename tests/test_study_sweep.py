@@ -503,7 +503,7 @@ def test_a_probe_sizes_the_work_and_every_chunk_runs_where_it_was_decided(
     serial = run_study(_study(chunk_size=6), tmp_path / "s").table
     sent, judged = [], []
 
-    def fake_dask(pending, chunks, args, params, simulate, scheduler, retries, store):
+    def fake_dask(pending, chunks, args, params, simulate, scheduler, retries, store, note):
         sent.extend(pending)
         sweep.run_serial(pending, chunks, args, params, simulate, store)
 
