@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from roverimpact.exceptions import ConfigError, InputError
+from roverimpact.exceptions import ConfigError, InputError, StudyInterrupted
 from roverimpact.studies import ScenarioEvaluator, expand, load_results, run_study
 from roverimpact.studies.config import apply_overrides, study_from_dict
 
@@ -335,6 +335,65 @@ def test_resume_refuses_a_robot_file_changed_since_the_first_run(tmp_path, monke
     pd.testing.assert_frame_equal(again.table, res.table)
     manifest = json.loads((out / "manifest.json").read_text())
     assert [Path(f).name for f in manifest["input_files"]] == ["mjcf_rover.xml"]
+
+
+@pytest.mark.parametrize("design", ["grid", "cases", "random"])
+def test_resume_refuses_a_swept_robot_file_changed_since_the_first_run(tmp_path, design):
+    """Only the base scenario's files were hashed: a study over two robot files (a grid,
+    listed cases or random choices of ``model.file``), one edited between the
+    interrupted run and --resume, kept the old robot's rows (T_c^- 0.683 J of the 30 kg
+    rover at beta = 30 deg, where the edited 60 kg one gives 1.279 J; no error). Now the
+    swept files are hashed too and the change is refused as a base file's is. Reference:
+    the same study run afresh on the edited file."""
+    import shutil
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    for name in ("mjcf_rover.xml", "mjcf_rover_beta.toml"):
+        shutil.copy(ex / name, tmp_path / name)
+    text = (tmp_path / "mjcf_rover.xml").read_text()
+    (tmp_path / "b.xml").write_text(text.replace('mass="20"', 'mass="30"'))
+    spec = {"grid": '[grid]\n"obstacle.beta_deg" = [30.0, 60.0]\n'
+                    '"model.file" = ["mjcf_rover.xml", "b.xml"]\n',
+            "cases": "".join(f'[[cases]]\n"obstacle.beta_deg" = {b}\n"model.file" = "{f}"\n'
+                             for b in (30.0, 60.0) for f in ("mjcf_rover.xml", "b.xml")),
+            "random": '[random]\nn = 4\nseed = 1\n[random.params]\n'
+                      '"model.file" = { choices = ["mjcf_rover.xml", "b.xml"] }\n'}[design]
+    (tmp_path / "st.toml").write_text(
+        f'name = "two"\nbase = "mjcf_rover_beta.toml"\nchunk_size = 2\n{spec}')
+    out = tmp_path / "out"
+
+    def stop(done, total):
+        if done >= 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(StudyInterrupted):
+        run_study(tmp_path / "st.toml", out, progress=stop)
+    first = pd.read_parquet(out / "chunks" / "chunk-000000.parquet")
+    assert "b.xml" in "".join(first["model.file"])  # the edited file's rows are kept
+    (tmp_path / "b.xml").write_text(text.replace('mass="20"', 'mass="60"'))
+    with pytest.raises(ConfigError, match=r"b\.xml changed"):
+        run_study(tmp_path / "st.toml", out, resume=True)
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert sorted(Path(f).name for f in manifest["input_files"]) == ["b.xml", "mjcf_rover.xml"]
+    res = run_study(tmp_path / "st.toml", out, overwrite=True).table
+    fresh = run_study(tmp_path / "st.toml", tmp_path / "fresh").table
+    pd.testing.assert_frame_equal(res, fresh)
+    assert set(np.round(res["m_total"], 9)) == {24.0, 64.0}
+
+
+def test_the_hashed_input_files_are_every_file_a_study_names(tmp_path):
+    """The files of a grid's ``terrain.file`` and ``terrain.function`` are hashed as well
+    as the base's robot file (each once)."""
+    from roverimpact.studies.sweep import input_files
+
+    for name in ("r.xml", "a.npy", "b.npy", "t.py"):
+        (tmp_path / name).write_text(name)
+    st = study_from_dict({"name": "t", "base": dict(BASE, model={"file": str(tmp_path / "r.xml")}),
+                          "grid": {"terrain.file": [str(tmp_path / "a.npy"),
+                                                    str(tmp_path / "b.npy")],
+                                   "terrain.function": [f"{tmp_path / 't.py'}:f",
+                                                        f"{tmp_path / 't.py'}:g"]}})
+    assert sorted(Path(f).name for f in input_files(st)) == ["a.npy", "b.npy", "r.xml", "t.py"]
 
 
 def test_a_study_reads_its_base_scenarios_terrain_relative_to_that_file(tmp_path,

@@ -42,8 +42,8 @@ from .._io import read_text_utf8, read_toml
 from .._schema import UNIT_RE, StrictModel, validation_message
 from ..exceptions import ConfigError, InputError
 
-__all__ = ["Case", "CaseSequence", "Study", "apply_overrides", "cases_of", "expand", "get_path",
-           "load_study"]
+__all__ = ["FILE_KEYS", "Case", "CaseSequence", "Study", "apply_overrides", "cases_of", "expand",
+           "get_path", "load_study", "named_files"]
 
 Scalar = bool | int | float | str
 
@@ -309,10 +309,10 @@ def _files_from(base: Any, folder: Path) -> Any:
 
 
 def _case_files_from(raw: dict, folder: Path) -> dict:
-    """``raw`` (a study) with the relative file names its ``[grid]`` and ``[[cases]]``
-    give (``"model.file" = [...]``) read from ``folder``, as its base's are: they were
-    read from the working folder of each process, and a Dask worker's is not the
-    command's."""
+    """``raw`` (a study, as a dict) with the relative file names its ``[grid]``,
+    ``[[cases]]`` and ``[random]`` choices give (``"model.file" = [...]``) read from
+    ``folder``, as its base's are: they were read from the working folder of each
+    process, and a Dask worker's is not the command's."""
     out = dict(raw)
     grid = raw.get("grid")
     if isinstance(grid, dict):
@@ -323,7 +323,41 @@ def _case_files_from(raw: dict, folder: Path) -> dict:
     if isinstance(cases, list):
         out["cases"] = [{k: _file_from(k, v, folder) for k, v in c.items()}
                         if isinstance(c, dict) else c for c in cases]
+    rnd = raw.get("random")
+    params = rnd.get("params") if isinstance(rnd, dict) else None
+    if isinstance(params, dict):
+        out["random"] = rnd | {"params": {
+            k: (spec | {"choices": [_file_from(k, v, folder) for v in spec["choices"]]}
+                if k in FILE_KEYS and isinstance(spec, dict)
+                and isinstance(spec.get("choices"), list) else spec)
+            for k, spec in params.items()}}
     return out
+
+
+def named_files(study: Study) -> list[str]:
+    """The names of the files the study's scenarios read (``model.file``,
+    ``terrain.file``, the ``.py`` file of a ``terrain.function``): its base's, then those
+    its grid, cases or random choices give; each once, as the study gives it."""
+    values = [(k, get_path(study.base, k, None)) for k in FILE_KEYS]
+    if study.grid is not None:
+        values += [(k, v) for k, spec in study.grid.items() if k in FILE_KEYS
+                   and isinstance(spec, list) for v in spec]
+    for case in study.cases or ():
+        values += [(k, v) for k, v in case.items() if k in FILE_KEYS]
+    if study.random is not None:
+        values += [(k, v) for k, spec in study.random.params.items() if k in FILE_KEYS
+                   and isinstance(spec, Choice) for v in spec.choices]
+    out: dict[str, None] = {}
+    for key, value in values:
+        if not isinstance(value, str):
+            continue
+        if key == "terrain.function":
+            mod = value.rpartition(":")[0]
+            if mod.endswith(".py"):
+                out[mod] = None
+        else:
+            out[value] = None
+    return list(out)
 
 
 def study_from_dict(data: Mapping[str, Any], where: str = "study") -> Study:

@@ -28,8 +28,8 @@ from .config import (
     CaseSequence,
     Study,
     cases_of,
-    get_path,
     load_study,
+    named_files,
     study_from_dict,
     validate_scenarios,
 )
@@ -531,18 +531,16 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, hashes: dict[str, str], *, 
 
 
 def input_files(study: Study) -> dict[str, str]:
-    """SHA-256 of each file the study's base scenario reads (``model.file``,
-    ``terrain.file``, a ``terrain.function``'s ``.py`` file), by its name as the study
-    gives it: the manifest keeps them, and ``--resume`` refuses to go on once one
-    changed (the fingerprint holds only the names). Files those files name in turn (a
-    robot's meshes) are not followed."""
-    names = [get_path(study.base, "model.file", None), get_path(study.base, "terrain.file", None)]
-    fn = get_path(study.base, "terrain.function", None)
-    if isinstance(fn, str) and fn.rpartition(":")[0].endswith(".py"):
-        names.append(fn.rpartition(":")[0])
+    """SHA-256 of each file the study's scenarios read (``model.file``, ``terrain.file``,
+    a ``terrain.function``'s ``.py`` file: the base's and those its grid, cases or random
+    choices name, :func:`~.config.named_files`), by its name as the study gives it: the
+    manifest keeps them, and ``--resume`` refuses to go on once one changed (the
+    fingerprint holds only the names). Files those files name in turn (a robot's meshes)
+    are not followed. (Only the base's were hashed: a grid over two robot files, one
+    edited between the interrupted run and ``--resume``, kept the old robot's rows.)"""
     out = {}
-    for name in names:
-        if isinstance(name, str) and Path(name).is_file():
+    for name in named_files(study):
+        if Path(name).is_file():
             out[name] = hashlib.sha256(Path(name).read_bytes()).hexdigest()
     return out
 
