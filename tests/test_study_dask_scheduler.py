@@ -151,6 +151,56 @@ def test_a_study_files_cases_read_their_robot_files_beside_the_study(tmp_path, m
     assert by_case["model.file"].iloc[0] == str(here / "mjcf_rover.xml")
 
 
+def test_a_study_objects_swept_robot_files_are_the_ones_beside_the_caller(tmp_path,
+                                                                          monkeypatch):
+    """A :class:`Study` built in Python whose grid (or cases) names ``"model.file" =
+    ["mjcf_rover.xml"]``: only its base's files were made absolute (a dict's grid and
+    cases were), and workers started in another folder read their own file (T_c^- of the
+    60 kg chassis, 1.279 J instead of 0.483 J at beta = 30 deg, no error). Reference: the
+    serial run in the caller's folder. A study file's random choices of a robot file are
+    read beside the study file, as its grid's are."""
+    from pathlib import Path
+
+    import dask
+    import tomllib
+    from dask.distributed import LocalCluster
+
+    from roverimpact.studies.config import Study, load_study
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    xml = (examples / "mjcf_rover.xml").read_text()
+    user, other = tmp_path / "user", tmp_path / "workers"
+    user.mkdir()
+    other.mkdir()
+    (user / "mjcf_rover.xml").write_text(xml)
+    (other / "mjcf_rover.xml").write_text(xml.replace('mass="20"', 'mass="60"'))
+    base = tomllib.loads((examples / "mjcf_rover_beta.toml").read_text())
+    base["model"]["file"] = str(user / "mjcf_rover.xml")
+    by_grid = Study(name="g", base=base, grid={"obstacle.beta_deg": [30.0, 60.0],
+                                               "model.file": ["mjcf_rover.xml"]})
+    by_case = Study(name="c", base=base, cases=[{"obstacle.beta_deg": b,
+                                                 "model.file": "mjcf_rover.xml"}
+                                                for b in (30.0, 60.0)])
+    monkeypatch.chdir(other)  # the workers' folder
+    with dask.config.set({"distributed.worker.multiprocessing-method": "fork"}), \
+            LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                         dashboard_address=None) as cluster:
+        monkeypatch.chdir(user)
+        serial = run_study(by_grid, user / "s").table
+        assert serial["T_c_minus"].iloc[0] == pytest.approx(0.4831, abs=1e-4)
+        for i, study in enumerate((by_grid, by_case)):
+            dist = run_study(study, user / f"d{i}", scheduler=cluster.scheduler_address).table
+            assert np.array_equal(dist["T_c_minus"].to_numpy(),
+                                  serial["T_c_minus"].to_numpy()), study.name
+            assert set(dist["model.file"]) == {str(user / "mjcf_rover.xml")}
+    (user / "st.toml").write_text(
+        'name = "r"\nbase = "scenario.toml"\n[random]\nn = 2\nseed = 0\n'
+        '[random.params]\n"model.file" = { choices = ["mjcf_rover.xml"] }\n')
+    (user / "scenario.toml").write_text((examples / "mjcf_rover_beta.toml").read_text())
+    study, _ = load_study(user / "st.toml")
+    assert study.random.params["model.file"].choices == [str(user / "mjcf_rover.xml")]
+
+
 class MissingFileOnWorker:
     """An evaluator that fails as a worker that does not see the study's robot file does."""
 

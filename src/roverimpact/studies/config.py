@@ -361,18 +361,19 @@ def named_files(study: Study) -> list[str]:
 
 
 def study_from_dict(data: Mapping[str, Any], where: str = "study") -> Study:
-    """Validate a study given as a dict (as read from TOML).
+    """Validate a study given as a dict (as read from TOML), or take a :class:`Study`.
 
-    A relative ``model.file``, ``terrain.file`` or ``terrain.function`` file of its base
-    is made absolute from the working folder (where this process reads it): a Dask worker
-    started in another folder read it there, another file of the same name or none (a
-    study of a 24 kg rover computed with the 64 kg one beside the workers, no error)."""
+    A relative ``model.file``, ``terrain.file`` or ``terrain.function`` file of its base,
+    grid, cases or random choices is made absolute from the working folder (where this
+    process reads it): a Dask worker started in another folder read it there, another file
+    of the same name or none (a study of a 24 kg rover computed with the 64 kg one beside
+    the workers, no error). A :class:`Study` built in Python is treated alike (only its
+    base's files were)."""
     if isinstance(data, Study):
-        if isinstance(data.base, dict):
-            base = _files_from(data.base, Path.cwd())
-            if base != data.base:
-                return data.model_copy(update={"base": base})
-        return data
+        raw = data.model_dump()
+        absolute = _case_files_from(raw, Path.cwd())
+        absolute["base"] = _files_from(absolute["base"], Path.cwd())
+        return data if absolute == raw else Study.model_validate(absolute)
     data = _case_files_from(dict(data), Path.cwd())
     if isinstance(data.get("base"), dict):
         data["base"] = _files_from(data["base"], Path.cwd())
