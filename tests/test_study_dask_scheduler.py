@@ -201,6 +201,19 @@ def test_a_study_objects_swept_robot_files_are_the_ones_beside_the_caller(tmp_pa
     assert study.random.params["model.file"].choices == [str(user / "mjcf_rover.xml")]
 
 
+class CountingEvaluator(ScenarioEvaluator):
+    """The scenario evaluator, counting the cases it is asked to compute."""
+
+    name = "counting"
+
+    def __init__(self):
+        self.n = 0
+
+    def evaluate(self, base, overrides, *, simulate=False):
+        self.n += len(overrides)
+        return super().evaluate(base, overrides, simulate=simulate)
+
+
 class MissingFileOnWorker:
     """An evaluator that fails as a worker that does not see the study's robot file does."""
 
@@ -318,6 +331,95 @@ def test_every_worker_lost_mid_study_is_waited_for_a_bounded_time_and_resumes(
     res = run_study(study, tmp_path / "d", resume=True)
     assert 2 <= res.n_reused < 6
     assert np.array_equal(res.table["T_c_minus"].to_numpy(), serial["T_c_minus"].to_numpy())
+
+
+def _other_code_on_workers(monkeypatch, after: int = 0):
+    """Workers of this process's in-process cluster answer another roverimpact source
+    than the command (after their first ``after`` answers): as a worker started from
+    another checkout or install does (the version string, 0.1.0, is the same)."""
+    from distributed import get_worker
+
+    from roverimpact.studies import executors, store
+
+    answers = []
+
+    def code_identity(dask_worker=None):  # (Client.run gives its worker as dask_worker)
+        try:
+            dask_worker or get_worker()
+        except ValueError:  # the command
+            return store.code_identity()
+        answers.append(1)
+        if len(answers) <= after:
+            return store.code_identity()
+        return store.code_identity() | {"roverimpact source": "0123456789abcdef"}
+
+    monkeypatch.setattr(executors, "code_identity", code_identity)
+
+
+def test_workers_of_other_code_are_refused_before_any_case(tmp_path, monkeypatch):
+    """A worker of another roverimpact (another checkout: the same version string) or
+    another numpy or Pinocchio major version computed its share of the chunks with no
+    word (4 of 40 rows 1 % off, a worker whose T_c^- differs by 1 %). Now the cluster is
+    refused with one line before the output folder is touched."""
+    from dask.distributed import LocalCluster
+
+    from roverimpact.studies.store import code_identity
+
+    ident = code_identity()
+    assert len(ident["roverimpact source"]) == 16
+    assert {"roverimpact", "numpy major version", "pinocchio major version"} <= set(ident)
+    _other_code_on_workers(monkeypatch)
+    ev = CountingEvaluator()
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        with pytest.raises(ConfigError) as err:
+            run_study(STUDY, tmp_path / "out", evaluator=ev,
+                      scheduler=cluster.scheduler_address)
+    assert str(err.value).startswith("the Dask worker at tcp://")
+    assert (f"runs other code than this command (roverimpact source 0123456789abcdef there, "
+            f"{ident['roverimpact source']} here)") in str(err.value)
+    assert str(err.value).endswith("(nothing was computed)")
+    assert ev.n == 0 and not (tmp_path / "out").exists()
+
+
+def test_a_worker_of_other_code_that_joins_mid_study_stops_it(tmp_path, monkeypatch):
+    """A worker of other code that joins after the check (the first answer is the
+    check's): its chunk is refused on the worker, the study stops with one line, the
+    finished chunks are kept."""
+    import json
+
+    from dask.distributed import LocalCluster
+
+    from roverimpact.exceptions import RoverImpactError
+
+    _other_code_on_workers(monkeypatch, after=1)
+    study = dict(STUDY, chunk_size=1)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        with pytest.raises(RoverImpactError, match=r"runs other code than this command "
+                           r"\(roverimpact source 0123456789abcdef there.*it joined while "
+                           r"the study ran: the finished chunks are kept, rerun with --resume"):
+            run_study(study, tmp_path / "out", scheduler=cluster.scheduler_address)
+    assert json.loads((tmp_path / "out" / "manifest.json").read_text())["status"] == "failed"
+
+
+def test_the_source_hash_tells_two_sources_apart(tmp_path):
+    """What identifies roverimpact's code: a hash of its files (paths and bytes), not of
+    the compiled caches beside them."""
+    from roverimpact.studies.store import tree_hash
+
+    (tmp_path / "pkg" / "__pycache__").mkdir(parents=True)
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    (tmp_path / "pkg" / "b.toml").write_text("y = 2\n")
+    first = tree_hash(tmp_path / "pkg")
+    (tmp_path / "pkg" / "__pycache__" / "a.cpython-312.pyc").write_bytes(b"\0")
+    (tmp_path / "pkg" / "k.nbi").write_bytes(b"\0")
+    assert tree_hash(tmp_path / "pkg") == first
+    (tmp_path / "pkg" / "a.py").write_text("x = 2\n")
+    assert tree_hash(tmp_path / "pkg") != first
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    (tmp_path / "pkg" / "b.toml").rename(tmp_path / "pkg" / "c.toml")
+    assert tree_hash(tmp_path / "pkg") != first
 
 
 def test_a_traverse_given_as_a_dict_names_its_files_absolute(tmp_path, monkeypatch):

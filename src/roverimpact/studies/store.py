@@ -34,6 +34,7 @@ __all__ = [
     "MANIFEST",
     "PARQUET_WRITE",
     "RESULTS",
+    "SAME_MAJOR",
     "STUDY_COPY",
     "WHOLE_WINDOW",
     "assemble",
@@ -41,6 +42,7 @@ __all__ = [
     "atomic_write_bytes",
     "check_out_dir",
     "chunk_path",
+    "code_identity",
     "finished_chunks",
     "folder_lock",
     "is_study_manifest",
@@ -49,6 +51,8 @@ __all__ = [
     "read_results_table",
     "remove_stale_temporaries",
     "simulated_forces",
+    "source_hash",
+    "tree_hash",
     "versions",
     "whole_window_cases",
     "write_manifest",
@@ -151,6 +155,49 @@ def _versions() -> dict[str, str]:
             out[name] = metadata.version(dist)
         except metadata.PackageNotFoundError:
             pass
+    return out
+
+
+#: The packages whose major version a Dask worker must share with the command
+#: (:func:`code_identity`), by distribution name
+SAME_MAJOR = (("numpy", "numpy"), ("pinocchio", "pin"))
+
+
+def tree_hash(root: Path) -> str:
+    """SHA-256 (first 16 hex digits) of the files under ``root``: their paths relative to
+    it and their bytes, compiled caches (``__pycache__``, ``.pyc``, numba's ``.nbi`` and
+    ``.nbc``) left out."""
+    import hashlib
+
+    root = Path(root)
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*")):
+        if (not f.is_file() or "__pycache__" in f.relative_to(root).parts
+                or f.suffix in (".pyc", ".nbi", ".nbc")):
+            continue
+        h.update(f.relative_to(root).as_posix().encode() + b"\0")
+        h.update(f.read_bytes() + b"\0")
+    return h.hexdigest()[:16]
+
+
+@functools.lru_cache(maxsize=1)
+def source_hash() -> str:
+    """:func:`tree_hash` of the roverimpact package this process imports: what identifies
+    "the same code", as the version string is the same for every change of an editable
+    install or a checkout. Computed once per process (125 files: 20-35 ms, 75 ms on a
+    loaded machine)."""
+    return tree_hash(Path(__file__).resolve().parents[1])
+
+
+def code_identity() -> dict[str, str]:
+    """What a process that computes a study's cases must share with the command that
+    writes them: roverimpact's version and :func:`source_hash`, and the major version of
+    numpy and Pinocchio (:data:`SAME_MAJOR`). A Dask worker of another identity is
+    refused (:func:`~.executors.check_workers`)."""
+    v = versions()
+    out = {"roverimpact": v["roverimpact"], "roverimpact source": source_hash()}
+    for name, _ in SAME_MAJOR:
+        out[f"{name} major version"] = v[name].split(".")[0] if name in v else "none"
     return out
 
 

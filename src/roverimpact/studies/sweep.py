@@ -38,6 +38,7 @@ from .executors import (
     ChunkFile,
     LazyCluster,
     check_scheduler,
+    check_workers,
     compute_chunk,
     need_dask,
     reworded,
@@ -305,6 +306,7 @@ def run_study(
     if scheduler is not None:
         need_dask()
         scheduler = check_scheduler(scheduler, note=note)
+        check_workers(scheduler)
     elif workers is not None:
         need_dask()
     out_dir = Path(out_dir)

@@ -501,6 +501,7 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
     """
     from ..studies.executors import (
         check_scheduler,
+        check_workers,
         local_cluster,
         need_dask,
         worker_start_method,
@@ -531,6 +532,7 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
     if scheduler is not None:
         need_dask()
         scheduler = check_scheduler(scheduler, note=note)
+        check_workers(scheduler)
     elif workers is not None:
         need_dask()
         worker_start_method()  # a bad ROVERIMPACT_WORKER_START fails before any work
