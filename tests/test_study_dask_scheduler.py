@@ -422,6 +422,49 @@ def test_the_source_hash_tells_two_sources_apart(tmp_path):
     assert tree_hash(tmp_path / "pkg") != first
 
 
+class _FakeKernel:
+    """A compiled kernel as :func:`kernels_to_compile` sees it."""
+
+    def __init__(self, cached: bool):
+        self.compiled, self._cached = False, cached
+
+    def cached(self) -> bool:
+        return self._cached
+
+
+def test_workers_with_a_cold_kernel_cache_are_said_to_compile(tmp_path, monkeypatch):
+    """Workers whose numba cache lacks the kernels (a fresh install) compiled for 30-70 s
+    before their first chunk, the progress bar at 0 and no word. The command now asks
+    them (numba's cache index on each worker) and says why the first chunks wait; with a
+    warm cache it says nothing."""
+    import sys
+    import types
+
+    from dask.distributed import LocalCluster
+
+    from roverimpact._kernels._jit import Kernel
+    from roverimpact.studies import sweep
+
+    for home in sweep.STUDY_KERNELS + sweep.SIMULATOR_KERNELS:  # the real ones resolve
+        module, _, name = home.partition(":")
+        assert isinstance(getattr(__import__(module, fromlist=[name]), name), Kernel)
+    fake = types.ModuleType("fake_kernels")
+    fake.cold, fake.warm = _FakeKernel(cached=False), _FakeKernel(cached=True)
+    monkeypatch.setitem(sys.modules, "fake_kernels", fake)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        for kernels, said in ((("fake_kernels:warm",), False), (("fake_kernels:warm",
+                                                                  "fake_kernels:cold"), True)):
+            monkeypatch.setattr(sweep, "STUDY_KERNELS", kernels)
+            notes: list[str] = []
+            run_study(STUDY, tmp_path / f"o{said}", scheduler=cluster.scheduler_address,
+                      note=notes.append)
+            compiling = [n for n in notes if "compile roverimpact's kernels" in n]
+            assert bool(compiling) is said
+            if said:
+                assert "numba's cache there lacks cold)" in compiling[0]
+
+
 def test_a_traverse_given_as_a_dict_names_its_files_absolute(tmp_path, monkeypatch):
     """``run_traverse(dict)`` with ``terrain.file = "dem.npy"`` kept the name relative, and
     its chunks (shipped as the config's dict) were read from each Dask worker's working

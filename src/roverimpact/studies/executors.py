@@ -44,6 +44,7 @@ __all__ = [
     "check_workers",
     "compute_chunk",
     "compute_chunk_file",
+    "kernels_to_compile",
     "local_cluster",
     "need_dask",
     "other_code_message",
@@ -303,7 +304,23 @@ def other_code_message(worker: str, there: Mapping[str, str], here: Mapping[str,
             "every worker, or stop the workers that differ")
 
 
-def check_workers(scheduler: str) -> None:
+def kernels_to_compile(homes: Sequence[str]) -> list[str]:
+    """The names of the compiled kernels (``module:attribute`` of each
+    :class:`~roverimpact._kernels._jit.Kernel`) that this process has not built and
+    numba's on-disk cache here does not hold: it compiles them when a case first needs
+    them (imported here, as the first chunk would)."""
+    import importlib
+
+    out = []
+    for home in homes:
+        module, _, name = home.partition(":")
+        k = getattr(importlib.import_module(module), name)
+        if not k.compiled and not k.cached():
+            out.append(name)
+    return out
+
+
+def check_workers(scheduler: str, kernels: Sequence[str] = ()) -> list[str]:
     """Refuse, before any case runs, a cluster whose workers run other code than this
     command: another roverimpact (:func:`~.store.source_hash`: the version string is the
     same for every change of the source) or another major version of numpy or Pinocchio
@@ -314,6 +331,10 @@ def check_workers(scheduler: str) -> None:
     plus 20-75 ms of hashing the first time a worker process is asked, then cached. A
     worker that cannot import roverimpact says so. Workers that join later are checked by
     each task (:func:`compute_chunk_file`).
+
+    Returns the names of the ``kernels`` (homes, :func:`kernels_to_compile`) that some
+    worker will compile before its first chunk (numba's cache there is cold: a fresh
+    install, another checkout), so that the command can say why its first chunks wait.
 
     Raises
     ------
@@ -336,11 +357,15 @@ def check_workers(scheduler: str) -> None:
                 f"roverimpact it runs ({type(exc).__name__}: {exc}): another version. "
                 "Install the same roverimpact, numpy and pinocchio on every worker, or "
                 "stop the workers that differ (nothing was computed)") from None
-    bad = {w: d for w, d in there.items() if d != here}
-    if bad:
-        worker, ident = min(bad.items())
-        raise ConfigError(other_code_message(worker, ident, here, len(bad) - 1)
-                          + " (nothing was computed)")
+        bad = {w: d for w, d in there.items() if d != here}
+        if bad:
+            worker, ident = min(bad.items())
+            raise ConfigError(other_code_message(worker, ident, here, len(bad) - 1)
+                              + " (nothing was computed)")
+        if not kernels:
+            return []
+        cold = client.run(kernels_to_compile, list(kernels))
+    return [k for k in kernels if any(k.rpartition(":")[2] in c for c in cold.values())]
 
 
 #: Dask configuration of the local clusters' worker processes: Dask's default

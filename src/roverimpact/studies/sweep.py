@@ -306,7 +306,11 @@ def run_study(
     if scheduler is not None:
         need_dask()
         scheduler = check_scheduler(scheduler, note=note)
-        check_workers(scheduler)
+        cold = check_workers(scheduler, study_kernels(prep.study))
+        if cold and note is not None:
+            note(f"the Dask workers compile roverimpact's kernels before their first chunk "
+                 f"(numba's cache there lacks {', '.join(k.rpartition(':')[2] for k in cold)}"
+                 "): the first chunks wait for it (30-70 s on a 2-core machine)")
     elif workers is not None:
         need_dask()
     out_dir = Path(out_dir)
@@ -315,6 +319,21 @@ def run_study(
         return _run_in_folder(prep, out_dir, resume=resume, overwrite=overwrite, csv=csv,
                               workers=workers, scheduler=scheduler, progress=progress,
                               retries=retries, cluster=cluster, note=note, t0=t0)
+
+
+#: The compiled kernels (``module:attribute``) every study's cases use, and those of the
+#: own simulator's (``simulate``): what a running scheduler's workers are asked about
+#: (:func:`~.executors.check_workers`); the command line compiles the same ahead for a
+#: run here (``cli._study._compile_plan``)
+STUDY_KERNELS = ("roverimpact._kernels.partition:partition_kernel",
+                 "roverimpact._kernels.lemke:impact_kernel")
+SIMULATOR_KERNELS = ("roverimpact._kernels.reduced:rk4_peaks",)
+
+
+def study_kernels(study: Study) -> tuple[str, ...]:
+    """:data:`STUDY_KERNELS`, and :data:`SIMULATOR_KERNELS` if the study runs the own
+    simulator."""
+    return STUDY_KERNELS + (SIMULATOR_KERNELS if "own" in study.engines() else ())
 
 
 def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv, workers,
