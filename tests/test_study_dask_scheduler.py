@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import http.server
+import os
 import threading
 import time
 
@@ -463,6 +464,44 @@ def test_workers_with_a_cold_kernel_cache_are_said_to_compile(tmp_path, monkeypa
             assert bool(compiling) is said
             if said:
                 assert "numba's cache there lacks cold)" in compiling[0]
+
+
+class CrashingAt40(ScenarioEvaluator):
+    """The scenario evaluator, whose process dies at beta = 40 deg (as a crash of a
+    compiled library, or the out-of-memory killer, ends it)."""
+
+    name = "crashing"
+
+    def evaluate(self, base, overrides, *, simulate=False):
+        if any(o.get("obstacle.beta_deg") == 40.0 for o in overrides):
+            os._exit(1)
+        return super().evaluate(base, overrides, simulate=simulate)
+
+
+def test_a_chunk_that_kills_its_workers_is_one_line_naming_it(tmp_path):
+    """A chunk whose every worker died computing it: the scheduler gives up on it and
+    Dask's KilledWorker ended the command in a traceback. Now one line names the chunk
+    and its cases; the finished chunks are kept."""
+    import json
+    import sys
+
+    import cloudpickle
+    import dask
+    from dask.distributed import LocalCluster
+
+    from roverimpact.exceptions import RoverImpactError
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    study = dict(STUDY, grid={"obstacle.beta_deg": [10.0, 20.0, 30.0, 40.0]}, chunk_size=1)
+    with dask.config.set({"distributed.worker.multiprocessing-method": "fork",
+                          "distributed.scheduler.allowed-failures": 0}), \
+            LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                         dashboard_address=None) as cluster:
+        with pytest.raises(RoverImpactError, match=r"^chunk (\d) \(cases \1-\1\) killed every "
+                           r"Dask worker that computed it .*The finished chunks are kept"):
+            run_study(study, tmp_path / "out", evaluator=CrashingAt40(),
+                      scheduler=cluster.scheduler_address)
+    assert json.loads((tmp_path / "out" / "manifest.json").read_text())["status"] == "failed"
 
 
 def test_a_traverse_given_as_a_dict_names_its_files_absolute(tmp_path, monkeypatch):

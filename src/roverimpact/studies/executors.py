@@ -649,17 +649,28 @@ def run_serial(pending, chunks, args, params, simulate, store) -> None:
         store(k, compute_chunk(*args, chunks[k], params, simulate))
 
 
-def worker_result(fut, scheduler: str, then: str = "rerun once it runs again"):
+def worker_result(fut, scheduler: str, then: str = "rerun once it runs again",
+                  what: str = "a chunk", killed: str = ""):
     """``fut.result()``, a chunk's rows; a case that cannot be posed, returned as its error
     (:func:`compute_chunk_file`), is raised. An error of the workers' environment says so:
     a robot file this machine has but the worker does not see read "no such URDF/MJCF
     file" with no hint where it was read, a package the worker lacks an ImportError. A
     scheduler gone away is one line ending with ``then`` (what to do), not Dask's
-    ``FutureCancelledError`` traceback."""
+    ``FutureCancelledError`` traceback; so is a chunk (``what``) whose workers died while
+    computing it, one after the other (a crash or the memory limit: Dask's
+    ``KilledWorker`` traceback), with ``killed`` (what is kept) before the advice."""
     from concurrent.futures import CancelledError
+
+    from distributed import KilledWorker
 
     try:
         out = fut.result()
+    except KilledWorker:
+        raise RoverImpactError(
+            f"{what} killed every Dask worker that computed it (the scheduler at "
+            f"{scheduler} gave up after a few): a crash, or the workers' memory limit. "
+            f"{killed}run them without Dask to see why, or give the workers more memory"
+            ) from None
     except ImportError as exc:
         raise ConfigError(f"on a Dask worker of the scheduler at {scheduler}: {exc}; the "
                           "workers need the same Python packages as this machine") from None
@@ -793,7 +804,11 @@ def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store,
             for fut in as_finished(queue, client, scheduler, note=note,
                                    then=then.replace("it runs", "workers run")):
                 k = futures.pop(fut)
-                df = worker_result(fut, scheduler, then)
+                first = k * chunks.size if hasattr(chunks, "size") else None
+                df = worker_result(fut, scheduler, then, what=(
+                    f"chunk {k}" if first is None else
+                    f"chunk {k} (cases {first}-{first + len(chunks[k]) - 1})"),
+                    killed="The finished chunks are kept; ")
                 if k not in written:  # a chunk is stored once, whatever happened to workers
                     store(k, df)
                     written.add(k)

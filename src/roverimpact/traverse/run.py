@@ -607,8 +607,9 @@ def _run_dask(address, cfg_dict, chunks, parts, progress, total) -> int:
         for fut in as_finished(as_completed(list(futures)), client, address,
                                then="rerun once workers run again"):
             n = futures[fut]
-            parts[n] = worker_result(fut, address)
-            _, a, b = chunks[n]
+            i, a, b = chunks[n]
+            parts[n] = worker_result(fut, address, what=f"the chunk of stations {a}-{b - 1} "
+                                     f"of path {i}")
             done += b - a
             if progress:
                 progress(done, total)
