@@ -185,6 +185,40 @@ def test_resume_says_what_it_keeps_from_the_first_run(tmp_path):
     assert not any("chunk size" in t or "begun by" in t for t in notes), notes
 
 
+def test_resume_says_when_another_source_of_the_same_version_began_the_results(tmp_path):
+    """The version string stays 0.1.0 from one checkout to the next: a study begun by
+    other code and resumed by this one held rows of both with no word (the note compared
+    the version strings). The manifest keeps the hash of the package's files, and the
+    note compares it; a manifest written before it was kept compares the versions."""
+    import json
+
+    from roverimpact.studies.store import source_hash, versions
+
+    def stop_after_one_chunk(done, total):
+        if done >= 4:
+            raise KeyboardInterrupt
+
+    for old, said in (("0123456789abcdef", True), (None, False)):
+        out = tmp_path / str(old)
+        with pytest.raises(KeyboardInterrupt):
+            run_study(_study(), out, chunk_size=4, progress=stop_after_one_chunk)
+        manifest = out / "manifest.json"
+        data = json.loads(manifest.read_text())
+        assert data["versions"]["roverimpact source"] == source_hash()
+        if old is None:
+            del data["versions"]["roverimpact source"]
+        else:
+            data["versions"]["roverimpact source"] = old
+        manifest.write_text(json.dumps(data))
+        notes: list[str] = []
+        run_study(_study(), out, resume=True, note=notes.append)
+        v = versions()["roverimpact"]
+        expected = (f"were begun by roverimpact {v} (source {old}), this is {v} (source "
+                    f"{source_hash()}): the table will hold rows of both")
+        assert any(expected in t for t in notes) is said, notes
+        assert said or not any("begun by" in t for t in notes), notes
+
+
 def test_a_folder_of_other_files_is_refused_and_overwrite_leaves_no_stale_table(tmp_path):
     """A folder holding files but no study (``-o .`` beside the study file) is refused
     before any work, whatever the flags: the study file there was replaced by its

@@ -145,7 +145,9 @@ def _versions() -> dict[str, str]:
 
     from .._version import __version__
 
-    out = {"roverimpact": __version__, "python": platform.python_version()}
+    # the version string is the same for every change of the source: its hash tells them
+    out = {"roverimpact": __version__, "roverimpact source": source_hash(),
+           "python": platform.python_version()}
     # distribution metadata only: nothing is imported (a serial run never imports dask)
     for name, dist in (("numpy", "numpy"), ("scipy", "scipy"), ("pandas", "pandas"),
                        ("pyarrow", "pyarrow"), ("pinocchio", "pin"),

@@ -522,8 +522,8 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, hashes: dict[str, str], *, 
                 note(f"--resume keeps the first run's chunk size, {first} cases a chunk "
                      f"(not {prep.chunk_size}): the finished chunks are reused as they are")
             prep.chunk_size = first
-            began = (old.get("versions") or {}).get("roverimpact")
-            now = versions()["roverimpact"]
+            began = _roverimpact_of(old.get("versions"))
+            now = _roverimpact_of(versions(), source="(source" in (began or ""))
             if note is not None and began not in (None, now):
                 note(f"the results in {out_dir} were begun by roverimpact {began}, this is "
                      f"{now}: the table will hold rows of both; --overwrite recomputes "
@@ -549,6 +549,17 @@ def _open_folder(prep: PreparedStudy, out_dir: Path, hashes: dict[str, str], *, 
                 f.unlink()
     chunk_dir.mkdir(exist_ok=True)
     remove_stale_temporaries(out_dir)
+
+
+def _roverimpact_of(vers, source: bool = True) -> str | None:
+    """"0.1.0 (source 0123456789abcdef)": the roverimpact of a manifest's ``versions``
+    (:func:`~.store.versions`; the version string stays 0.1.0 from one checkout to the
+    next); the version alone without ``source``, or in a manifest written before the
+    source hash was kept."""
+    if not isinstance(vers, dict) or vers.get("roverimpact") is None:
+        return None
+    src = vers.get("roverimpact source") if source else None
+    return f"{vers['roverimpact']} (source {src})" if src else str(vers["roverimpact"])
 
 
 def input_files(study: Study) -> dict[str, str]:
