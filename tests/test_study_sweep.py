@@ -1155,6 +1155,39 @@ def test_report_of_an_interrupted_study_says_how_far_it_got(tmp_path):
     assert res.n_reused == 8 and res.n_computed == 10
 
 
+def test_the_copy_of_a_study_naming_relative_files_resumes_it(tmp_path, monkeypatch):
+    """A study file whose ``[base]`` names ``model.file = "mjcf_rover.xml"`` (relative to
+    the study file) was copied as written next to the results: `roverimpact sweep
+    results/study.toml -o results --resume`, the advice of `report` for a stopped study,
+    read the robot from the results folder ("no such URDF/MJCF file"). The copy now names
+    the files absolute, and the resumed table is the uninterrupted one."""
+    import shutil
+
+    import tomllib
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    shutil.copy(ex / "mjcf_rover.xml", tmp_path / "mjcf_rover.xml")
+    base = tomllib.loads((ex / "mjcf_rover_beta.toml").read_text())
+    assert base["model"]["file"] == "mjcf_rover.xml"
+    import tomli_w
+
+    (tmp_path / "st.toml").write_text(
+        'name = "inline"\nchunk_size = 2\n[grid]\n"obstacle.beta_deg" = [20.0, 40.0, 60.0, 80.0]'
+        "\n\n" + tomli_w.dumps({"base": base}))
+    whole = run_study(tmp_path / "st.toml", tmp_path / "whole").table
+
+    def stop(done, total):
+        if done >= 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(StudyInterrupted):
+        run_study(tmp_path / "st.toml", tmp_path / "r", progress=stop)
+    monkeypatch.chdir(tmp_path / "r")
+    res = run_study(tmp_path / "r" / "study.toml", tmp_path / "r", resume=True)
+    assert res.n_reused == 2 and res.n_computed == 2
+    pd.testing.assert_frame_equal(res.table, whole)
+
+
 class _CountingToFile(ScenarioEvaluator):
     """The scenario evaluator, appending a line to a file per call (on a worker too)."""
 

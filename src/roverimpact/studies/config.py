@@ -229,8 +229,8 @@ def load_study(path: str | Path) -> tuple[Study, str]:
     ``None``: the study is self-contained only once the base is inlined). A relative
     ``model.file``, ``terrain.file`` or ``terrain.function`` file is read relative to the
     file that names it (the base file, or the study file for a ``[base]`` table), as a
-    scenario file's is; the text is then ``None`` too, so that the copy written next to
-    the results names the files by absolute path and runs (``--resume``) from there.
+    scenario file's is (the text is then ``None`` too: the copy beside the results names
+    the files absolute).
 
     Raises
     ------
@@ -238,7 +238,8 @@ def load_study(path: str | Path) -> tuple[Study, str]:
         For malformed TOML, unknown keys, wrong types, an empty grid or a missing base.
     """
     path = Path(path)
-    raw = read_toml(path)
+    given = read_toml(path)
+    raw = dict(given)
     if "base" not in raw and ("model" in raw or "obstacle" in raw):
         raise ConfigError(f"{path}: a scenario file, not a study: a study names its scenario "
                           "in [base] (or base = \"scenario.toml\") and what varies in [grid], "
@@ -250,14 +251,13 @@ def load_study(path: str | Path) -> tuple[Study, str]:
         raw["base"] = _files_from(read_toml(base_path), base_path.parent)
         text = None
     elif isinstance(raw.get("base"), dict):
-        base = _files_from(raw["base"], path.parent)
-        if base != raw["base"]:
-            text = None
-        raw["base"] = base
-    resolved = _case_files_from(raw, path.parent)
-    if resolved != raw:
+        raw["base"] = _files_from(raw["base"], path.parent)
+    raw = _case_files_from(raw, path.parent)
+    if raw != given:
+        # relative file names: the copy written next to the results names them absolute
+        # (the text's, read from the results folder, named files that are not there, and
+        # `--resume` with the copy, as `report` advises for a stopped study, failed)
         text = None
-    raw = resolved
     try:
         study = Study.model_validate(raw)
     except ValidationError as exc:
