@@ -404,6 +404,30 @@ def test_a_worker_of_other_code_that_joins_mid_study_stops_it(tmp_path, monkeypa
     assert json.loads((tmp_path / "out" / "manifest.json").read_text())["status"] == "failed"
 
 
+def test_a_worker_that_does_not_answer_the_check_is_refused_in_bounded_time(tmp_path,
+                                                                           monkeypatch):
+    """A worker that does not answer (a stopped process, ``kill -STOP``): Dask's
+    ``Client.run`` waits for ever, and the check hung the command before any work."""
+    from dask.distributed import LocalCluster
+
+    from roverimpact.studies import executors, store
+
+    monkeypatch.setattr(executors, "WORKERS_ANSWER_S", 0.5)
+
+    def slow_identity(dask_worker=None):
+        if dask_worker is not None:
+            time.sleep(2.0)
+        return store.code_identity()
+
+    monkeypatch.setattr(executors, "code_identity", slow_identity)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        with pytest.raises(ConfigError, match=r"did not answer in 0.5 s \(a stopped or stuck "
+                           r"process\).*\(nothing was computed\)$"):
+            run_study(STUDY, tmp_path / "out", scheduler=cluster.scheduler_address)
+    assert not (tmp_path / "out").exists()
+
+
 def test_the_source_hash_tells_two_sources_apart(tmp_path):
     """What identifies roverimpact's code: a hash of its files (paths and bytes), not of
     the compiled caches beside them."""

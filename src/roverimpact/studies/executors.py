@@ -320,6 +320,35 @@ def kernels_to_compile(homes: Sequence[str]) -> list[str]:
     return out
 
 
+#: Longest wait [s] for the workers' answers to :func:`check_workers` (a worker's first
+#: answer imports roverimpact and its kernels' modules: 7 s on the loaded 2-core machine)
+WORKERS_ANSWER_S = 60.0
+
+
+def _run_on_workers(client, scheduler: str, fn, *args) -> dict:
+    """``client.run(fn, *args)``, within :data:`WORKERS_ANSWER_S`: Dask waits for ever for
+    a worker that does not answer (a stopped process: ``kill -STOP``)."""
+    box: dict = {}
+
+    def run() -> None:
+        try:
+            box["out"] = client.run(fn, *args)
+        except BaseException as exc:  # raised in the caller's thread
+            box["exc"] = exc
+
+    t = threading.Thread(target=run, daemon=True, name="roverimpact-check-workers")
+    t.start()
+    t.join(WORKERS_ANSWER_S)
+    if t.is_alive():
+        raise ConfigError(
+            f"a Dask worker of the scheduler at {scheduler} did not answer in "
+            f"{WORKERS_ANSWER_S:g} s (a stopped or stuck process): restart it, or stop it "
+            "(nothing was computed)")
+    if "exc" in box:
+        raise box["exc"]
+    return box["out"]
+
+
 def check_workers(scheduler: str, kernels: Sequence[str] = ()) -> list[str]:
     """Refuse, before any case runs, a cluster whose workers run other code than this
     command: another roverimpact (:func:`~.store.source_hash`: the version string is the
@@ -346,11 +375,13 @@ def check_workers(scheduler: str, kernels: Sequence[str] = ()) -> list[str]:
     with _LoggerAtLeast("distributed.client", logging.CRITICAL), \
             Client(scheduler, timeout="10s") as client:
         try:
-            there = client.run(code_identity)
+            there = _run_on_workers(client, scheduler, code_identity)
         except ImportError as exc:
             raise ConfigError(f"on a Dask worker of the scheduler at {scheduler}: {exc}; "
                               "the workers need the same Python packages as this machine "
                               "(nothing was computed)") from None
+        except RoverImpactError:  # (no answer)
+            raise
         except Exception as exc:  # a roverimpact without code_identity: another version
             raise ConfigError(
                 f"a Dask worker of the scheduler at {scheduler} cannot say which "
@@ -364,7 +395,7 @@ def check_workers(scheduler: str, kernels: Sequence[str] = ()) -> list[str]:
                               + " (nothing was computed)")
         if not kernels:
             return []
-        cold = client.run(kernels_to_compile, list(kernels))
+        cold = _run_on_workers(client, scheduler, kernels_to_compile, list(kernels))
     return [k for k in kernels if any(k.rpartition(":")[2] in c for c in cold.values())]
 
 
