@@ -298,9 +298,10 @@ def test_path_names_with_a_slash(tmp_path, capfd):
     assert sorted(f.name for f in out.glob("*.png")) == sorted(f"{s}.png" for s in stems)
     assert set(pd.read_parquet(out / "poses.parquet")["path"]) == {"route 1/a", "route 1.5"}
     assert "route 1/a" in (out / "report.html").read_text()
-    assert main(["traverse", str(f), "-o", str(tmp_path / "n"), "--no-report"]) == 0
-    assert main(["traverse-report", str(tmp_path / "n")]) == 0
-    assert (tmp_path / "n" / "map-route_1.5.png").is_file()
+    for stem in stems:  # traverse-report draws them again from the tables
+        (out / f"{stem}.png").unlink()
+    assert main(["traverse-report", str(out)]) == 0
+    assert sorted(f.name for f in out.glob("*.png")) == sorted(f"{s}.png" for s in stems)
 
 
 def test_summary_table_at_80_columns():
