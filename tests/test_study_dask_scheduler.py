@@ -8,6 +8,7 @@ import http.server
 import os
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -38,6 +39,21 @@ def http_port():
     yield server.server_address[1]
     server.shutdown()
     server.server_close()
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def _two_rovers(mine, theirs):
+    """Folders ``mine`` and ``theirs``, each with an ``mjcf_rover.xml``: the example's
+    (a 20 kg chassis) in ``mine``, a 60 kg chassis in ``theirs`` (a worker reading its own
+    folder's file gives another T_c^-)."""
+    xml = (EXAMPLES / "mjcf_rover.xml").read_text()
+    assert 'mass="20"' in xml
+    for folder, text in ((mine, xml), (theirs, xml.replace('mass="20"', 'mass="60"'))):
+        folder.mkdir()
+        (folder / "mjcf_rover.xml").write_text(text)
+    return mine, theirs
 
 
 def test_a_port_that_is_not_a_schedulers_is_refused_before_any_work(tmp_path, http_port):
@@ -95,21 +111,12 @@ def test_a_dict_studys_relative_robot_file_is_the_one_beside_the_caller(tmp_path
     file of the working folder; workers started in another folder read theirs (a 60 kg
     chassis instead of 20 kg: T_c^- 1.279 J instead of 0.483 J at beta = 30 deg, no
     error). The file is now made absolute where the study is given."""
-    from pathlib import Path
-
     import dask
     import tomllib
     from dask.distributed import LocalCluster
 
-    examples = Path(__file__).resolve().parents[1] / "examples"
-    xml = (examples / "mjcf_rover.xml").read_text()
-    assert 'mass="20"' in xml
-    user, other = tmp_path / "user", tmp_path / "workers"
-    user.mkdir()
-    other.mkdir()
-    (user / "mjcf_rover.xml").write_text(xml)
-    (other / "mjcf_rover.xml").write_text(xml.replace('mass="20"', 'mass="60"'))
-    base = tomllib.loads((examples / "mjcf_rover_beta.toml").read_text())
+    user, other = _two_rovers(tmp_path / "user", tmp_path / "workers")
+    base = tomllib.loads((EXAMPLES / "mjcf_rover_beta.toml").read_text())
     assert base["model"]["file"] == "mjcf_rover.xml"
     study = {"name": "rel", "base": base, "grid": {"obstacle.beta_deg": [30.0, 60.0]}}
 
@@ -130,16 +137,8 @@ def test_a_study_files_cases_read_their_robot_files_beside_the_study(tmp_path, m
     working folder of each process (the command's, each Dask worker's), not from the
     study file's folder as the base's file is: run from another folder, the study failed
     or took that folder's file (T_c^- of the 60 kg chassis)."""
-    from pathlib import Path
-
-    examples = Path(__file__).resolve().parents[1] / "examples"
-    xml = (examples / "mjcf_rover.xml").read_text()
-    here, other = tmp_path / "study", tmp_path / "elsewhere"
-    here.mkdir()
-    other.mkdir()
-    (here / "mjcf_rover.xml").write_text(xml)
-    (other / "mjcf_rover.xml").write_text(xml.replace('mass="20"', 'mass="60"'))
-    scenario = (examples / "mjcf_rover_beta.toml").read_text()
+    here, other = _two_rovers(tmp_path / "study", tmp_path / "elsewhere")
+    scenario = (EXAMPLES / "mjcf_rover_beta.toml").read_text()
     (here / "scenario.toml").write_text(scenario)
     (here / "by_case.toml").write_text(
         'name = "c"\nbase = "scenario.toml"\n[[cases]]\n"model.file" = "mjcf_rover.xml"\n')
@@ -160,22 +159,14 @@ def test_a_study_objects_swept_robot_files_are_the_ones_beside_the_caller(tmp_pa
     60 kg chassis, 1.279 J instead of 0.483 J at beta = 30 deg, no error). Reference: the
     serial run in the caller's folder. A study file's random choices of a robot file are
     read beside the study file, as its grid's are."""
-    from pathlib import Path
-
     import dask
     import tomllib
     from dask.distributed import LocalCluster
 
     from roverimpact.studies.config import Study, load_study
 
-    examples = Path(__file__).resolve().parents[1] / "examples"
-    xml = (examples / "mjcf_rover.xml").read_text()
-    user, other = tmp_path / "user", tmp_path / "workers"
-    user.mkdir()
-    other.mkdir()
-    (user / "mjcf_rover.xml").write_text(xml)
-    (other / "mjcf_rover.xml").write_text(xml.replace('mass="20"', 'mass="60"'))
-    base = tomllib.loads((examples / "mjcf_rover_beta.toml").read_text())
+    user, other = _two_rovers(tmp_path / "user", tmp_path / "workers")
+    base = tomllib.loads((EXAMPLES / "mjcf_rover_beta.toml").read_text())
     base["model"]["file"] = str(user / "mjcf_rover.xml")
     by_grid = Study(name="g", base=base, grid={"obstacle.beta_deg": [30.0, 60.0],
                                                "model.file": ["mjcf_rover.xml"]})
@@ -197,7 +188,7 @@ def test_a_study_objects_swept_robot_files_are_the_ones_beside_the_caller(tmp_pa
     (user / "st.toml").write_text(
         'name = "r"\nbase = "scenario.toml"\n[random]\nn = 2\nseed = 0\n'
         '[random.params]\n"model.file" = { choices = ["mjcf_rover.xml"] }\n')
-    (user / "scenario.toml").write_text((examples / "mjcf_rover_beta.toml").read_text())
+    (user / "scenario.toml").write_text((EXAMPLES / "mjcf_rover_beta.toml").read_text())
     study, _ = load_study(user / "st.toml")
     assert study.random.params["model.file"].choices == [str(user / "mjcf_rover.xml")]
 
@@ -532,14 +523,11 @@ def test_a_traverse_given_as_a_dict_names_its_files_absolute(tmp_path, monkeypat
     """``run_traverse(dict)`` with ``terrain.file = "dem.npy"`` kept the name relative, and
     its chunks (shipped as the config's dict) were read from each Dask worker's working
     folder. The config the run goes on with names the file beside the caller."""
-    from pathlib import Path
-
     import tomllib
 
     from roverimpact.traverse import run as trun
 
-    examples = Path(__file__).resolve().parents[1] / "examples"
-    raw = tomllib.loads((examples / "traverse_sparse.toml").read_text())
+    raw = tomllib.loads((EXAMPLES / "traverse_sparse.toml").read_text())
     raw["terrain"] = {"kind": "file", "file": "dem.npy", "spacing": 0.05}
     seen = []
 
