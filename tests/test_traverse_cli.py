@@ -551,15 +551,22 @@ def test_speed_figure_does_not_draw_stations_without_pose_as_unlimited():
     assert np.isnan(stairs[0].get_data().values[1])
 
 
-def test_summary_length_is_the_path_length(tmp_path, capfd):
-    """The summary's "length [m]" was the last station's s: 0.3 m for a 0.33 m path at
-    0.1 m spacing (the segments end at 0.33 m). It is the polyline's length."""
-    np.save(tmp_path / "flat.npy", np.zeros((201, 301)))
-    f = tmp_path / "t.toml"
+def _flat_traverse(folder):
+    """``folder/t.toml``: a 0.33 m path of the 2-D rover over ``folder/flat.npy`` (flat,
+    1 cm cells), the height field named relative to the traverse file."""
+    np.save(folder / "flat.npy", np.zeros((201, 301)))
+    f = folder / "t.toml"
     f.write_text('[terrain]\nkind = "file"\nfile = "flat.npy"\nspacing = 0.01\n'
                  'origin = [-1.0, -1.0]\n[path]\nname = "p"\n'
                  'waypoints = [[0.0, 0.0], [0.33, 0.0]]\nspacing = 0.1\n'
                  '[model]\nname = "rover2d"\n[drive]\nspeed = 0.1\n[limits]\nT_allow = 0.01\n')
+    return f
+
+
+def test_summary_length_is_the_path_length(tmp_path, capfd):
+    """The summary's "length [m]" was the last station's s: 0.3 m for a 0.33 m path at
+    0.1 m spacing (the segments end at 0.33 m). It is the polyline's length."""
+    f = _flat_traverse(tmp_path)
     capfd.readouterr()
     assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json"]) == 0
     out = json.loads(capfd.readouterr().out)
@@ -713,12 +720,7 @@ def test_copy_of_the_traverse_file_runs_from_the_output_folder(tmp_path, monkeyp
     it is read from, and the report of the folder is still drawn."""
     src = tmp_path / "in"
     src.mkdir()
-    np.save(src / "flat.npy", np.zeros((201, 301)))
-    f = src / "t.toml"
-    f.write_text('[terrain]\nkind = "file"\nfile = "flat.npy"\nspacing = 0.01\n'
-                 'origin = [-1.0, -1.0]\n[path]\nname = "p"\n'
-                 'waypoints = [[0.0, 0.0], [0.33, 0.0]]\nspacing = 0.1\n'
-                 '[model]\nname = "rover2d"\n[drive]\nspeed = 0.1\n[limits]\nT_allow = 0.01\n')
+    f = _flat_traverse(src)
     monkeypatch.chdir(src)
     assert main(["traverse", "t.toml", "-o", "../out", "--json", "--no-report"]) == 0
     elsewhere = tmp_path / "elsewhere"
