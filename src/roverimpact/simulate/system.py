@@ -315,12 +315,23 @@ class ContactSystem:
             Jp = J[:, :3, :] + self.rSn[kk, ww] @ J[:, 3:, :]
         vp = Jp @ v                                              # (K, 3)
         vn = (vp * N).sum(axis=-1)
-        delta = -gap[kk, ww]
+        fn, ft, F = self._pair_forces(kk, -gap[kk, ww], vp, vn, N, v_i)
+        f_n[kk, ww] = fn
+        f_t[kk, ww] = ft
+        # summed in the order of ContactState.tau (pairs row-major): the same bits
+        tau += (Jp * F[:, :, None]).sum(axis=(0, 1))
+        return ContactForces(gap, f_n, f_t, tau)
+
+    def _pair_forces(self, kk, delta, vp, vn, N, v_i):
+        """Normal force ``f_n``, friction force ``f_t`` (K,) and contact force ``F`` (K, 3)
+        of K pairs in contact: plane ``kk`` (ascending), indentation ``delta`` > 0,
+        contact-point velocity ``vp`` (K, 3), normal velocity ``vn``, normal ``N`` (K, 3).
+        One law call for consecutive planes that share a law and ``v_i`` (a law is
+        elementwise: the same values as one call per plane)."""
         fn = np.empty(kk.size)
         v_i = [p.v_i for p in self.planes] if v_i is None else v_i
         bounds = np.searchsorted(kk, self._plane_range).tolist()
         for k0, k1 in self._law_runs:
-            # one call for planes in a row that share a law and v_i (a law is elementwise)
             runs = [(k0, k1)] if all(x == v_i[k0] for x in v_i[k0 + 1:k1]) else [
                 (k, k + 1) for k in range(k0, k1)]
             for a, b in runs:
@@ -329,16 +340,13 @@ class ContactSystem:
                     raw = self.planes[a].law.force(delta[i0:i1], -vn[i0:i1], v_i[a])
                     fn[i0:i1] = np.maximum(np.asarray(raw, float), 0.0)
         F = fn[:, None] * N
+        ft = np.zeros(kk.size)
         if self.mu > 0.0:
             vt = vp - vn[:, None] * N
             s = np.sqrt((vt * vt).sum(axis=-1))
             ft = self.mu * fn * np.tanh(s / self.v_slip)
             F = F - (ft / np.maximum(s, 1e-300))[:, None] * vt
-            f_t[kk, ww] = ft
-        f_n[kk, ww] = fn
-        # summed in the order of ContactState.tau (pairs row-major): the same bits
-        tau += (Jp * F[:, :, None]).sum(axis=(0, 1))
-        return ContactForces(gap, f_n, f_t, tau)
+        return fn, ft, F
 
     def _forces(self, gap, Jp, vp, vn, N, v_i) -> ContactState:
         """Normal and friction forces from the gaps, point Jacobians, contact-point
@@ -346,27 +354,16 @@ class ContactSystem:
         (planes, wheels, 3))."""
         npl, nw = gap.shape
         delta = -gap if not self.bounded else np.where(np.isfinite(gap), -gap, -1.0)
-        delta_dot = -vn
+        N = np.broadcast_to(N, (npl, nw, 3))
         f_n = np.zeros((npl, nw))
-        on_any = delta > 0.0
-        if on_any.any():
-            v_i = [p.v_i for p in self.planes] if v_i is None else v_i
-            for k, p in enumerate(self.planes):
-                on = on_any[k]
-                if on.any():
-                    raw = np.asarray(p.law.force(delta[k][on], delta_dot[k][on], v_i[k]),
-                                     float)
-                    f_n[k, on] = np.maximum(raw, 0.0)
-        F = f_n[..., None] * N
-        f_t = np.zeros_like(f_n)
-        if self.mu > 0.0 and on_any.any():
-            vt = vp - vn[..., None] * N
-            s = np.sqrt((vt * vt).sum(axis=-1))
-            f_t = self.mu * f_n * np.tanh(s / self.v_slip)
-            F = F - (f_t / np.maximum(s, 1e-300))[..., None] * vt
+        f_t = np.zeros((npl, nw))
+        F = np.zeros((npl, nw, 3))
+        kk, ww = np.nonzero(delta > 0.0)                     # pairs in contact, by plane
+        if kk.size:
+            f_n[kk, ww], f_t[kk, ww], F[kk, ww] = self._pair_forces(
+                kk, delta[kk, ww], vp[kk, ww], vn[kk, ww], N[kk, ww], v_i)
         tau = (Jp * F[..., None]).sum(axis=(0, 1, 2))
-        return ContactState(gap, np.maximum(delta, 0.0), delta_dot, f_n, f_t, F, Jp, tau,
-                            np.broadcast_to(N, (npl, nw, 3)))
+        return ContactState(gap, np.maximum(delta, 0.0), -vn, f_n, f_t, F, Jp, tau, N)
 
     # ------------------------------------------------------------------ dynamics
     def spring_torque(self, q, v) -> np.ndarray:
