@@ -103,7 +103,10 @@ def _rim_rows(J, axis, radius, n):
 
     n = n / np.linalg.norm(n, axis=-1)[..., None]
     d = n - np.einsum("...j,...j->...", n, axis)[..., None] * axis
-    d /= np.linalg.norm(d, axis=-1)[..., None]
+    nd = np.linalg.norm(d, axis=-1)[..., None]
+    # along the axis to rounding (|d| below 1e-9, the row assembly's threshold): a bare
+    # d /= |d| turned a residual of 1e-16 into an arbitrary rim point and a finite model
+    d = np.where(nd < 1e-9, np.nan, d / np.maximum(nd, 1e-300))
     return point_rows(J, -radius[..., None] * d, n[..., None, :])[..., 0, :]
 
 
