@@ -384,3 +384,15 @@ def test_compiled_contact_finds_the_deeper_basin_as_the_numpy_one():
         ref = minimize_scalar(g, bounds=(lo, hi), method="bounded",
                               options={"xatol": 1e-12}).fun
         assert got.gap[w] / got.normal[w, 2] == pytest.approx(min(ref, g(phis[k])), abs=1e-12)
+
+
+def test_wheels_that_meet_the_face_together_are_reported_in_model_order():
+    """Gaps equal to rounding (a symmetric rover's front wheels): the first wheel in the
+    model's order, whichever is 1e-16 m nearer; a wheel nearer by more than ``TIE_GAP``
+    wins; a wheel with no face ahead (inf, NaN) is never chosen."""
+    from roverimpact.simulate.run import TIE_GAP, first_contact_wheel
+
+    assert first_contact_wheel([0.3, 2e-16, 1e-16, np.inf]) == 1
+    assert first_contact_wheel([1e-16, -1e-12, 0.2]) == 0
+    assert first_contact_wheel([0.0, -2 * TIE_GAP, np.nan]) == 1
+    assert first_contact_wheel([np.nan, np.inf, 0.5]) == 2

@@ -29,7 +29,8 @@ from .config import SimulationConfig, gravity_vector
 from .result import SimulationResult
 from .system import ContactSystem, Plane
 
-__all__ = ["build_system", "effective_energy", "initial_state", "simulate_impact"]
+__all__ = ["build_system", "effective_energy", "first_contact_wheel", "initial_state",
+           "simulate_impact"]
 
 _CHART_LIMIT = 0.5
 _MAX_EVALS = 400_000
@@ -286,6 +287,20 @@ def _driving_velocity(sys: ContactSystem, mbm, q, u: float) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- indicator
+#: Wheels whose obstacle gaps are within this of the smallest meet the face together [m].
+TIE_GAP = 1e-9
+
+
+def first_contact_wheel(gaps) -> int:
+    """The wheel that meets the obstacle: the first, in the model's order, of those whose
+    gap (n_wheels,) is within ``TIE_GAP`` of the smallest. Wheels of a symmetric rover meet
+    a face together; a bare argmin chose between them by rounding (1e-16 m), so the
+    reported wheel and rows changed with the terrain's tilt or the numpy version."""
+    g = np.asarray(gaps, dtype=float)
+    g = np.where(np.isfinite(g), g, np.inf)
+    return int(np.flatnonzero(g <= np.min(g) + TIE_GAP)[0])
+
+
 def effective_energy(sys: ContactSystem, mbm, q, v, wheel: int, config: SimulationConfig,
                      simultaneous: float = 1e-6):
     """``T_c^-`` and ``m_eff`` of the state (q, v) for an obstacle contact of ``wheel``.
@@ -546,7 +561,7 @@ def simulate_impact(mbm, config: SimulationConfig | dict | None = None, *, q0=No
             f"{float(np.min(gaps)):.4g} m away at {config.speed} m/s): increase t_max or "
             "reduce distance")
     v_minus = y1[:sys.nv].copy()
-    wheel = int(np.argmin(sys.gaps(q_minus)[-1]))
+    wheel = first_contact_wheel(sys.gaps(q_minus)[-1])
     v_n = float(sys.contacts(q_minus, v_minus).delta_dot[-1, wheel])
     if v_n <= 0.0:  # pragma: no cover - the event has direction -1
         raise SolverError("the first obstacle contact has no approach velocity")

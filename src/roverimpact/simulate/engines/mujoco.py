@@ -124,6 +124,7 @@ from ..run import (
     as_config,
     build_system,
     effective_energy,
+    first_contact_wheel,
     initial_state,
     reference_configuration,
     simulate_impact,
@@ -675,7 +676,7 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
 
     # ---- pre-impact quantities (Pinocchio, the own engine's definitions)
     g_now = sys.gaps(q_minus)[io]
-    wheel = int(np.argmin(g_now))
+    wheel = first_contact_wheel(g_now)
     cs = sys.contacts(q_minus, v_minus)
     v_n = float(cs.delta_dot[io, wheel])
     if v_n <= 0.0:  # pragma: no cover - the gap decreased over the last step
