@@ -536,6 +536,31 @@ def _check_urdf_numbers(root, path: Path) -> None:
                             " (a decimal point, not a comma; SI units)")
 
 
+def _check_urdf_planar(root, path: Path) -> None:
+    """One ModelError naming a ``planar`` joint whose ``<axis>`` is not ``0 0 1``.
+
+    URDF's planar joint moves in the plane perpendicular to its axis (default ``1 0 0``:
+    the y-z plane of the joint frame; MuJoCo's URDF reader follows it), but Pinocchio's
+    parser builds ``JointModelPlanar``, x, y and a turn about z, whatever the axis: a
+    rover written side-on with ``<axis xyz="0 1 0"/>`` (the x-z plane) moved sideways in
+    x-y, with the mass matrix and contact rows of that motion, and no error."""
+    for j in root.findall("joint"):
+        if j.get("type") != "planar":
+            continue
+        el = j.find("axis")
+        raw = el.get("xyz") if el is not None else None
+        axis = np.array([float(x) for x in raw.split()]) if raw else np.array([1.0, 0, 0])
+        if np.linalg.norm(axis - [0.0, 0.0, np.linalg.norm(axis)]) > 1e-9 * np.linalg.norm(axis):
+            said = f'<axis xyz="{raw}">' if raw else "no <axis> (URDF's default: 1 0 0)"
+            raise ModelError(
+                f"{path}: planar joint {j.get('name')!r} has {said}: URDF moves it in the "
+                "plane perpendicular to that axis, but Pinocchio (which builds the model) "
+                "always in the x-y plane of the joint frame. Give it <axis xyz=\"0 0 1\"/> "
+                "and rotate its <origin> so that the plane is the joint frame's x-y plane, "
+                "or write it as two prismatic joints and a revolute joint through massless "
+                "links (the planar base roverimpact reads: x slide, z slide, y hinge)")
+
+
 def _check_urdf_tree(root, path: Path) -> None:
     """One ModelError for a link that is the child of two joints (a closed chain written
     as URDF: urdfdom keeps one parent, and Pinocchio said "Model does not have any body
@@ -740,6 +765,7 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         _check_not_xacro(meta["element"], path)
         _check_urdf_numbers(meta["element"], path)
         _check_urdf_tree(meta["element"], path)
+        _check_urdf_planar(meta["element"], path)
         _check_urdf_inertias(meta["element"], path)
         args = (str(path), pin.JointModelFreeFlyer()) if floating else (str(path),)
         parser_said: list[str] = []
