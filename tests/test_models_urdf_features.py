@@ -179,3 +179,45 @@ def test_urdf_planar_joint_about_z_gives_mujocos_T_c(tmp_path):
         T_ri, p_ri = _roverimpact_T_c(mbm, q, v, "arm", [0.1, 0.05, -0.2], n)
         np.testing.assert_allclose(p_ri, p_mj, atol=1e-12)
         assert T_ri == pytest.approx(T_mj, rel=1e-9)
+
+
+def test_urdf_floating_joint_with_origin_reads_mujocos_state(tmp_path):
+    """A ``floating`` joint with an ``<origin>``: MuJoCo's ``qpos`` is the world pose of
+    its link; Pinocchio measured ``q`` from the origin, so the state read from MuJoCo
+    (``mujoco_state_to_pinocchio``) put the arm 1.2-1.7 m away and T_c^- was wrong (0 for
+    MuJoCo's 0.058 J). Now the point and T_c^- equal MuJoCo's at random states, and the
+    nominal configuration puts the link where MuJoCo's ``qpos0`` does."""
+    from roverimpact.models.mjcf import mujoco_state_to_pinocchio
+
+    text = ARM_URDF.replace(
+        '<link name="base_footprint"/>',
+        '<link name="world"/><joint name="float" type="floating"><parent link="world"/>'
+        '<child link="base_link"/><origin xyz="0.5 0.2 1.0" rpy="0.3 0.2 0.9"/></joint>'
+        '<link name="base_footprint"/>')
+    f = tmp_path / "floating.urdf"
+    f.write_text(text)
+    mbm = load_robot(f)
+    m = mujoco.MjModel.from_xml_path(str(f))
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    data = mbm.model.createData()
+    pin.framesForwardKinematics(mbm.model, data, np.array(mbm.params["q_nominal"]))
+    np.testing.assert_allclose(data.oMf[mbm.model.getFrameId("l2")].translation,
+                               d.xpos[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "l2")],
+                               atol=1e-12)
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        qpos = m.qpos0.copy()
+        qpos[:3] += rng.uniform(-1, 1, 3)
+        quat = rng.standard_normal(4)
+        qpos[3:7] = quat / np.linalg.norm(quat)
+        qpos[7:] += rng.uniform(-0.1, 0.1, m.nq - 7)
+        qvel = rng.standard_normal(m.nv)
+        d.qpos[:], d.qvel[:] = qpos, qvel
+        mujoco.mj_forward(m, d)
+        q, v = mujoco_state_to_pinocchio(mbm, qpos, qvel)
+        for frame, point in (("l2", [0.1, 0, 0.2]), ("l4", [0.1, 0.02, 0.03])):
+            T_mj, p_mj, n = _mujoco_T_c(m, d, frame, point, rng.standard_normal(3), qvel)
+            T_ri, p_ri = _roverimpact_T_c(mbm, q, v, frame, point, n)
+            np.testing.assert_allclose(p_ri, p_mj, atol=1e-12)
+            assert T_ri == pytest.approx(T_mj, rel=1e-9)

@@ -655,6 +655,30 @@ def _urdf_mimic(root) -> list[list]:
     return out
 
 
+def _free_root_at_origin(model) -> list[float] | None:
+    """Make a URDF ``floating`` joint's coordinates the world pose of its link, as MuJoCo's
+    ``qpos`` (and an MJCF free joint's, and ``[configuration.base]``) mean them, and return
+    the nominal configuration (``None`` if no such joint has an ``<origin>``).
+
+    Pinocchio places the free-flyer at the joint's ``<origin>`` and measures ``q`` from
+    there, so a file with ``<origin xyz="0.5 0.2 1" .../>`` on it read MuJoCo's state (and
+    ``x``, ``z``, ``yaw_deg``) 1.4 m and 0.9 rad away from where MuJoCo puts the link. The
+    placement becomes the identity and ``q_nominal`` the origin's pose: the same set of
+    configurations, the link where the file puts it at ``q_nominal``."""
+    q0 = pin.neutral(model)
+    moved = False
+    for j in range(1, model.njoints):
+        X = model.jointPlacements[j]
+        if (model.parents[j] != 0 or model.joints[j].shortname() != "JointModelFreeFlyer"
+                or X.isIdentity()):
+            continue
+        jm = model.joints[j]
+        q0[jm.idx_q:jm.idx_q + 7] = pin.SE3ToXYZQUAT(X)
+        model.jointPlacements[j] = pin.SE3.Identity()
+        moved = True
+    return [float(x) for x in q0] if moved else None
+
+
 def _unique_frame_names(model) -> None:
     """One frame per name: a URDF joint named as its child link (``rocker_left`` ->
     link ``rocker_left``, a common style) gives Pinocchio a JOINT and a BODY frame of that
@@ -779,6 +803,9 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
             raise ModelError(f"{path}: Pinocchio cannot build a model from it ("
                              + (f"{said[0]}; " if said else "") + f"{msg})") from None
         _unique_frame_names(model)
+        q_free = _free_root_at_origin(model)
+        if q_free is not None and "q_nominal" not in meta["params"]:
+            extra["q_nominal"] = q_free
         _set_armature(model, meta["armature"], path)
         extra["mujoco_check"] = "off"
         if mujoco_check and model.nv > 0:
