@@ -64,6 +64,14 @@ ARM_URDF = f"""<?xml version="1.0"?>
 """
 
 
+#: the arm floating on its own: a ``floating`` joint with an origin from a ``world`` link
+FLOATING_ARM_URDF = ARM_URDF.replace(
+    '<link name="base_footprint"/>',
+    '<link name="world"/><joint name="float" type="floating"><parent link="world"/>'
+    '<child link="base_link"/><origin xyz="0.5 0.2 1.0" rpy="0.3 0.2 0.9"/></joint>'
+    '<link name="base_footprint"/>')
+
+
 def _planar_urdf(axis: str | None) -> str:
     ax = "" if axis is None else f'<axis xyz="{axis}"/>'
     return f"""<?xml version="1.0"?>
@@ -189,13 +197,8 @@ def test_urdf_floating_joint_with_origin_reads_mujocos_state(tmp_path):
     nominal configuration puts the link where MuJoCo's ``qpos0`` does."""
     from roverimpact.models.mjcf import mujoco_state_to_pinocchio
 
-    text = ARM_URDF.replace(
-        '<link name="base_footprint"/>',
-        '<link name="world"/><joint name="float" type="floating"><parent link="world"/>'
-        '<child link="base_link"/><origin xyz="0.5 0.2 1.0" rpy="0.3 0.2 0.9"/></joint>'
-        '<link name="base_footprint"/>')
     f = tmp_path / "floating.urdf"
-    f.write_text(text)
+    f.write_text(FLOATING_ARM_URDF)
     mbm = load_robot(f)
     m = mujoco.MjModel.from_xml_path(str(f))
     d = mujoco.MjData(m)
@@ -221,3 +224,29 @@ def test_urdf_floating_joint_with_origin_reads_mujocos_state(tmp_path):
             T_ri, p_ri = _roverimpact_T_c(mbm, q, v, frame, point, n)
             np.testing.assert_allclose(p_ri, p_mj, atol=1e-12)
             assert T_ri == pytest.approx(T_mj, rel=1e-9)
+
+
+def test_declared_floating_base_on_a_urdf_that_floats_uses_its_floating_joint(tmp_path):
+    """``[model.base] kind = "floating"`` on a URDF whose root link already floats added a
+    second free-flyer above the massless ``world`` link, refused as "joints
+    ['root_joint'] move no mass". The file's floating joint is now the base: MuJoCo's
+    number of DoF, and MuJoCo's T_c^- at its nominal state."""
+    from roverimpact.scenario.build import make_model
+    from roverimpact.scenario.schema import ModelSpec
+
+    f = tmp_path / "floating.urdf"
+    f.write_text(FLOATING_ARM_URDF)
+    mbm = make_model(ModelSpec.model_validate({"file": str(f), "base": {"kind": "floating"}}))
+    m = mujoco.MjModel.from_xml_path(str(f))
+    d = mujoco.MjData(m)
+    assert mbm.model.nv == m.nv == 10
+    qvel = np.random.default_rng(5).standard_normal(m.nv)
+    d.qvel[:] = qvel
+    mujoco.mj_forward(m, d)
+    from roverimpact.models.mjcf import mujoco_state_to_pinocchio
+
+    q, v = mujoco_state_to_pinocchio(mbm, m.qpos0, qvel)
+    T_mj, p_mj, n = _mujoco_T_c(m, d, "l3", [0, 0.05, 0], np.array([0.3, -0.2, 1.0]), qvel)
+    T_ri, p_ri = _roverimpact_T_c(mbm, q, v, "l3", [0, 0.05, 0], n)
+    np.testing.assert_allclose(p_ri, p_mj, atol=1e-12)
+    assert T_ri == pytest.approx(T_mj, rel=1e-9)

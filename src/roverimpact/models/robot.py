@@ -655,6 +655,22 @@ def _urdf_mimic(root) -> list[list]:
     return out
 
 
+def _floating_root_joint(root) -> str | None:
+    """The name of a ``floating`` joint whose parent is the URDF's root link (a file that
+    floats on its own: ``world`` -> ``base_link``), else ``None``. ``floating_base=True``
+    (``[model.base] kind = "floating"``) on such a file added a second free-flyer above the
+    massless root link and was refused as "joints ['root_joint'] move no mass"."""
+    links = [el.get("name") for el in root.findall("link")]
+    children = {c.get("link") for j in root.findall("joint") for c in j.findall("child")}
+    roots = [nm for nm in links if nm not in children]
+    for j in root.findall("joint"):
+        parent = j.find("parent")
+        if (j.get("type") == "floating" and parent is not None and len(roots) == 1
+                and parent.get("link") == roots[0]):
+            return j.get("name")
+    return None
+
+
 def _free_root_at_origin(model) -> list[float] | None:
     """Make a URDF ``floating`` joint's coordinates the world pose of its link, as MuJoCo's
     ``qpos`` (and an MJCF free joint's, and ``[configuration.base]``) mean them, and return
@@ -791,6 +807,8 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         _check_urdf_tree(meta["element"], path)
         _check_urdf_planar(meta["element"], path)
         _check_urdf_inertias(meta["element"], path)
+        if floating and _floating_root_joint(meta["element"]):
+            floating = False  # the file's own floating joint is the free base
         args = (str(path), pin.JointModelFreeFlyer()) if floating else (str(path),)
         parser_said: list[str] = []
         try:
