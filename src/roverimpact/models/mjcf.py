@@ -21,6 +21,9 @@ mass, ``fusestatic`` ...) and :func:`pinocchio_from_mujoco` copies the result:
 * frames: a BODY frame per body, a JOINT frame per joint, an OP_FRAME per site and per
   named geom. A joint, site or geom whose name is already a frame name gets the suffix
   ``_joint``, ``_site`` or ``_geom`` (Pinocchio needs unique frame names).
+* equalities: joint and fixed-tendon equalities as linear couplings, ``connect`` as point
+  loops (:func:`attach_connect_loops`); welds and nonlinear ones are ignored, with a
+  warning.
 
 Coordinates. For hinge and slide joints the Pinocchio coordinate equals MuJoCo's
 ``qpos`` (the joint's ``ref`` is built into the placements), so ``q = qpos`` and
@@ -59,6 +62,7 @@ from ..exceptions import ModelError
 from .base import MultibodyModel
 
 __all__ = [
+    "attach_connect_loops",
     "compile_mjcf",
     "load_mjcf",
     "mujoco_joint_map",
@@ -289,6 +293,7 @@ def pinocchio_from_mujoco(m, *, name: str | None = None) -> tuple[pin.Model, dic
             "conaffinity": int(m.geom_conaffinity[g]),
         })
     mimic, couplings, ignored = _joint_equalities(mujoco, m, joint_names)
+    connect = _connect_loops(mujoco, m, body_names, sites)
     info = {
         "mujoco": {"nq": int(m.nq), "nv": int(m.nv), "joints": jmap,
                    "qpos0": [float(x) for x in m.qpos0]},
@@ -300,12 +305,40 @@ def pinocchio_from_mujoco(m, *, name: str | None = None) -> tuple[pin.Model, dic
         info["mimic"] = mimic
     if couplings:
         info["couplings"] = couplings
+    if connect:
+        info["connect"] = connect
     if ignored:
         info["mujoco_equalities_ignored"] = [nm for nm, _why in ignored]
         info["mujoco_equalities_ignored_why"] = [f"{nm!r} ({why})" for nm, why in ignored]
     q0, _ = state_to_pinocchio(model, info["mujoco"], np.asarray(m.qpos0, dtype=float), None)
     info["q_nominal"] = [float(x) for x in q0]
     return model, info
+
+
+def _connect_loops(mujoco, m, body_names, sites) -> list[list]:
+    """MuJoCo's active ``connect`` equalities as point loops ``[name, frame_a, point_a,
+    frame_b, point_b]`` (:class:`~roverimpact.models.declare.FrameLoop`, ``kind =
+    "point"``): ``body1``'s ``anchor`` (``eq_data[0:3]``, body1 frame) and the same point
+    in ``body2``'s frame at ``qpos0`` (``eq_data[3:6]``, as MuJoCo's compiler computes
+    it; ``universe`` for the world), or the origins of ``site1`` and ``site2``."""
+    out = []
+    site_obj = int(mujoco.mjtObj.mjOBJ_SITE)
+    for e in range(m.neq):
+        if not m.eq_active0[e] or int(m.eq_type[e]) != int(mujoco.mjtEq.mjEQ_CONNECT):
+            continue
+        nm = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, e) or f"equality{e}"
+        o1, o2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
+        if int(m.eq_objtype[e]) == site_obj:
+            s1 = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SITE, o1)
+            s2 = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SITE, o2)
+            if s1 not in sites or s2 not in sites:
+                raise ModelError(f"equality {nm!r}: a connect between unnamed sites")
+            out.append([nm, sites[s1], [0.0, 0.0, 0.0], sites[s2], [0.0, 0.0, 0.0]])
+            continue
+        data = [float(x) for x in m.eq_data[e, :6]]
+        out.append([nm, body_names[o1] if o1 > 0 else "universe", data[:3],
+                    body_names[o2] if o2 > 0 else "universe", data[3:]])
+    return out
 
 
 def _fixed_tendon(mujoco, m, t: int, joint_names) -> list[tuple[str, float]] | None:
@@ -338,7 +371,7 @@ def _joint_equalities(mujoco, m, joint_names):
       ``qpos0``, ``tendon_length0``); without ``tendon2``, ``L_1 - L_1^0 = c0``. So ``C =
       coef_1 - c1 coef_2`` and ``offset = -(L_1^0 + c0) + c1 L_2^0``: ``phi`` is MuJoCo's
       residual ``efc_pos`` and ``C`` its row of ``efc_J``.
-    * ``ignored``: ``(name, reason)`` of the others: connect and weld equalities, a
+    * ``ignored``: ``(name, reason)`` of the others: weld equalities, a
       nonzero quadratic or higher ``polycoef`` term between two joints or tendons
       (nonlinear), spatial tendons.
     """
@@ -352,6 +385,8 @@ def _joint_equalities(mujoco, m, joint_names):
         kind = int(m.eq_type[e])
         o1, o2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
         c0, c1 = float(poly[0]), float(poly[1])
+        if kind == int(mujoco.mjtEq.mjEQ_CONNECT):
+            continue  # a point loop (_connect_loops)
         if kind not in (int(mujoco.mjtEq.mjEQ_JOINT), int(mujoco.mjtEq.mjEQ_TENDON)):
             ignored.append((nm, kinds.get(kind, f"type {kind}")))
             continue
@@ -772,7 +807,21 @@ def load_mjcf(path: str | Path, *, floating_base: bool | None = None):
         from .joints import attach_couplings
 
         attach_couplings(mbm)
+    attach_connect_loops(mbm)
     return mbm, m
+
+
+def attach_connect_loops(mbm: MultibodyModel) -> None:
+    """Close the loops of ``mbm.params["connect"]`` (MuJoCo ``connect`` equalities, see
+    :func:`pinocchio_from_mujoco`) as point loops (rows ``loop:<equality>:x|y|z``) at
+    the nominal configuration, where MuJoCo's compiler closed them."""
+    if not mbm.params.get("connect"):
+        return
+    from .declare import FrameLoop, attach_frame_loops
+
+    attach_frame_loops(mbm, [FrameLoop(nm, "point", fa, tuple(pa), fb, tuple(pb))
+                             for nm, fa, pa, fb, pb in mbm.params["connect"]],
+                       mbm.params["q_nominal"])
 
 
 def _demo_free_body() -> MultibodyModel:

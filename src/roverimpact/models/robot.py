@@ -890,4 +890,8 @@ def load_robot(path: str | Path, *, floating_base: bool | None = None,
         from .joints import attach_couplings
 
         attach_couplings(mbm)
+    if params.get("connect"):
+        from .mjcf import attach_connect_loops
+
+        attach_connect_loops(mbm)
     return mbm
