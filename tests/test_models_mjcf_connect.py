@@ -104,3 +104,86 @@ def test_connect_closes_the_loop_as_mujoco_does(tmp_path, connect):
         a = n @ jp
         ratios.append(T_mj / (0.5 * (a @ qvel) ** 2 / (a @ np.linalg.solve(M, a))))
     assert max(ratios) > 2  # the loop matters
+
+
+#: a free base with a three-hinge arm whose last link is welded to the world (9 DoF, 6
+#: held), and a second arm link welded to the base by relpose at qpos0 (the default)
+WELDED = """<mujoco model="welded">
+  <worldbody>
+    <body name="base" pos="0 0 0.5" euler="10 -20 30">
+      <freejoint name="root"/>
+      <geom type="box" size="0.3 0.2 0.1" mass="8"/>
+      <body name="l1" pos="0.3 0 0.1" euler="0 30 0">
+        <joint name="a" axis="0 0 1"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
+        <body name="l2" pos="0.3 0 0" euler="20 0 0">
+          <joint name="b" axis="0 1 0"/>
+          <geom type="capsule" fromto="0 0 0 0.3 0.1 0" size="0.03" mass="0.8"/>
+          <body name="l3" pos="0.3 0.1 0">
+            <joint name="c" axis="1 0 0"/>
+            <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.03" mass="0.5"/>
+          </body>
+        </body>
+      </body>
+      <body name="tail" pos="-0.3 0 0">
+        <joint name="t" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 -0.3 0 0" size="0.03" mass="0.6"/>
+        <site name="tail_tip" pos="-0.3 0 0"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality><weld name="grip" body1="l3"/></equality>
+</mujoco>
+"""
+
+
+def test_weld_holds_the_relative_pose_as_mujoco_does(tmp_path):
+    """A weld (here of an arm's last link to the world, closing base + arm into a loop)
+    was ignored with a warning. It is now three point loops of body2's origin and unit
+    x, y points (9 rows, rank 6): T_c^- of the tail tip equals MuJoCo's with the weld's
+    six rows (``mj_jac`` translation and rotation differences) held, to 1e-9."""
+    f = tmp_path / "welded.xml"
+    f.write_text(WELDED)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mbm = load_robot(f)
+    m = mujoco.MjModel.from_xml_path(str(f))
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    l3 = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "l3")
+    jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    mujoco.mj_jac(m, d, jp, jr, d.xpos[l3], l3)
+    J = np.vstack([jp, jr])  # the world does not move
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "tail_tip")
+    jt = np.zeros((3, m.nv))
+    mujoco.mj_jac(m, d, jt, None, d.site_xpos[s], m.site_bodyid[s])
+    rng = np.random.default_rng(4)
+    ratios = []
+    for _ in range(3):
+        qvel = (np.eye(m.nv) - np.linalg.pinv(J) @ J) @ rng.standard_normal(m.nv)
+        n = rng.standard_normal(3)
+        n = n if n @ jt @ qvel < 0 else -n
+        n /= np.linalg.norm(n)
+        A = np.vstack([J, n @ jt])
+        T_mj = 0.5 * (A @ qvel) @ np.linalg.pinv(A @ np.linalg.solve(M, A.T)) @ (A @ qvel)
+        q, v = mujoco_state_to_pinocchio(mbm, m.qpos0, qvel)
+        st = ImpactSetup.from_state(mbm, q, v, constraints="all",
+                                    obstacle={"frame": "tail_tip", "normal": list(n)})
+        assert st.labels[-1] == "obstacle:tail_tip:normal" and len(st.labels) == 10
+        assert st.partition().T_c_minus == pytest.approx(T_mj, rel=1e-9)
+        a = n @ jt
+        ratios.append(T_mj / (0.5 * (a @ qvel) ** 2 / (a @ np.linalg.solve(M, a))))
+    assert max(abs(r - 1) for r in ratios) > 0.05  # the weld matters
+
+
+def test_weld_open_at_qpos0_is_ignored_with_a_warning_naming_it(tmp_path):
+    """A weld whose explicit relpose does not hold at qpos0 (MuJoCo pulls the bodies
+    together in its first steps) cannot be a loop of the nominal configuration: it is
+    left out with the warning that names the ignored equalities, and the gap."""
+    f = tmp_path / "open.xml"
+    f.write_text(WELDED.replace('body1="l3"/>', 'body1="l3" relpose="0 0 0.1 1 0 0 0"/>'))
+    with pytest.warns(UserWarning, match=r"'grip' \(weld open by [0-9.]+ m at qpos0\)"):
+        mbm = load_robot(f)
+    assert mbm.loop_closure is None and mbm.params["mujoco_equalities_ignored"] == ["grip"]

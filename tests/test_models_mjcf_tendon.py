@@ -263,13 +263,14 @@ def test_constrained_effective_mass_equals_mujocos(linkage):
 
 
 def test_unsupported_equalities_are_one_warning_naming_each(tmp_path):
-    """A nonlinear two-tendon polycoef, a spatial tendon and a weld are ignored with
-    one warning naming each and why; the linear tendon equality beside them is kept."""
+    """A nonlinear two-tendon polycoef, a spatial tendon and a weld without torque
+    (torquescale 0) are ignored with one warning naming each and why; the linear tendon
+    equality beside them is kept."""
     extra = LINKAGE.replace(
         '<tendon name="bogie_link" tendon1="bogies" tendon2="steer" polycoef="0.05 -0.7 0 0 0"/>',
         '<tendon name="bogie_link" tendon1="bogies" tendon2="steer" polycoef="0 -0.7 0.2 0 0"/>'
         '<tendon name="cable_eq" tendon1="cable"/>'
-        '<weld name="pin" body1="wheel_l" body2="wheel_r"/>'
+        '<weld name="pin" body1="wheel_l" body2="wheel_r" torquescale="0"/>'
     ).replace('<fixed name="steer">',
               '<spatial name="cable"><site site="s1"/><site site="s2"/></spatial>'
               '<fixed name="steer">'
@@ -287,7 +288,7 @@ def test_unsupported_equalities_are_one_warning_naming_each(tmp_path):
     assert len(msgs) == 1, msgs
     assert "'bogie_link' (tendon equality, nonlinear polycoef" in msgs[0]
     assert "'cable_eq' (tendon equality over the spatial tendon 'cable')" in msgs[0]
-    assert "'pin' (weld)" in msgs[0]
+    assert "'pin' (weld, torquescale 0)" in msgs[0]
     assert mbm.params["mujoco_equalities_ignored"] == ["bogie_link", "cable_eq", "pin"]
     assert mbm.loop_names == ["mimic:steer_l", "tendon:differential"]
 

@@ -21,9 +21,9 @@ mass, ``fusestatic`` ...) and :func:`pinocchio_from_mujoco` copies the result:
 * frames: a BODY frame per body, a JOINT frame per joint, an OP_FRAME per site and per
   named geom. A joint, site or geom whose name is already a frame name gets the suffix
   ``_joint``, ``_site`` or ``_geom`` (Pinocchio needs unique frame names).
-* equalities: joint and fixed-tendon equalities as linear couplings, ``connect`` as point
-  loops (:func:`attach_connect_loops`); welds and nonlinear ones are ignored, with a
-  warning.
+* equalities: joint and fixed-tendon equalities as linear couplings, ``connect`` and
+  ``weld`` as point loops (:func:`attach_connect_loops`); nonlinear ones and those open
+  at ``qpos0`` are ignored, with a warning.
 
 Coordinates. For hinge and slide joints the Pinocchio coordinate equals MuJoCo's
 ``qpos`` (the joint's ``ref`` is built into the placements), so ``q = qpos`` and
@@ -293,7 +293,8 @@ def pinocchio_from_mujoco(m, *, name: str | None = None) -> tuple[pin.Model, dic
             "conaffinity": int(m.geom_conaffinity[g]),
         })
     mimic, couplings, ignored = _joint_equalities(mujoco, m, joint_names)
-    connect = _connect_loops(mujoco, m, body_names, sites)
+    connect, left_out = _connect_loops(mujoco, m, body_names, sites)
+    ignored += left_out
     info = {
         "mujoco": {"nq": int(m.nq), "nv": int(m.nv), "joints": jmap,
                    "qpos0": [float(x) for x in m.qpos0]},
@@ -315,30 +316,77 @@ def pinocchio_from_mujoco(m, *, name: str | None = None) -> tuple[pin.Model, dic
     return model, info
 
 
-def _connect_loops(mujoco, m, body_names, sites) -> list[list]:
-    """MuJoCo's active ``connect`` equalities as point loops ``[name, frame_a, point_a,
-    frame_b, point_b]`` (:class:`~roverimpact.models.declare.FrameLoop`, ``kind =
-    "point"``): ``body1``'s ``anchor`` (``eq_data[0:3]``, body1 frame) and the same point
-    in ``body2``'s frame at ``qpos0`` (``eq_data[3:6]``, as MuJoCo's compiler computes
-    it; ``universe`` for the world), or the origins of ``site1`` and ``site2``."""
-    out = []
+def _connect_loops(mujoco, m, body_names, sites) -> tuple[list[list], list]:
+    """MuJoCo's active ``connect`` and ``weld`` equalities as point loops ``[name, frame_a,
+    point_a, frame_b, point_b]`` (:class:`~roverimpact.models.declare.FrameLoop`, ``kind
+    = "point"``), and ``(name, reason)`` of those left out.
+
+    * connect between bodies: ``body1``'s ``anchor`` (``eq_data[0:3]``, body1 frame) and
+      the same point in ``body2``'s frame at ``qpos0`` (``eq_data[3:6]``, as MuJoCo's
+      compiler computes it; ``universe`` for the world); between sites: their origins.
+    * weld between bodies (``torquescale > 0``): body2's pose in body1's frame is
+      ``relpose`` (``eq_data[3:10]``); three points of body2 (its origin, and 1 m along its
+      x and y axes) held at their places in body1 fix the relative pose (rank 6 of 9 rows).
+
+    An equality that MuJoCo's compiler leaves open at ``qpos0`` (more than
+    :data:`~roverimpact.models.declare.LOOP_GAP_TOL`: an explicit ``relpose`` or two sites
+    apart), a weld between sites or with ``torquescale = 0`` is left out (the caller warns).
+    """
+    from .declare import LOOP_GAP_TOL
+
+    out, ignored = [], []
     site_obj = int(mujoco.mjtObj.mjOBJ_SITE)
+    connect, weld = int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)
+    d = mujoco.MjData(m)
+    d.qpos[:] = m.qpos0
+    mujoco.mj_kinematics(m, d)
+
+    def world(kind: str, i: int, p) -> np.ndarray:
+        pos, mat = (d.site_xpos[i], d.site_xmat[i]) if kind == "site" else (d.xpos[i],
+                                                                           d.xmat[i])
+        return pos + mat.reshape(3, 3) @ np.asarray(p, dtype=float)
+
     for e in range(m.neq):
-        if not m.eq_active0[e] or int(m.eq_type[e]) != int(mujoco.mjtEq.mjEQ_CONNECT):
+        kind = int(m.eq_type[e])
+        if not m.eq_active0[e] or kind not in (connect, weld):
             continue
         nm = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, e) or f"equality{e}"
         o1, o2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
-        if int(m.eq_objtype[e]) == site_obj:
+        data = np.asarray(m.eq_data[e], dtype=float)
+        on_sites = int(m.eq_objtype[e]) == site_obj
+        if kind == weld and (on_sites or not data[10] > 0.0):
+            ignored.append((nm, "weld between sites" if on_sites else "weld, torquescale 0"))
+            continue
+        if on_sites:
             s1 = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SITE, o1)
             s2 = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SITE, o2)
             if s1 not in sites or s2 not in sites:
-                raise ModelError(f"equality {nm!r}: a connect between unnamed sites")
-            out.append([nm, sites[s1], [0.0, 0.0, 0.0], sites[s2], [0.0, 0.0, 0.0]])
+                ignored.append((nm, "connect between unnamed sites"))
+                continue
+            rows = [(nm, ("site", o1, sites[s1], np.zeros(3)),
+                     ("site", o2, sites[s2], np.zeros(3)))]
+        else:
+            f1 = body_names[o1] if o1 > 0 else "universe"
+            f2 = body_names[o2] if o2 > 0 else "universe"
+            if kind == connect:
+                rows = [(nm, ("body", o1, f1, data[:3]), ("body", o2, f2, data[3:6]))]
+            else:  # body2's points at relpose in body1: R p + t
+                R = np.zeros(9)
+                mujoco.mju_quat2Mat(R, data[6:10] / np.linalg.norm(data[6:10]))
+                R = R.reshape(3, 3)
+                rows = [(f"{nm}:{tag}", ("body", o1, f1, R @ p + data[3:6]),
+                         ("body", o2, f2, p))
+                        for tag, p in (("o", np.zeros(3)), ("x", np.eye(3)[0]),
+                                       ("y", np.eye(3)[1]))]
+        gap = max(float(np.linalg.norm(world(a[0], a[1], a[3]) - world(b[0], b[1], b[3])))
+                  for _n, a, b in rows)
+        if gap > LOOP_GAP_TOL:
+            ignored.append((nm, f"{'weld' if kind == weld else 'connect'} open by "
+                                f"{gap:.3g} m at qpos0"))
             continue
-        data = [float(x) for x in m.eq_data[e, :6]]
-        out.append([nm, body_names[o1] if o1 > 0 else "universe", data[:3],
-                    body_names[o2] if o2 > 0 else "universe", data[3:]])
-    return out
+        out += [[n, a[2], [float(x) for x in a[3]], b[2], [float(x) for x in b[3]]]
+                for n, a, b in rows]
+    return out, ignored
 
 
 def _fixed_tendon(mujoco, m, t: int, joint_names) -> list[tuple[str, float]] | None:
@@ -371,7 +419,7 @@ def _joint_equalities(mujoco, m, joint_names):
       ``qpos0``, ``tendon_length0``); without ``tendon2``, ``L_1 - L_1^0 = c0``. So ``C =
       coef_1 - c1 coef_2`` and ``offset = -(L_1^0 + c0) + c1 L_2^0``: ``phi`` is MuJoCo's
       residual ``efc_pos`` and ``C`` its row of ``efc_J``.
-    * ``ignored``: ``(name, reason)`` of the others: weld equalities, a
+    * ``ignored``: ``(name, reason)`` of the others: a
       nonzero quadratic or higher ``polycoef`` term between two joints or tendons
       (nonlinear), spatial tendons.
     """
@@ -385,8 +433,8 @@ def _joint_equalities(mujoco, m, joint_names):
         kind = int(m.eq_type[e])
         o1, o2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
         c0, c1 = float(poly[0]), float(poly[1])
-        if kind == int(mujoco.mjtEq.mjEQ_CONNECT):
-            continue  # a point loop (_connect_loops)
+        if kind in (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)):
+            continue  # point loops (_connect_loops)
         if kind not in (int(mujoco.mjtEq.mjEQ_JOINT), int(mujoco.mjtEq.mjEQ_TENDON)):
             ignored.append((nm, kinds.get(kind, f"type {kind}")))
             continue
@@ -799,10 +847,11 @@ def load_mjcf(path: str | Path, *, floating_base: bool | None = None):
     mbm.params["total_mass"] = float(sum(Y.mass for Y in model.inertias))
     if info.get("mujoco_equalities_ignored"):
         warnings.warn(f"{path}: MuJoCo equality constraints "
-                      f"{', '.join(info['mujoco_equalities_ignored_why'])} are not linear "
-                      "couplings of joints (joint equalities, or tendon equalities over fixed "
-                      "tendons, with polycoef c0 c1 0 0 0); roverimpact ignores them (model "
-                      "them as loop closures or contacts)", UserWarning, stacklevel=2)
+                      f"{', '.join(info['mujoco_equalities_ignored_why'])} are neither "
+                      "linear couplings of joints (joint equalities, or tendon equalities over "
+                      "fixed tendons, with polycoef c0 c1 0 0 0) nor connects or welds of "
+                      "bodies closed at qpos0; roverimpact ignores them (model them as loop "
+                      "closures or contacts)", UserWarning, stacklevel=2)
     if info.get("mimic") or info.get("couplings"):
         from .joints import attach_couplings
 
@@ -812,16 +861,25 @@ def load_mjcf(path: str | Path, *, floating_base: bool | None = None):
 
 
 def attach_connect_loops(mbm: MultibodyModel) -> None:
-    """Close the loops of ``mbm.params["connect"]`` (MuJoCo ``connect`` equalities, see
-    :func:`pinocchio_from_mujoco`) as point loops (rows ``loop:<equality>:x|y|z``) at
+    """Close the loops of ``mbm.params["connect"]`` (MuJoCo ``connect`` and ``weld``
+    equalities, see :func:`pinocchio_from_mujoco`) as point loops (rows
+    ``loop:<equality>:x|y|z``; a weld's three points ``loop:<equality>:o|x|y:x|y|z``) at
     the nominal configuration, where MuJoCo's compiler closed them."""
     if not mbm.params.get("connect"):
         return
+    from ..exceptions import ConfigError
     from .declare import FrameLoop, attach_frame_loops
 
-    attach_frame_loops(mbm, [FrameLoop(nm, "point", fa, tuple(pa), fb, tuple(pb))
-                             for nm, fa, pa, fb, pb in mbm.params["connect"]],
-                       mbm.params["q_nominal"])
+    try:
+        attach_frame_loops(mbm, [FrameLoop(nm, "point", fa, tuple(pa), fb, tuple(pb))
+                                 for nm, fa, pa, fb, pb in mbm.params["connect"]],
+                           mbm.params["q_nominal"])
+    except ConfigError as exc:  # q_nominal moved onto joint couplings opened them
+        names = sorted({nm.split(":")[0] for nm, *_ in mbm.params.pop("connect")})
+        warnings.warn(f"{mbm.params.get('source', mbm.name)}: MuJoCo connect/weld "
+                      f"equalities {names} are open at the nominal configuration (qpos0 "
+                      f"moved onto the joint couplings: {exc}); roverimpact ignores them",
+                      UserWarning, stacklevel=3)
 
 
 def _demo_free_body() -> MultibodyModel:
