@@ -250,3 +250,29 @@ def test_declared_floating_base_on_a_urdf_that_floats_uses_its_floating_joint(tm
     T_ri, p_ri = _roverimpact_T_c(mbm, q, v, "l3", [0, 0.05, 0], n)
     np.testing.assert_allclose(p_ri, p_mj, atol=1e-12)
     assert T_ri == pytest.approx(T_mj, rel=1e-9)
+
+
+@pytest.mark.parametrize("inertial, said", [
+    ('<inertial><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>',
+     r"has no <mass value=...>"),
+    ('<inertial><origin xyz="0.2 0 0"/><mass value="2"/></inertial>', r"has no <inertia>"),
+], ids=["no-mass", "no-inertia"])
+def test_urdf_inertial_without_mass_or_inertia_is_refused_naming_the_link(tmp_path, inertial,
+                                                                       said):
+    """MuJoCo refuses an <inertial> without <mass> or without <inertia>. Pinocchio's
+    parser dropped the whole <inertial> when the mass was missing (the load then failed
+    as "joints ['j1'] move no mass", about links "without <inertial>") and read a point
+    mass when the inertia was missing (loaded, T_c^- of a point mass, the check skipped).
+    Both are now one error naming the link and the missing element."""
+    f = tmp_path / "r.urdf"
+    f.write_text(f"""<robot name="r">
+  <link name="base">{_inertial(1, .1, .1, .1)}</link>
+  <link name="l1">{inertial}</link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>""")
+    with pytest.raises(ValueError):
+        mujoco.MjModel.from_xml_path(str(f))
+    with pytest.raises(ModelError, match=rf"link 'l1': its <inertial> {said}"):
+        load_robot(f)

@@ -579,9 +579,11 @@ def _check_urdf_tree(root, path: Path) -> None:
 
 
 def _check_urdf_inertias(root, path: Path) -> None:
-    """One ModelError naming the link whose <inertial> is no physical body: a negative mass
-    or a negative principal moment of inertia (Pinocchio builds M with it; MuJoCo refuses
-    the file, so the cross-check is skipped). Tolerance: 1e-6 of the largest principal
+    """One ModelError naming the link whose <inertial> is no physical body or is incomplete:
+    no <mass> (urdfdom drops the <inertial>), no <inertia> (a point mass to Pinocchio, an
+    error to MuJoCo), a negative mass or a negative principal moment of inertia
+    (Pinocchio builds M with it; MuJoCo refuses the file, so the cross-check is skipped).
+    Tolerance: 1e-6 of the largest principal
     moment of the file's links (the rounding of CAD exports: tiago's antenna links have
     -3.5e-8 kg m^2, 6e-8 of tiago's largest; romeo_laas_small's body -0.021, 0.22 of it)."""
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
@@ -591,7 +593,16 @@ def _check_urdf_inertias(root, path: Path) -> None:
         if el is None:
             continue
         mass, inertia = el.find("mass"), el.find("inertia")
-        if mass is not None and float(mass.get("value", 0.0)) < 0.0:
+        if mass is None or mass.get("value") is None:
+            raise ModelError(f"{path}: link {link.get('name')!r}: its <inertial> has no "
+                             "<mass value=...>; the URDF parser drops the whole <inertial> "
+                             "without a word (MuJoCo refuses the file): give the mass in kg")
+        if inertia is None:
+            raise ModelError(f"{path}: link {link.get('name')!r}: its <inertial> has no "
+                             "<inertia>; Pinocchio would read a point mass, MuJoCo refuses "
+                             "the file: give <inertia ixx= ixy= ixz= iyy= iyz= izz=/> "
+                             "(all \"0\" for a point mass)")
+        if float(mass.get("value", 0.0)) < 0.0:
             raise ModelError(f"{path}: link {link.get('name')!r}: <mass value="
                              f"\"{mass.get('value')}\"> is negative")
         if inertia is not None:
