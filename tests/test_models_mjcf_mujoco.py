@@ -526,18 +526,23 @@ def test_load_check_refuses_a_wrong_urdf_inertia_naming_the_link(files, monkeypa
 
 
 def test_urdf_that_mujoco_cannot_compile_loads_without_the_check(tmp_path):
-    """A URDF Pinocchio accepts and MuJoCo refuses (inertia violating the triangle
-    inequality): loaded, check skipped and said so."""
-    (tmp_path / "odd.urdf").write_text("""<robot name="odd">
+    """A URDF Pinocchio accepts and MuJoCo refuses (a floating joint below the root; an
+    inertia violating the triangle inequality is checked now,
+    test_models_urdf_features.py): loaded, check skipped and said so."""
+    inertial = ('<inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" '
+                'ixz="0" iyz="0"/></inertial>')
+    (tmp_path / "odd.urdf").write_text(f"""<robot name="odd">
   <link name="base"/>
-  <link name="arm"><inertial><mass value="1"/>
-    <inertia ixx="1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="arm">{inertial}</link>
   <joint name="j" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
     <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <link name="float">{inertial}</link>
+  <joint name="f" type="floating"><parent link="arm"/><child link="float"/>
+    <origin xyz="0.3 0 0"/></joint>
 </robot>""")
     mbm = load_robot(tmp_path / "odd.urdf")
     assert mbm.params["mujoco_check"].startswith("skipped: MuJoCo cannot compile it")
-    assert mbm.model.nv == 1
+    assert mbm.model.nv == 7
 
 
 def test_urdf_massless_slider_links_are_checked(tmp_path, monkeypatch):

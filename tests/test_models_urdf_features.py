@@ -276,3 +276,29 @@ def test_urdf_inertial_without_mass_or_inertia_is_refused_naming_the_link(tmp_pa
         mujoco.MjModel.from_xml_path(str(f))
     with pytest.raises(ModelError, match=rf"link 'l1': its <inertial> {said}"):
         load_robot(f)
+
+
+def test_urdf_inertia_violating_the_triangle_inequality_is_still_cross_checked(tmp_path):
+    """MuJoCo refuses an inertia with A + B < C (CAD exports have them: the allegro hand's
+    finger links by 20 %), so the load-time M(q) check was skipped for the whole file.
+    Both engines' copies now get the same isotropic addition on that link, just enough
+    for MuJoCo: the check passes on the file as Pinocchio reads it and refuses a model
+    whose violating link is 1 % heavier (compared with MuJoCo's mj_fullM)."""
+    from roverimpact.models.mujoco_check import check_urdf
+
+    text = ARM_URDF.replace(_inertial(.8, .004, .005, .006, o="0 0 0.1"),
+                            _inertial(.8, .001, .0015, .006, .0002, o="0 0 0.1"))
+    f = tmp_path / "violating.urdf"
+    f.write_text(text)
+    with pytest.raises(ValueError, match="A \\+ B >= C"):
+        mujoco.MjModel.from_xml_path(str(f))
+    mbm = load_robot(f)
+    assert mbm.params["mujoco_check"] == "passed"
+    import xml.etree.ElementTree as ET
+
+    wrong = pin.Model(mbm.model)
+    jid = wrong.getJointId("j2")
+    Y = wrong.inertias[jid]
+    wrong.inertias[jid] = pin.Inertia(Y.mass * 1.01, Y.lever, Y.inertia)
+    with pytest.raises(ModelError, match="disagrees with MuJoCo"):
+        check_urdf(f, ET.parse(f).getroot(), wrong, floating=False)

@@ -25,8 +25,11 @@ mass in URDF; no mesh is loaded), ``inertiafromgeom="false"`` (a link without
 joint ``root_joint`` on the root link for a floating base. MuJoCo refuses moving bodies
 without mass or inertia; every moving body of both copies therefore gets the same tiny
 extra inertia (mass ``1e-9`` of the total, inertia ``1e-9`` of the largest), which leaves
-the comparison exact. If MuJoCo cannot compile the file, or a joint has no MuJoCo
-counterpart (planar joints ...), the check is skipped: it never makes a file that
+the comparison exact. MuJoCo also refuses an inertia that violates the triangle inequality
+(``A + B < C``; CAD exports have them): such a link gets the same isotropic addition
+``delta * 1`` in both copies, just enough for MuJoCo (:func:`_restore_triangle`). If
+MuJoCo cannot compile the file (a floating joint below the root ...), or a joint has no
+MuJoCo counterpart (planar joints ...), the check is skipped: it never makes a file that
 Pinocchio can load unloadable.
 """
 
@@ -215,7 +218,7 @@ def _compile_urdf(mujoco, root: ET.Element, floating: bool):
         name = _root_link(root)
         body = spec.body(name) if name else None
         if body is None or name == "world":
-            return None, None, 0.0, 0.0
+            return None, None, 0.0, 0.0, {}
         body.add_freejoint(name="root_joint")
     for el in root.iter("roverimpact_armature"):  # export_urdf's rotor inertia
         joint = spec.joint(el.get("joint"))
@@ -225,6 +228,7 @@ def _compile_urdf(mujoco, root: ET.Element, floating: bool):
                 raise ValueError(f"the armature of joint {el.get('joint')!r} differs between "
                                  "its DoFs; MuJoCo has one per joint")
             joint.armature = arm[0]
+    triangle = _restore_triangle(spec)
     moving = [b for b in spec.bodies if any(True for _ in b.joints)]
     total = sum(float(b.mass) for b in spec.bodies)
     imax = 0.0
@@ -252,7 +256,36 @@ def _compile_urdf(mujoco, root: ET.Element, floating: bool):
             b.inertia = np.full(3, dI)
             ipos = np.zeros(3)
         patch[b.name] = ipos
-    return spec.compile(), patch, dm, dI
+    return spec.compile(), patch, dm, dI, triangle
+
+
+def _restore_triangle(spec) -> dict[str, float]:
+    """Add ``delta`` to the three principal moments of every link whose explicit inertia
+    violates the triangle inequality (``A + B < C``: MuJoCo refuses it; CAD exports have
+    it, the allegro hand's finger links by 20 %), just enough to satisfy it; ``{link:
+    delta}``. ``delta * 1`` (isotropic) is the same tensor change in any frame, so
+    :func:`check_urdf` adds it to Pinocchio's copy too and the comparison stays exact."""
+    out = {}
+    for b in spec.bodies:
+        if not b.explicitinertial:
+            continue
+        fi = np.asarray(b.fullinertia, dtype=float)
+        if np.isfinite(fi[0]):
+            xx, yy, zz, xy, xz, yz = fi
+            ev = np.linalg.eigvalsh([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+        else:
+            ev = np.sort(np.asarray(b.inertia, dtype=float))
+        gap = float(ev[2] - ev[0] - ev[1])
+        if not gap > 0.0:
+            continue
+        delta = gap * (1.0 + 1e-6) + 1e-12
+        if np.isfinite(fi[0]):
+            fi[:3] += delta
+            b.fullinertia = fi
+        else:
+            b.inertia = np.asarray(b.inertia, dtype=float) + delta
+        out[b.name] = delta
+    return out
 
 
 def check_urdf(path: str | Path, root: ET.Element, model, *, floating: bool,
@@ -279,7 +312,7 @@ def check_urdf(path: str | Path, root: ET.Element, model, *, floating: bool,
         return None, "mujoco is not installed"
     try:
         with mujoco_warnings(mujoco):  # about MuJoCo's import of a copy: not shown
-            m, patch, dm, dI = _compile_urdf(mujoco, root, floating)
+            m, patch, dm, dI, triangle = _compile_urdf(mujoco, root, floating)
         if m is None:
             return None, "the root link has no MuJoCo body to float"
     except Exception as exc:  # MuJoCo's URDF importer or compiler refused the file
@@ -314,6 +347,12 @@ def check_urdf(path: str | Path, root: ET.Element, model, *, floating: bool,
             return None, f"joint {jname!r} has no Pinocchio counterpart"
         jid = model.getJointId(jname)
         pm.inertias[jid] = pm.inertias[jid] + pin.Inertia(dm, ipos, dI * np.eye(3))
+    for link, delta in triangle.items():  # the same isotropic delta, wherever the link is
+        if not model.existFrame(link):
+            return None, f"link {link!r} has no Pinocchio frame"
+        jid = model.frames[model.getFrameId(link)].parentJoint
+        pm.inertias[jid] = pm.inertias[jid] + pin.Inertia(0.0, np.zeros(3),
+                                                            delta * np.eye(3))
     _, _, msg = compare_mass_matrices(pm, mp, m, rtol=rtol)
     if msg is not None:
         raise ModelError(f"{path}: Pinocchio's URDF model disagrees with MuJoCo's import of "
