@@ -584,3 +584,134 @@ def test_head_areas_have_no_transient_pressure():
     sternum = next(a for a in safety.BODY_AREAS if a.label == "Sternum")
     assert sternum.p_transient == 240e4
     assert all(a.p_transient == 2 * a.p_qs for a in safety.BODY_AREAS if a.number > 3)
+
+
+# ---------------------------------------------------------------------------------------
+# MuJoCo as the second engine; batches of configurations; degrees; `safety point`
+# ---------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def ur5_mujoco():
+    """(MultibodyModel, mujoco.MjModel) of example-robot-data's UR5: MuJoCo reads the same
+    URDF (visuals and collisions dropped, fixed links kept as bodies so that ``tool0``
+    exists, no inertia from geometry)."""
+    import xml.etree.ElementTree as ET
+
+    mujoco = pytest.importorskip("mujoco")
+    from roverimpact.models.robot_data import example_robot_file
+
+    root = ET.parse(example_robot_file("erd:ur5")).getroot()
+    for link in root.iter("link"):
+        for tag in ("visual", "collision"):
+            for e in link.findall(tag):
+                link.remove(e)
+    ET.SubElement(ET.SubElement(root, "mujoco"), "compiler", fusestatic="false",
+                  discardvisual="true", inertiafromgeom="false", balanceinertia="false")
+    m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    return safety.load_arm("erd:ur5"), m
+
+
+def _mujoco_masses(m, qpos, body, p_body, U):
+    """Khatib's m_u = 1 / (u^T J_p M^-1 J_p^T u) from MuJoCo alone: ``mj_fullM`` for M,
+    ``mj_jac`` for J_p at the point ``p_body`` of ``body`` (body coordinates)."""
+    import mujoco
+
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    mujoco.mj_forward(m, d)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)
+    jacp = np.zeros((3, m.nv))
+    mujoco.mj_jac(m, d, jacp, None, d.xpos[b] + d.xmat[b].reshape(3, 3) @ p_body, b)
+    return 1.0 / np.einsum("ki,ij,kj->k", U, jacp @ np.linalg.solve(M, jacp.T), U)
+
+
+def test_batch_of_configurations_matches_one_at_a_time_and_mujoco(ur5_mujoco):
+    """q (4, 2, nq) at the UR5's tool0 with a TCP offset, 3 directions: one call gives
+    (4, 2, 3), equal to the configurations one at a time and to MuJoCo's
+    mj_fullM / mj_jac (a batch was refused: "q must have shape (6,)")."""
+    mbm, m = ur5_mujoco
+    rng = np.random.default_rng(7)
+    q = rng.uniform(-2.5, 2.5, (4, 2, 6))
+    U = rng.normal(size=(3, 3))
+    U /= np.linalg.norm(U, axis=1)[:, None]
+    tcp = np.array([0.0, 0.0, 0.12])
+    got = safety.point_effective_mass(mbm, q, "tool0", U, point=tcp)
+    assert got.shape == (4, 2, 3)
+    one = np.array([safety.point_effective_mass(mbm, qi, "tool0", U, point=tcp)
+                    for qi in q.reshape(-1, 6)]).reshape(4, 2, 3)
+    np.testing.assert_allclose(got, one, rtol=1e-12)
+    ref = np.array([_mujoco_masses(m, qi, "tool0", tcp, U)
+                    for qi in q.reshape(-1, 6)]).reshape(4, 2, 3)
+    np.testing.assert_allclose(got, ref, rtol=1e-9)
+    single = safety.point_effective_mass(mbm, q[:, 0], "tool0", U[0], point=tcp)
+    assert single.shape == (4,)
+    np.testing.assert_allclose(single, ref[:, 0, 0], rtol=1e-9)
+
+
+def test_q_in_degrees_is_refused_naming_the_joint(ur5_mujoco, capsys):
+    """UR5 at (0, -90, 90, -90, -90, 0) typed in degrees: read as radians it printed a
+    table (exit 0) for a pose 90 rad away. The URDF limits (+-2 pi) refuse it, naming the
+    joint; with --deg the table is MuJoCo's at np.radians of the same numbers."""
+    import json
+
+    from roverimpact.cli import main
+
+    mbm, m = ur5_mujoco
+    deg = [0, -90, 90, -90, -90, 0]
+    with pytest.raises(InputError, match=r"'shoulder_lift_joint' = -90 rad is outside its "
+                                         r"limits \[-6.28319, 6.28319\].*degrees"):
+        safety.point_effective_mass(mbm, deg, "tool0", [1, 0, 0])
+    q_s = ",".join(str(x) for x in deg)
+    assert main(["safety", "arm", "erd:ur5", "--q", q_s]) == 2
+    err = capsys.readouterr().err
+    assert "outside its limits" in err and "--deg" in err and "Traceback" not in err
+    assert main(["safety", "point", "erd:ur5", "--frame", "tool0", "--direction", "1,0,0",
+                 "--q", q_s, "--deg", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(out["q"], np.radians(deg), rtol=1e-15)
+    ref = _mujoco_masses(m, np.radians(deg), "tool0", np.zeros(3), np.eye(3)[:1])
+    assert out["directions"][0]["m_u"] == pytest.approx(ref[0], rel=1e-9)
+    with pytest.raises(InputError, match="q in degrees takes 6"):
+        safety.arm.arm_configuration(mbm, [0.0] * 5, deg=True)
+
+
+def test_cli_point(ur5_mujoco, capsys):
+    """`safety point`: the exact mass of a named frame + offset along given directions
+    (MuJoCo's), v_max = F_T / sqrt(mu K) with mu = (1/m_H + 1/m_u)^-1 by hand (hand:
+    280 N, 75 N/mm, 0.6 kg), the ISO m_R = M/2 + m_L beside it; bad input is one line and
+    exit 2."""
+    import json
+
+    from roverimpact.cli import main
+
+    _, m = ur5_mujoco
+    q = [0.3, -1.2, 1.4, -0.5, 1.2, 0.3]
+    args = ["safety", "point", "erd:ur5", "--frame", "wrist_3_link", "--point", "0,0.1,0",
+            "--direction", "1,0,0", "--direction", "0,2,2", "--q", ",".join(map(str, q)),
+            "--region", "hands_fingers", "--payload", "1"]
+    assert main([*args, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    U = np.array([[1, 0, 0], [0, 1, 1]]) / np.array([[1.0], [np.sqrt(2)]])
+    ref = _mujoco_masses(m, q, "wrist_3_link", np.array([0, 0.1, 0]), U)
+    got = [r["m_u"] for r in out["directions"]]
+    np.testing.assert_allclose(got, ref, rtol=1e-9)
+    for r, m_u in zip(out["directions"], ref, strict=True):
+        mu = 1 / (1 / 0.6 + 1 / m_u)
+        assert r["v_max"] == pytest.approx(280 / np.sqrt(mu * 75e3), rel=1e-12)
+        assert r["m_R_iso"] == pytest.approx(out["M_total"] / 2 + 1, rel=1e-15)
+    assert main(args) == 0
+    assert "ISO/TS 15066: m_R = M/2 + m_L" in capsys.readouterr().out
+    for bad, msg in (({"--frame": "tool"}, "no frame 'tool'"),
+                     ({"--direction": "0,0,0"}, "finite and non-zero"),
+                     ({"--direction": "1,0"}, "--direction must be 3"),
+                     ({"--region": "hand"}, "unknown body region 'hand'"),
+                     ({"--payload": "-1"}, "--payload (payload m_L) must be")):
+        a = list(args)
+        for k, v in bad.items():
+            a[a.index(k) + 1] = v
+        assert main(a) == 2
+        err = capsys.readouterr().err
+        assert msg in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

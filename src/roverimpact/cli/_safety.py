@@ -24,6 +24,36 @@ def _check_mass(value: float | None, option: str, what: str, *, allow_zero: bool
                          f"{'>=' if allow_zero else '>'} 0 kg, got {value:g}")
 
 
+def _numbers(text: str, option: str, count: int | None = None) -> list[float]:
+    """Comma-separated numbers of an option, or one InputError naming it."""
+    from ..exceptions import InputError
+
+    try:
+        values = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise InputError(f"{option} must be comma-separated numbers, got {text!r}") from None
+    if count is not None and len(values) != count:
+        raise InputError(f"{option} must be {count} comma-separated numbers, got {text!r}")
+    return values
+
+
+def _configuration(robot: str, mbm, q: str | None, deg: bool) -> np.ndarray:
+    """``--q`` (``--deg``) of ``safety arm`` / ``safety point``, else the ready pose of a
+    known robot, else Pinocchio's neutral configuration."""
+    import pinocchio as pin
+
+    from ..exceptions import InputError
+    from ..safety.arm import arm_configuration, ready_pose
+
+    if q is not None:
+        return arm_configuration(mbm, _numbers(q, "--q"), deg=deg)
+    if deg:
+        raise InputError("--deg applies to the values of --q: give --q too")
+    if (pose := ready_pose(robot)) is not None:
+        return np.array(pose)
+    return pin.neutral(mbm.model)
+
+
 def _fmt_v(region, m_R) -> str:
     from ..safety import (
         max_transient_speed,
@@ -99,6 +129,8 @@ def arm_cmd(
                           "value per joint (rad / m; continuous joints by angle); default: "
                           "the ready pose for known robots (either spelling), else the "
                           "neutral one."),
+    deg: bool = typer.Option(False, "--deg", help="--q gives one value per joint, angles in "
+                             "degrees (prismatic joints in m)."),
     payload: float = typer.Option(0.0, "--payload", help="Payload m_L [kg] (ISO formula)."),
     region: str = typer.Option("chest", "--region", help="Body region for the speed limits."),
     points: str = typer.Option("com", "--points", help="'com' or 'origin' of each link."),
@@ -108,24 +140,11 @@ def arm_cmd(
 ) -> None:
     """Per link: the standard's m_R = M/2 + m_L vs the exact effective mass, and v_max."""
     one_format(as_json, as_csv)
-    import pinocchio as pin
-
-    from ..exceptions import InputError
     from ..safety import arm_effective_masses, load_arm
-    from ..safety.arm import arm_configuration, ready_pose
 
     _check_mass(payload, "--payload", "payload m_L", allow_zero=True)
     mbm = load_arm(robot)
-    if q is not None:
-        try:
-            values = [float(x) for x in q.split(",")]
-        except ValueError:
-            raise InputError(f"--q must be comma-separated numbers, got {q!r}") from None
-        qv = arm_configuration(mbm, values)
-    elif (pose := ready_pose(robot)) is not None:
-        qv = np.array(pose)
-    else:
-        qv = pin.neutral(mbm.model)
+    qv = _configuration(robot, mbm, q, deg)
     df = arm_effective_masses(mbm, qv, payload=payload, points=points, region=region)
     if as_json:
         print_json({"robot": robot, "points": points, "region": region, "payload": payload,
@@ -150,3 +169,75 @@ def arm_cmd(
     console.print(tab)
     console.print(f"M (moving parts) = {df.attrs['M_total']:.3f} kg, payload {payload:g} kg, "
                   f"q = {np.round(qv, 4).tolist()}", highlight=False)
+
+
+@safety_app.command("point")
+def point_cmd(
+    robot: str = typer.Argument(..., help="URDF file or erd:<name> (example-robot-data)."),
+    frame: str = typer.Option(..., "--frame", help="Frame the contact point is fixed to: a "
+                              "link or a tool frame (panda_hand_tcp, tool0, ...)."),
+    direction: list[str] = typer.Option(..., "--direction", help="Contact direction "
+                                        "x,y,z in world axes (normalised); repeat the "
+                                        "option for several."),
+    point: str = typer.Option(None, "--point", help="Contact point x,y,z [m] in the "
+                              "frame's coordinates; default the frame origin."),
+    q: str = typer.Option(None, "--q", help="Configuration, as in `safety arm --q`; "
+                          "default: the ready pose for known robots, else the neutral one."),
+    deg: bool = typer.Option(False, "--deg", help="--q gives one value per joint, angles in "
+                             "degrees (prismatic joints in m)."),
+    payload: float = typer.Option(0.0, "--payload", help="Payload m_L [kg] of the ISO "
+                                  "formula (not added to the exact mass)."),
+    region: str = typer.Option("chest", "--region", help="Body region for the speed limits."),
+    as_json: bool = typer.Option(False, "--json", help="Print the table as JSON (null for an "
+                                 "unbounded mass or a speed that is not permitted)."),
+    as_csv: bool = typer.Option(False, "--csv", help="Print the table as CSV."),
+) -> None:
+    """Exact effective mass of one point of an arm along directions, and v_max (vs ISO)."""
+    one_format(as_json, as_csv)
+    from ..safety import (
+        body_region,
+        iso_robot_mass,
+        load_arm,
+        max_transient_speed,
+        point_effective_mass,
+    )
+
+    _check_mass(payload, "--payload", "payload m_L", allow_zero=True)
+    reg = body_region(region)
+    U = np.array([_numbers(d, "--direction", 3) for d in direction])
+    p = None if point is None else _numbers(point, "--point", 3)
+    mbm = load_arm(robot)
+    qv = _configuration(robot, mbm, q, deg)
+    m_u = np.atleast_1d(point_effective_mass(mbm, qv, frame, U, point=p))
+    U = U / np.linalg.norm(U, axis=1)[:, None]
+    M_total = float(sum(i.mass for i in mbm.model.inertias[1:]))
+    m_iso = float(iso_robot_mass(M_total, payload))
+    ok = reg.F_transient is not None
+    v_iso = float(max_transient_speed(reg, m_iso)) if ok else None
+    v = max_transient_speed(reg, m_u) if ok else np.full(len(m_u), np.nan)
+    recs = [{"direction": u.tolist(), "m_u": float(m), "v_max": float(vi), "m_R_iso": m_iso,
+             "v_iso": v_iso} for u, m, vi in zip(U, m_u, np.atleast_1d(v), strict=True)]
+    if as_json:
+        print_json({"robot": robot, "frame": frame, "point": p, "region": reg.name,
+                    "payload": payload, "q": qv, "M_total": M_total, "directions": recs})
+        return
+    if as_csv:
+        print_csv(["ux", "uy", "uz", "m_u", "v_max", "m_R_iso", "v_iso"],
+                  ([*r["direction"], r["m_u"], r["v_max"], m_iso, v_iso] for r in recs))
+        return
+
+    def f(x):
+        return "-" if x is None or math.isnan(x) else "inf" if math.isinf(x) else f"{x:.3f}"
+
+    where = frame if p is None else f"{frame} + {p}"
+    tab = new_table(f"{robot}: {where}, region {reg.name}", "direction u (world)",
+                    "m_u [kg]", "v_max [m/s]")
+    for r in recs:
+        tab.add_row(", ".join(f"{x:.3f}" for x in r["direction"]), f(r["m_u"]),
+                    f(r["v_max"]))
+    tab.caption = ("inf: the point cannot move along u (v_max for mu = m_H). "
+                   + ("" if ok else f"-: transient contact not permitted for {reg.name}."))
+    console.print(tab)
+    console.print(f"ISO/TS 15066: m_R = M/2 + m_L = {M_total:.3f}/2 + {payload:g} = "
+                  f"{m_iso:.3f} kg, v_max = {f(v_iso)} m/s; q = "
+                  f"{np.round(qv, 4).tolist()}", highlight=False)

@@ -90,10 +90,10 @@ def ready_pose(source: str | Path) -> list[float] | None:
     return None
 
 
-def _arm(model, q):
+def _arm(model, q, *, batch: bool = False):
     """(ConstraintSet of the model's coupling rows, checked q) from a ``MultibodyModel``, a
     robot file (:func:`load_arm`) or a ``pinocchio.Model`` (which carries no couplings:
-    every joint is independent)."""
+    every joint is independent). ``q`` is (nq,), or (..., nq) with ``batch``."""
     import pinocchio as pin
 
     from ..models import MultibodyModel
@@ -113,16 +113,51 @@ def _arm(model, q):
     cs = ConstraintSet(model, held)
     nq = model.model.nq
     q = as_array(q, "q", min_ndim=1)
-    if q.shape != (nq,):
+    if q.shape[-1:] != (nq,) or (q.ndim != 1 and not batch):
         two = _two_numbers(model)
-        raise InputError(f"q must have shape ({nq},) for this model{f' ({two})' if two else ''}"
+        shape = f"({nq},)" + (f" or (..., {nq}) for a batch" if batch else "")
+        raise InputError(f"q must have shape {shape} for this model{f' ({two})' if two else ''}"
                          f", got {q.shape}")
     check_configuration(model.model, q)  # NaN, a (cos, sin) pair or quaternion not unit
+    _check_limits(model, q)
     if model.loop_closure is not None:  # a mimic joint at its leader's value, loops closed
         from ..scenario.build import check_loop_closed
 
-        check_loop_closed(model, *model.loop_closure(q))
+        for qi in q.reshape(-1, nq):
+            check_loop_closed(model, *model.loop_closure(qi))
     return cs, q
+
+
+#: Pinocchio's "no limit" (the largest double, a joint added without limits); inf too.
+_NO_LIMIT = 1e300
+
+
+def _check_limits(mbm, q) -> None:
+    """Refuse ``q`` (..., nq) outside the position limits of a revolute or prismatic joint
+    (the URDF's ``<limit lower upper>``; joints without limits, or with ``lower >= upper``,
+    are not checked): a configuration in degrees read as radians is the usual cause."""
+    from ..models.joints import joint_coordinate
+
+    model = mbm.model
+    lo, hi = np.asarray(model.lowerPositionLimit), np.asarray(model.upperPositionLimit)
+    flat = q.reshape(-1, model.nq)
+    for name in model.names[1:]:
+        jc = joint_coordinate(mbm, name)
+        if jc.kind not in ("revolute", "prismatic") or jc.nq != 1:
+            continue
+        i = jc.idx_q
+        if not (-_NO_LIMIT < lo[i] < hi[i] < _NO_LIMIT):  # none, or lower >= upper
+            continue
+        tol = 1e-9 * max(1.0, abs(lo[i]), abs(hi[i]))
+        bad = (lo[i] - flat[:, i] > tol) | (flat[:, i] - hi[i] > tol)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            where = f" (configuration {k})" if q.ndim > 1 else ""
+            unit = "rad" if jc.kind == "revolute" else "m"
+            hint = ("; angles are in radians: for degrees use numpy.radians, or --deg on "
+                    "the command line" if jc.kind == "revolute" else "")
+            raise InputError(f"q{where}: joint {name!r} = {flat[k, i]:g} {unit} is outside "
+                             f"its limits [{lo[i]:g}, {hi[i]:g}] {unit}{hint}")
 
 
 def _two_numbers(mbm) -> str:
@@ -137,7 +172,7 @@ def _two_numbers(mbm) -> str:
     return f"a continuous joint takes two numbers, cos theta and sin theta: {', '.join(cont)}"
 
 
-def arm_configuration(model, values) -> np.ndarray:
+def arm_configuration(model, values, *, deg: bool = False) -> np.ndarray:
     """The configuration ``q`` (nq,) of a list of numbers, as ``safety arm --q`` reads it.
 
     Parameters
@@ -149,11 +184,14 @@ def arm_configuration(model, values) -> np.ndarray:
         ``nq``, one value per joint in the model's order [rad or m; continuous joints by
         angle], set by name as ``[configuration.joints]`` of a scenario sets them (a mimic
         joint's value must agree with its leader's).
+    deg : bool, optional
+        The values are one per joint, the angles of revolute and continuous joints in
+        degrees (prismatic joints stay in m): ``safety arm --deg``.
 
     Raises
     ------
     InputError
-        A count that is neither.
+        A count that is neither (with ``deg``: not one value per joint).
     """
     from ..models.joints import joint_coordinate
     from ..scenario.build import configuration
@@ -162,10 +200,18 @@ def arm_configuration(model, values) -> np.ndarray:
     names = list(model.model.names[1:])
     values = as_array(values, "q", min_ndim=1)
     nq = model.model.nq
-    if values.shape == (nq,):
+    kinds = [joint_coordinate(model, nm) for nm in names]
+    one_dof = all(jc.one_dof for jc in kinds)
+    if deg:
+        if not (one_dof and values.shape == (len(names),)):
+            what = (f"{len(names)} (one per joint: {', '.join(names)})" if one_dof else
+                    "one value per joint, for an arm of 1-DoF joints only")
+            raise InputError(f"q in degrees takes {what}, got {values.size} numbers")
+        values = np.array([np.radians(x) if jc.kind in ("revolute", "continuous") else x
+                           for jc, x in zip(kinds, values, strict=True)])
+    elif values.shape == (nq,):
         return values
-    per_joint = len(names) != nq and all(joint_coordinate(model, nm).one_dof
-                                         for nm in names)
+    per_joint = (len(names) != nq or deg) and one_dof
     if not (per_joint and values.shape == (len(names),)):
         alt = (f", or {len(names)} (one value per joint: {', '.join(names)}; continuous "
                "joints by angle)") if per_joint else ""
@@ -229,12 +275,17 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
         robot file or ``"erd:<name>"`` that :func:`load_arm` loads. A bare
         ``pinocchio.Model`` carries no couplings: a ``<mimic>`` joint would move on its
         own.
-    q : (nq,) array_like
-        Configuration.
+    q : (nq,) or (..., nq) array_like
+        Configuration [rad, m], or a batch of them: Pinocchio evaluates ``M`` and ``J_p``
+        per configuration, the masses of the whole batch are one call of
+        :func:`~roverimpact.energy.row_masses`. A value outside the limits of a revolute
+        or prismatic joint (the URDF's ``<limit>``) is refused: angles given in degrees
+        are the usual cause.
     link : str
         Name of a Pinocchio frame (a link/body or any frame fixed to one).
     direction : (3,) or (k, 3) array_like
-        Contact direction(s) in world axes; normalised here.
+        Contact direction(s) in world axes; normalised here. The same directions at every
+        configuration of a batch.
     point : (3,) array_like, optional
         Contact point in the frame's coordinates [m]; default the frame origin.
     rtol : float, optional
@@ -243,11 +294,13 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
 
     Returns
     -------
-    m_u : float or (k,) ndarray
-        [kg]; ``inf`` where the point cannot move along the direction.
+    m_u : float, (k,), (...) or (..., k) ndarray
+        [kg]; ``inf`` where the point cannot move along the direction (a singular
+        configuration along ``u``). The batch axes of ``q`` come first, then ``k`` for a
+        (k, 3) ``direction``.
     """
     rtol = check_rtol(rtol)
-    cs, q = _arm(model, q)
+    cs, q = _arm(model, q, batch=True)
     model = cs.mbm.model
     u = as_array(direction, "direction", min_ndim=1)
     single = u.ndim == 1
@@ -262,14 +315,26 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
     u = u / big[:, None]
     u = u / np.linalg.norm(u, axis=1)[:, None]
     fid, p = _resolve_point(model, link, point)
-    data, M, B = _kinematics(cs, q)
-    Jp = _jacobian(model, data, fid, p)
-    A = u @ Jp  # (k, nv)
-    moving = np.linalg.norm(A, axis=1) > rtol * max(np.linalg.norm(Jp), 1e-300)
-    out = np.full(len(u), np.inf)
+    batch = q.shape[:-1]
+    Ms, As, Bs, moving = [], [], [], []
+    for qi in q.reshape(-1, model.nq):
+        data, M, B = _kinematics(cs, qi)
+        Jp = _jacobian(model, data, fid, p)
+        A = u @ Jp  # (k, nv)
+        Ms.append(M)
+        As.append(A)
+        Bs.append(B)
+        moving.append(np.linalg.norm(A, axis=1) > rtol * max(np.linalg.norm(Jp), 1e-300))
+    moving = np.array(moving)  # (b, k)
+    out = np.full(moving.shape, np.inf)
     if moving.any():
-        out[moving] = row_masses(M, A[moving], B)[0]
-    return float(out[0]) if single else out
+        bi, ki = np.nonzero(moving)
+        M, A, B = np.array(Ms), np.array(As), np.array(Bs)
+        out[bi, ki] = row_masses(M[bi], A[bi, ki], B[bi] if B.shape[1] else None)[0]
+    out = out.reshape((*batch, len(u)))
+    if single:
+        out = out[..., 0]
+    return float(out) if out.ndim == 0 else out
 
 
 def _link_points(model, which: str):
