@@ -442,6 +442,8 @@ CASES = [
     ("safety-unknown", ["safety", "nope"], [], "nope", None),
     ("safety-arm-degrees", ["safety", "arm", "erd:ur5", "--q", "0,-90,90,0,0,0"], [],
      "outside its limits", None),
+    ("safety-arm-neutral-outside-limits", ["safety", "arm", "erd:panda_collision"], [],
+     "neutral configuration (0 for each joint): joint 'panda_joint4'", None),
     ("safety-arm-deg-count", ["safety", "arm", "erd:ur5", "--q", "0,1", "--deg"], [],
      "q in degrees takes 6", None),
     ("safety-point-frame", ["safety", "point", "erd:ur5", "--frame", "tool", "--direction", "1,0,0"], [],

@@ -43,7 +43,7 @@ def _configuration(robot: str, mbm, q: str | None, deg: bool) -> np.ndarray:
     import pinocchio as pin
 
     from ..exceptions import InputError
-    from ..safety.arm import arm_configuration, ready_pose
+    from ..safety.arm import arm_configuration, check_joint_limits, ready_pose
 
     if q is not None:
         return arm_configuration(mbm, _numbers(q, "--q"), deg=deg)
@@ -51,7 +51,10 @@ def _configuration(robot: str, mbm, q: str | None, deg: bool) -> np.ndarray:
         raise InputError("--deg applies to the values of --q: give --q too")
     if (pose := ready_pose(robot)) is not None:
         return np.array(pose)
-    return pin.neutral(mbm.model)
+    q0 = pin.neutral(mbm.model)
+    check_joint_limits(mbm, q0, "without --q, Pinocchio's neutral configuration (0 for "
+                       "each joint)", "; give --q")
+    return q0
 
 
 def _fmt_v(region, m_R) -> str:

@@ -119,7 +119,7 @@ def _arm(model, q, *, batch: bool = False):
         raise InputError(f"q must have shape {shape} for this model{f' ({two})' if two else ''}"
                          f", got {q.shape}")
     check_configuration(model.model, q)  # NaN, a (cos, sin) pair or quaternion not unit
-    _check_limits(model, q)
+    check_joint_limits(model, q)
     if model.loop_closure is not None:  # a mimic joint at its leader's value, loops closed
         from ..scenario.build import check_loop_closed
 
@@ -132,10 +132,12 @@ def _arm(model, q, *, batch: bool = False):
 _NO_LIMIT = 1e300
 
 
-def _check_limits(mbm, q) -> None:
+def check_joint_limits(mbm, q, what: str = "q", hint: str | None = None) -> None:
     """Refuse ``q`` (..., nq) outside the position limits of a revolute or prismatic joint
     (the URDF's ``<limit lower upper>``; joints without limits, or with ``lower >= upper``,
-    are not checked): a configuration in degrees read as radians is the usual cause."""
+    are not checked): a configuration in degrees read as radians is the usual cause.
+    ``what`` names ``q`` in the message, ``hint`` (default: the one about degrees) ends
+    it."""
     from ..models.joints import joint_coordinate
 
     model = mbm.model
@@ -154,9 +156,10 @@ def _check_limits(mbm, q) -> None:
             k = int(np.flatnonzero(bad)[0])
             where = f" (configuration {k})" if q.ndim > 1 else ""
             unit = "rad" if jc.kind == "revolute" else "m"
-            hint = ("; angles are in radians: for degrees use numpy.radians, or --deg on "
-                    "the command line" if jc.kind == "revolute" else "")
-            raise InputError(f"q{where}: joint {name!r} = {flat[k, i]:g} {unit} is outside "
+            if hint is None:
+                hint = ("; angles are in radians: for degrees use numpy.radians, or --deg "
+                        "on the command line" if jc.kind == "revolute" else "")
+            raise InputError(f"{what}{where}: joint {name!r} = {flat[k, i]:g} {unit} is outside "
                              f"its limits [{lo[i]:g}, {hi[i]:g}] {unit}{hint}")
 
 
