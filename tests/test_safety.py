@@ -591,11 +591,11 @@ def test_head_areas_have_no_transient_pressure():
 # ---------------------------------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def ur5_mujoco():
-    """(MultibodyModel, mujoco.MjModel) of example-robot-data's UR5: MuJoCo reads the same
-    URDF (visuals and collisions dropped, fixed links kept as bodies so that ``tool0``
-    exists, no inertia from geometry)."""
+def _ur5_in_mujoco(payload=None):
+    """MuJoCo's model of example-robot-data's UR5 URDF (visuals and collisions dropped,
+    fixed links kept as bodies so that ``tool0`` exists, no inertia from geometry);
+    ``payload=(mass, xyz)``: a link of that mass at ``xyz`` of tool0 (a point mass, its
+    inertia 1e-9 kg m^2)."""
     import xml.etree.ElementTree as ET
 
     mujoco = pytest.importorskip("mujoco")
@@ -606,10 +606,26 @@ def ur5_mujoco():
         for tag in ("visual", "collision"):
             for e in link.findall(tag):
                 link.remove(e)
+    if payload is not None:
+        mass, xyz = payload
+        link = ET.SubElement(root, "link", name="payload")
+        inertial = ET.SubElement(link, "inertial")
+        ET.SubElement(inertial, "mass", value=str(mass))
+        ET.SubElement(inertial, "inertia", ixx="1e-9", iyy="1e-9", izz="1e-9", ixy="0",
+                      ixz="0", iyz="0")
+        joint = ET.SubElement(root, "joint", name="payload_joint", type="fixed")
+        ET.SubElement(joint, "parent", link="tool0")
+        ET.SubElement(joint, "child", link="payload")
+        ET.SubElement(joint, "origin", xyz=" ".join(map(str, xyz)))
     ET.SubElement(ET.SubElement(root, "mujoco"), "compiler", fusestatic="false",
                   discardvisual="true", inertiafromgeom="false", balanceinertia="false")
-    m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
-    return safety.load_arm("erd:ur5"), m
+    return mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+
+
+@pytest.fixture(scope="module")
+def ur5_mujoco():
+    """(MultibodyModel, mujoco.MjModel) of example-robot-data's UR5, the same URDF."""
+    return safety.load_arm("erd:ur5"), _ur5_in_mujoco()
 
 
 def _mujoco_masses(m, qpos, body, p_body, U):
@@ -691,7 +707,7 @@ def test_cli_point(ur5_mujoco, capsys):
     q = [0.3, -1.2, 1.4, -0.5, 1.2, 0.3]
     args = ["safety", "point", "erd:ur5", "--frame", "wrist_3_link", "--point", "0,0.1,0",
             "--direction", "1,0,0", "--direction", "0,2,2", "--q", ",".join(map(str, q)),
-            "--region", "hands_fingers", "--payload", "1"]
+            "--region", "hands_fingers", "--payload", "0"]
     assert main([*args, "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     U = np.array([[1, 0, 0], [0, 1, 1]]) / np.array([[1.0], [np.sqrt(2)]])
@@ -701,7 +717,7 @@ def test_cli_point(ur5_mujoco, capsys):
     for r, m_u in zip(out["directions"], ref, strict=True):
         mu = 1 / (1 / 0.6 + 1 / m_u)
         assert r["v_max"] == pytest.approx(280 / np.sqrt(mu * 75e3), rel=1e-12)
-        assert r["m_R_iso"] == pytest.approx(out["M_total"] / 2 + 1, rel=1e-15)
+        assert r["m_R_iso"] == pytest.approx(out["M_total"] / 2, rel=1e-15)
     assert main(args) == 0
     assert "ISO/TS 15066: m_R = M/2 + m_L" in capsys.readouterr().out
     for bad, msg in (({"--frame": "tool"}, "no frame 'tool'"),
@@ -715,3 +731,51 @@ def test_cli_point(ur5_mujoco, capsys):
         assert main(a) == 2
         err = capsys.readouterr().err
         assert msg in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_payload_is_a_point_mass_in_the_exact_model(ur5_mujoco, capsys):
+    """payload= adds m_L at the payload point (M + m_L J_L^T J_L): MuJoCo with a 1.2 kg
+    link at tool0 + (0, 0, 0.05) gives the same masses at wrist_3_link + (0, 0.1, 0)
+    (1e-7: its 1e-9 inertia), and the lever rule of one link by hand,
+    m_u = (m l^2 + m_L r_L^2) / r^2. `safety point --payload` used m_L only in the
+    ISO number (the exact mass of the arm without it)."""
+    import json
+
+    from roverimpact.cli import main
+
+    mbm, m0 = ur5_mujoco
+    m = _ur5_in_mujoco((1.2, (0, 0, 0.05)))
+    q = np.array([0.3, -1.2, 1.4, -0.5, 1.2, 0.3])
+    U = np.random.default_rng(3).normal(size=(4, 3))
+    U /= np.linalg.norm(U, axis=1)[:, None]
+    p = np.array([0, 0.1, 0])
+    got = safety.point_effective_mass(mbm, q, "wrist_3_link", U, point=p, payload=1.2,
+                                      payload_frame="tool0", payload_point=[0, 0, 0.05])
+    ref = _mujoco_masses(m, q, "wrist_3_link", p, U)
+    np.testing.assert_allclose(got, ref, rtol=1e-7)
+    assert np.all(got > _mujoco_masses(m0, q, "wrist_3_link", p, U))
+    assert main(["safety", "point", "erd:ur5", "--frame", "wrist_3_link", "--point", "0,0.1,0",
+                 "--direction", ",".join(map(str, U[0])), "--q", ",".join(map(str, q)),
+                 "--payload", "1.2", "--payload-frame", "tool0", "--payload-point",
+                 "0,0,0.05", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["directions"][0]["m_u"] == pytest.approx(ref[0], rel=1e-7)
+    # one link about z: point mass m at l, payload m_L at r_L, contact at r (perpendicular)
+    mass, l, m_L, r_L, r = 3.0, 0.8, 1.5, 0.6, 0.5
+    model = pin.Model()
+    j = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "j")
+    model.appendBodyToJoint(j, pin.Inertia(mass, np.array([l, 0, 0]), np.zeros((3, 3))),
+                            pin.SE3.Identity())
+    model.addBodyFrame("link", j, pin.SE3.Identity(), 0)
+    u = [-np.sin(0.3), np.cos(0.3), 0]
+    assert safety.point_effective_mass(model, [0.3], "link", u, point=[r, 0, 0], payload=m_L,
+                                       payload_point=[r_L, 0, 0]) == pytest.approx(
+        (mass * l**2 + m_L * r_L**2) / r**2, rel=1e-12)
+    assert safety.point_effective_mass(model, [0.3], "link", u, point=[r, 0, 0],
+                                       payload=m_L) == pytest.approx(
+        (mass * l**2 + m_L * r**2) / r**2, rel=1e-12)  # default: at the contact point
+    for bad in (-1.0, np.nan, [1.0, 2.0]):
+        with pytest.raises(InputError, match="payload must be one finite number >= 0"):
+            safety.point_effective_mass(model, [0.3], "link", u, payload=bad)
+    with pytest.raises(ModelError, match="no frame 'nope'"):
+        safety.point_effective_mass(model, [0.3], "link", u, payload=1.0, payload_frame="nope")

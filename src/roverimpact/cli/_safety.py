@@ -188,8 +188,13 @@ def point_cmd(
                           "default: the ready pose for known robots, else the neutral one."),
     deg: bool = typer.Option(False, "--deg", help="--q gives one value per joint, angles in "
                              "degrees (prismatic joints in m)."),
-    payload: float = typer.Option(0.0, "--payload", help="Payload m_L [kg] of the ISO "
-                                  "formula (not added to the exact mass)."),
+    payload: float = typer.Option(0.0, "--payload", help="Payload m_L [kg]: in the ISO "
+                                  "m_R = M/2 + m_L, and a point mass in the exact model."),
+    payload_frame: str = typer.Option(None, "--payload-frame", help="Frame the payload is "
+                                      "fixed to; default --frame."),
+    payload_point: str = typer.Option(None, "--payload-point", help="Payload's centre of "
+                                      "mass x,y,z [m] in its frame; default --point without "
+                                      "--payload-frame, else that frame's origin."),
     region: str = typer.Option("chest", "--region", help="Body region for the speed limits."),
     as_json: bool = typer.Option(False, "--json", help="Print the table as JSON (null for an "
                                  "unbounded mass or a speed that is not permitted)."),
@@ -211,7 +216,10 @@ def point_cmd(
     p = None if point is None else _numbers(point, "--point", 3)
     mbm = load_arm(robot)
     qv = _configuration(robot, mbm, q, deg)
-    m_u = np.atleast_1d(point_effective_mass(mbm, qv, frame, U, point=p))
+    p_L = None if payload_point is None else _numbers(payload_point, "--payload-point", 3)
+    m_u = np.atleast_1d(point_effective_mass(mbm, qv, frame, U, point=p, payload=payload,
+                                             payload_frame=payload_frame,
+                                             payload_point=p_L))
     U = U / np.linalg.norm(U, axis=1)[:, None]
     M_total = float(sum(i.mass for i in mbm.model.inertias[1:]))
     m_iso = float(iso_robot_mass(M_total, payload))
@@ -222,7 +230,8 @@ def point_cmd(
              "v_iso": v_iso} for u, m, vi in zip(U, m_u, np.atleast_1d(v), strict=True)]
     if as_json:
         print_json({"robot": robot, "frame": frame, "point": p, "region": reg.name,
-                    "payload": payload, "q": qv, "M_total": M_total, "directions": recs})
+                    "payload": payload, "payload_frame": payload_frame or frame,
+                    "payload_point": p_L, "q": qv, "M_total": M_total, "directions": recs})
         return
     if as_csv:
         print_csv(["ux", "uy", "uz", "m_u", "v_max", "m_R_iso", "v_iso"],
@@ -241,6 +250,10 @@ def point_cmd(
     tab.caption = ("inf: the point cannot move along u (v_max for mu = m_H). "
                    + ("" if ok else f"-: transient contact not permitted for {reg.name}."))
     console.print(tab)
+    if payload:
+        console.print(f"payload {payload:g} kg at {payload_frame or frame}"
+                      f"{'' if p_L is None else f' + {p_L}'} in the exact model",
+                      highlight=False)
     console.print(f"ISO/TS 15066: m_R = M/2 + m_L = {M_total:.3f}/2 + {payload:g} = "
                   f"{m_iso:.3f} kg, v_max = {f(v_iso)} m/s; q = "
                   f"{np.round(qv, 4).tolist()}", highlight=False)

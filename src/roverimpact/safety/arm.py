@@ -261,7 +261,9 @@ def _body_type():
     return pin.FrameType.BODY
 
 
-def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: float = 1e-10):
+def point_effective_mass(model, q, link: str, direction, *, point=None, payload: float = 0.0,
+                         payload_frame: str | None = None, payload_point=None,
+                         rtol: float = 1e-10):
     r"""Exact effective mass of a point of a link along one or many unit directions.
 
     .. math::  m_u = \frac{1}{u^T J_p(q) N(q) J_p(q)^T u}
@@ -269,7 +271,8 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
     (:math:`N = M^{-1}` for independent joints; with the model's coupling rows :math:`B`
     held, see the module docstring) computed with :func:`roverimpact.energy.row_masses`
     (``m_eff`` with ``held=B``, as :func:`roverimpact.effective_mass`) on the rows
-    :math:`a = u^T J_p`.
+    :math:`a = u^T J_p`. A ``payload`` :math:`m_L` is a point mass at the payload point
+    :math:`L` (its Jacobian :math:`J_L`): :math:`M \to M + m_L J_L^T J_L`.
 
     Parameters
     ----------
@@ -291,6 +294,14 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
         configuration of a batch.
     point : (3,) array_like, optional
         Contact point in the frame's coordinates [m]; default the frame origin.
+    payload : float, optional
+        Payload mass :math:`m_L` [kg] (tool and workpiece, the :math:`m_L` of the
+        standard's :math:`M/2 + m_L`), added to the model as a point mass; default 0.
+    payload_frame : str, optional
+        Frame the payload is fixed to; default ``link``.
+    payload_point : (3,) array_like, optional
+        Payload's centre of mass in ``payload_frame`` coordinates [m]; default ``point``
+        when ``payload_frame`` is not given, else that frame's origin.
     rtol : float, optional
         A row with :math:`|u^T J_p| \le` ``rtol`` :math:`|J_p|` means the point cannot move
         along ``u``; its effective mass is ``inf``.
@@ -318,10 +329,19 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
     u = u / big[:, None]
     u = u / np.linalg.norm(u, axis=1)[:, None]
     fid, p = _resolve_point(model, link, point)
+    payload = _check_payload(payload)
+    if payload_frame is None:
+        fid_L, p_L = fid, (p if payload_point is None else
+                           _resolve_point(model, link, payload_point)[1])
+    else:
+        fid_L, p_L = _resolve_point(model, payload_frame, payload_point)
     batch = q.shape[:-1]
     Ms, As, Bs, moving = [], [], [], []
     for qi in q.reshape(-1, model.nq):
         data, M, B = _kinematics(cs, qi)
+        if payload:
+            J_L = _jacobian(model, data, fid_L, p_L)
+            M = M + payload * (J_L.T @ J_L)
         Jp = _jacobian(model, data, fid, p)
         A = u @ Jp  # (k, nv)
         Ms.append(M)
@@ -338,6 +358,14 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, rtol: fl
     if single:
         out = out[..., 0]
     return float(out) if out.ndim == 0 else out
+
+
+def _check_payload(payload) -> float:
+    """A payload mass [kg]: one finite number >= 0, or one InputError."""
+    x = as_array(payload, "payload")
+    if x.ndim != 0 or not (np.isfinite(x) and x >= 0):
+        raise InputError(f"payload must be one finite number >= 0 kg, got {payload!r}")
+    return float(x)
 
 
 def _link_points(model, which: str):
