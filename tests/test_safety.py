@@ -720,6 +720,12 @@ def test_cli_point(ur5_mujoco, capsys):
         assert r["m_R_iso"] == pytest.approx(out["M_total"] / 2, rel=1e-15)
     assert main(args) == 0
     assert "ISO/TS 15066: m_R = M/2 + m_L" in capsys.readouterr().out
+    big = list(args)
+    big[big.index("0,2,2")] = "0,3e300,3e300"  # printed as (0, 0, 0): its norm overflowed
+    assert main([*big, "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)["directions"][1]
+    np.testing.assert_allclose(r["direction"], U[1], rtol=1e-15)
+    assert r["m_u"] == pytest.approx(ref[1], rel=1e-9)
     for bad, msg in (({"--frame": "tool"}, "no frame 'tool'"),
                      ({"--direction": "0,0,0"}, "finite and non-zero"),
                      ({"--direction": "1,0"}, "--direction must be 3"),

@@ -220,6 +220,7 @@ def point_cmd(
     m_u = np.atleast_1d(point_effective_mass(mbm, qv, frame, U, point=p, payload=payload,
                                              payload_frame=payload_frame,
                                              payload_point=p_L))
+    U = U / np.max(np.abs(U), axis=1)[:, None]  # checked non-zero; scaled: no overflow
     U = U / np.linalg.norm(U, axis=1)[:, None]
     M_total = float(sum(i.mass for i in mbm.model.inertias[1:]))
     m_iso = float(iso_robot_mass(M_total, payload))
