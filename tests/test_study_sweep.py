@@ -836,7 +836,9 @@ def test_cli_signal_on_a_local_cluster_leaves_no_worker_and_no_dask_lines(tmp_pa
         pytest.skip("fork and /proc: Linux only")
     import subprocess
 
-    _, code_text = _slow_sweep(tmp_path, 40, "0.3 * len(overrides)", "--chunk-size", "4",
+    # 200 cases (30 s of sleep on two workers) although the signal comes after the first
+    # chunk: with 40 (6 s) a machine loaded by other jobs once finished before it came
+    _, code_text = _slow_sweep(tmp_path, 200, "0.3 * len(overrides)", "--chunk-size", "4",
                                "--workers", "2")
     env = {**os.environ, "ROVERIMPACT_WORKER_START": "fork"}
     proc = subprocess.Popen([sys.executable, "-c", code_text], stdout=subprocess.PIPE,
