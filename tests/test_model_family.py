@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import roverimpact as ri
 from roverimpact.exceptions import ModelError
 from roverimpact.models import rocker_bogie
 from roverimpact.models.family import ModelFamily, family_numbers, has_family
@@ -231,3 +232,32 @@ def test_evaluator_bad_case_raises_as_evaluate_case():
     with pytest.raises(ModelError) as got:
         ScenarioEvaluator().evaluate(ROVER, overrides)
     assert str(got.value) == str(ref.value)
+
+
+def test_study_cases_of_their_own_warn_of_a_pulling_wheel():
+    """A study whose every case is of its own (another speed: cases batched by shape;
+    another chassis mass: a model family's block) with ``contacts.ground = "noslip"``
+    warns of the held wheel that needs a pulling impulse, as ``energy_of`` of the same
+    scenario does (right front wheel of the rocker-bogie at 60 deg); the study path was
+    silent. The default ground holds no pulling wheel and stays silent."""
+    import warnings
+
+    from roverimpact.exceptions import HeldRowsWarning, PullingContactWarning
+    from roverimpact.studies.evaluate import ScenarioEvaluator
+
+    base = {"model": {"name": "rocker_bogie"}, "velocity": {"u": 0.5},
+            "obstacle": {"wheel": "left_front", "beta_deg": 60.0},
+            "contacts": {"ground": "noslip"}}
+    with pytest.warns(PullingContactWarning, match=r"ground:right_front .*-0\.616 N s"):
+        ri.energy_of(base)
+    speeds = [{"velocity.u": 0.4}, {"velocity.u": 0.5}]
+    masses = [{"model.params.chassis_mass": m} for m in (10.0, 12.0)]
+    for overrides in (speeds, masses):
+        with pytest.warns(PullingContactWarning, match=r"ground:right_front .*N s"):
+            out = ScenarioEvaluator().evaluate(base, overrides)
+        assert np.isfinite(out["T_c_minus"]).all()
+    default = {k: v for k, v in base.items() if k != "contacts"}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", HeldRowsWarning)
+        for overrides in (speeds, masses):
+            ScenarioEvaluator().evaluate(default, overrides)

@@ -163,7 +163,7 @@ class ImpactSetup:
         total mass."""
         en = _energy(self.M, self.A, self.v, self.obstacle_row)
         warn_if_jammed(self.model, en.m_eff, self.labels, self.obstacle_row)
-        if self.constraints == "auto" and self.contacts.ground == "noslip":
+        if pulling_applies(self.constraints, self.contacts):
             warn_if_pulling(self.M, self.A, self.v, self.labels, self.obstacle_row)
         return en
 
@@ -1151,33 +1151,51 @@ def pulling_contact(M, A, v, labels, obstacle_row: int, tol: float = 1e-6):
     return labels[i].rpartition(":")[0], float(p[i]), float(p[obs])
 
 
-def pulling_contact_of(M, A, v, labels, obstacle_row: int, keep):
+def pulling_contact_of(M, A, v, labels, obstacle_row: int, keep=None):
     """:func:`pulling_contact` of a stack ``A`` (k, m, n) whose held rows are ``keep``
-    (k, m): the first item found to pull, or None. One batched impulse solve per distinct
-    held set; then :func:`pulling_contact` on the items whose impulse pulls, the most
-    pulling (relative to the obstacle's impulse) first, until one is confirmed."""
+    (k, m; default all): the first item found to pull, or None. ``M`` (n, n) or (k, n, n)
+    and ``v`` (n,) or (k, n): one system or one per item (a study's cases). One batched
+    impulse solve per distinct held set; then :func:`pulling_contact` on the items whose
+    impulse pulls, the most pulling (relative to the obstacle's impulse) first, until one
+    is confirmed."""
     from ..impulse import impulsive_impact
 
-    todo = []  # (relative pull, rows, labels, obstacle row)
+    M, A, v = np.asarray(M, float), np.asarray(A, float), np.asarray(v, float)
+    k = A.shape[0]
+    M = np.broadcast_to(M, (k, *M.shape[-2:]))
+    v = np.broadcast_to(v, (k, v.shape[-1]))
+    if keep is None:
+        keep = np.ones(A.shape[:2], dtype=bool)
+    todo = []  # (relative pull, item, rows, labels, obstacle row)
     for mask in np.unique(keep, axis=0):
-        sub = A[(keep == mask).all(axis=-1)][:, mask]
+        items = np.flatnonzero((keep == mask).all(axis=-1))
+        sub = A[items][:, mask]
         ob = int(np.sum(mask[:obstacle_row]))
         lab = [lb for lb, k in zip(labels, mask, strict=True) if k]
         normal = [i for i, lb in enumerate(lab) if i != ob and lb.endswith(":normal")]
-        sub = sub[sub[:, ob] @ v < 0.0]
+        approach = np.einsum("kn,kn->k", sub[:, ob], v[items]) < 0.0
+        items, sub = items[approach], sub[approach]
         if not (len(sub) and normal):
             continue
         if (np.max(np.abs(sub), axis=-1) > 0.0).all():
-            p = np.asarray(impulsive_impact(M, sub, v, restitution=0.0).impulse)
+            p = np.asarray(impulsive_impact(M[items], sub, v[items], restitution=0.0).impulse)
             rel = np.min(p[:, normal], axis=-1) / np.abs(p[:, ob])
         else:  # a zero row: pulling_contact drops it
             rel = np.full(len(sub), -np.inf)
-        todo += [(r, Ai, lab, ob) for r, Ai in zip(rel, sub, strict=True) if r < -1e-6]
-    for _, Ai, lab, ob in sorted(todo, key=lambda t: t[0]):
-        hit = pulling_contact(M, Ai, v, lab, ob)
+        todo += [(r, i, Ai, lab, ob) for r, i, Ai in zip(rel, items, sub, strict=True)
+                 if r < -1e-6]
+    for _, i, Ai, lab, ob in sorted(todo, key=lambda t: t[0]):
+        hit = pulling_contact(M[i], Ai, v[i], lab, ob)
         if hit is not None:
             return hit
     return None
+
+
+def pulling_applies(constraints, contacts) -> bool:
+    """Whether :func:`warn_if_pulling` applies to a scenario's ``constraints`` and
+    ``[contacts]``: the wheels held with no-slip rows (``ground = "noslip"``) among the
+    rows ``constraints = "auto"`` chose."""
+    return constraints == "auto" and contacts.ground == "noslip"
 
 
 def warn_if_pulling(M, A, v, labels, obstacle_row: int, keep=None,

@@ -13,6 +13,7 @@ from .build import (
     friction_of,
     no_approach,
     normal_from_beta,
+    pulling_applies,
     warn_if_jammed,
     warn_if_pulling,
 )
@@ -106,6 +107,6 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
         warn_if_jammed(setup.model, en.m_eff,
                      [lb for lb, k in zip(setup.candidate_labels, keep[worst], strict=True) if k],
                      int(np.sum(keep[worst][:obs])))
-    if setup.constraints == "auto" and setup.contacts.ground == "noslip":
+    if pulling_applies(setup.constraints, setup.contacts):
         warn_if_pulling(setup.M, A, setup.v, setup.candidate_labels, obs, keep, stacklevel=3)
     return en

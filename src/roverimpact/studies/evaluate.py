@@ -58,7 +58,13 @@ from ..contact import peak_force
 from ..exceptions import RoverImpactError
 from ..scenario import ImpactSetup, Scenario, scenario_from_dict, sweep_energy
 from ..scenario.block import block_key, is_number, member_block
-from ..scenario.build import jam_total_mass, model_key, warn_jammed
+from ..scenario.build import (
+    jam_total_mass,
+    model_key,
+    pulling_applies,
+    warn_if_pulling,
+    warn_jammed,
+)
 from ..simulate import SimulationConfig, simulate_scenario
 from ..simulate.engines import check_engine
 from .config import apply_overrides
@@ -396,7 +402,7 @@ class ScenarioEvaluator:
                     blk = None  # case by case below: the same error, from its own case
                 if blk is not None:
                     m_total[idx] = blk.total_mass
-                    own.add_block(idx, blk)
+                    own.add_block(idx, blk, pulling_applies(first.constraints, first.contacts))
                     continue
                 for i in idx:
                     setup = self._setup(scenario_from_dict(apply_overrides(base, overrides[i])),
@@ -444,7 +450,8 @@ class _OwnCases:
     def __init__(self, T, m_eff, m_eff_free, v_n):
         self.out = (T, m_eff, m_eff_free, v_n)
         # (shape of M, shape of A, obstacle row) -> [cases, count]; a part of the cases is
-        # (indices, M, A, v, labels, total mass of each or None)
+        # (indices, M, A, v, labels, total mass of each or None, whether the pulling check
+        # of contacts.ground = "noslip" with constraints = "auto" applies)
         self.pending: dict[tuple, list] = {}
 
     def add(self, i: int, setup: ImpactSetup) -> None:
@@ -452,11 +459,13 @@ class _OwnCases:
         total = jam_total_mass(setup.model)
         self._add((setup.M.shape, setup.A.shape, setup.obstacle_row),
                   (np.array([i]), setup.M[None], setup.A[None], setup.v[None], setup.labels,
-                   None if total is None else np.array([total])))
+                   None if total is None else np.array([total]),
+                   pulling_applies(setup.constraints, setup.contacts)))
 
-    def add_block(self, idx, blk) -> None:
+    def add_block(self, idx, blk, pull: bool = False) -> None:
         """The cases ``idx`` of an :class:`~roverimpact.scenario.block.ImpactBlock`, by
-        active set."""
+        active set (``pull``: the block's scenarios hold the wheels with no-slip rows and
+        ``constraints = "auto"``: :func:`pulling_applies`)."""
         idx = np.asarray(idx)
         patterns, which = np.unique(blk.active, axis=0, return_inverse=True)
         which = which.reshape(-1)
@@ -468,7 +477,7 @@ class _OwnCases:
             self._add((blk.M.shape[1:], A.shape[1:], obstacle_row),
                       (idx[sel], blk.M[sel], A, blk.v[sel],
                        tuple(blk.labels[r] for r in rows),
-                       blk.total_mass[sel] if blk.vehicle else None))
+                       blk.total_mass[sel] if blk.vehicle else None, pull))
 
     def _add(self, key, part) -> None:
         entry = self.pending.setdefault(key, [[], 0])
@@ -499,10 +508,13 @@ class _OwnCases:
             m_eff_free, v_n  # no approach, no impact (build.no_approach)
         s = 0
         for pt in parts:
-            n, labels, total = len(pt[0]), pt[4], pt[5]
+            n, labels, total, pull = len(pt[0]), pt[4], pt[5], pt[6]
             if total is not None:
                 for j in np.flatnonzero(m_eff[s:s + n] > total * (1.0 + 1e-9)):
                     warn_jammed(float(m_eff[s + j]), float(total[j]), labels, obstacle_row)
+            if pull:  # as ImpactSetup.partition and sweep_energy warn
+                warn_if_pulling(M[s:s + n], A[s:s + n], v[s:s + n], labels, obstacle_row,
+                                np.ones(A.shape[:2], dtype=bool)[s:s + n], stacklevel=2)
             s += n
 
 
