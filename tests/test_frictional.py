@@ -30,6 +30,7 @@ from hypothesis.extra import numpy as hnp
 import roverimpact as ri
 from roverimpact.frictional import (
     FACETS,
+    MU_MAX,
     frictional_active_set,
     frictional_impact,
 )
@@ -332,6 +333,33 @@ def test_slip_reversal_algebraic_law_not_routh():
     assert routh_Pn == pytest.approx(0.6927, abs=1e-4)
     assert routh_Pt == pytest.approx(0.1545, abs=1e-4)
     assert r.impulse_tangent[0, 0] / routh_Pt == pytest.approx(1.42, abs=0.01)
+
+
+def test_mu_above_mu_max_is_refused_not_solved_outside_the_cone():
+    r"""A body with n = 2 and one contact whose sticking impulses
+    :math:`K (P_n, P_t) = -(\gamma^-, s^-)` (K the 2 x 2 Delassus matrix) are
+    (6.737, -1.722) N s: Coulomb's law sticks for every mu >= 0.256 and stops the body
+    (v+ = 0, the impact removes all of T^- = 3.4645 J). mu = 1e6 and inf give that. At
+    mu = 1e12 the solver returned "sliding" with P_n = -5.8e-12 N s and P_t = +5.75 N s,
+    outside the cone |P_t| <= mu P_n, and T^+ = 17.4 J from 3.46 J with e = 0 (which no
+    Coulomb solution can gain); a finite mu above MU_MAX = 1e6 is now refused, naming
+    inf."""
+    M = np.array([[2.6, -0.1], [-0.1, 1.3]])
+    v = np.array([1.4, 1.3])
+    N, T = np.array([[-0.7, 0.0]]), np.array([[[-0.7, 0.9]]])
+    J = np.vstack([N[0], T[0, 0]])
+    Pn, Pt = np.linalg.solve(J @ np.linalg.solve(M, J.T), -(J @ v))
+    assert Pn > 0 and abs(Pt) / Pn == pytest.approx(0.2557, abs=1e-4)
+    for mu in (0.3, MU_MAX, np.inf):
+        r = frictional_impact(M, v, N, T, mu, 0.0)
+        assert r.state.tolist() == ["sticking"], mu
+        assert r.impulse[0] == pytest.approx(Pn, rel=1e-12)
+        assert r.impulse_tangent[0, 0] == pytest.approx(Pt, rel=1e-12)
+        np.testing.assert_allclose(r.v_plus, 0.0, atol=1e-14)
+        assert float(r.energy_lost) == pytest.approx(3.4645, rel=1e-12)
+    for mu in (1e12, [1e12]):
+        with pytest.raises(ri.InputError, match=r"mu must be at most 1e\+06 or inf .*got 1e\+12"):
+            frictional_impact(M, v, N, T, mu, 0.0)
 
 
 def test_mu_inf_no_friction_without_normal_impulse():
