@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import roverimpact as ri
-from roverimpact.exceptions import SolverError
+from roverimpact.exceptions import EnergyGainWarning, SolverError
 from roverimpact.unilateral import TOL, active_set, unilateral_impact
 
 from .strategies import full_rank_rows, spd_matrices, vectors
@@ -245,7 +245,8 @@ def test_newton_different_e_with_a_separating_contact_adds_energy():
     0.25 J: the contact that was separating takes the rebound). With one e = 1 Newton keeps
     2.5 J (v+ = -v-)."""
     N, v = [[-1.0, -2.0], [1.0, 1.0]], [1.0, 2.0]
-    r = unilateral_impact(np.eye(2), v, N, [1.0, 0.0])
+    with pytest.warns(EnergyGainWarning, match=r"T\+ = 25 J from T- = 2\.5 J"):
+        r = unilateral_impact(np.eye(2), v, N, [1.0, 0.0])
     np.testing.assert_allclose(r.v_plus, [5.0, -5.0], atol=1e-12)
     np.testing.assert_allclose(r.impulse, [11.0, 15.0], rtol=1e-12)
     assert float(r.T_plus) == pytest.approx(25.0) and float(r.T_minus) == pytest.approx(2.5)

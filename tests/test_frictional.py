@@ -20,6 +20,7 @@ References, independent of the solver:
 from __future__ import annotations
 
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -28,6 +29,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 import roverimpact as ri
+from roverimpact.exceptions import EnergyGainWarning
 from roverimpact.frictional import (
     FACETS,
     MU_MAX,
@@ -242,9 +244,14 @@ def test_energy_gain_with_restitution_and_slip():
     assert abs(Pt) <= 0.5 * Pn
     gain = 0.5 * Pt * sm
     assert gain > 0.4
-    r = frictional_impact(M, v, [n], [[t]], 0.5, 1.0)
+    with pytest.warns(EnergyGainWarning, match="Kane's paradox"):
+        r = frictional_impact(M, v, [n], [[t]], 0.5, 1.0)
     assert r.state.tolist() == ["sticking"]
     assert -r.energy_lost == pytest.approx(gain, rel=1e-12)
+    # e = 0: the same rod loses energy, and nothing is said
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EnergyGainWarning)
+        assert float(frictional_impact(M, v, [n], [[t]], 0.5, 0.0).energy_lost) > 0
 
 
 def test_energy_gain_when_slip_stops_without_reversing():
@@ -271,7 +278,8 @@ def test_energy_gain_when_slip_stops_without_reversing():
     p_stop = 0.6 / (mu * K[0, 0] - K[0, 1])
     assert -1.0 + (K[1, 1] - mu * K[1, 0]) * p_stop < 0.0
     assert abs(K[0, 1] / K[0, 0]) <= mu
-    r = frictional_impact(M, v, [n], [[t]], mu, 1.0)
+    with pytest.warns(EnergyGainWarning, match=r"T\+ = 0\.7925 J from T- = 0\.68 J"):
+        r = frictional_impact(M, v, [n], [[t]], mu, 1.0)
     assert r.state.tolist() == ["sticking"]
     assert r.impulse[0] == pytest.approx(1.025, rel=1e-12)
     assert r.impulse_tangent[0, 0] == pytest.approx(0.375, rel=1e-12)
@@ -481,6 +489,7 @@ def _check_solution(r, M, v, N, T, B, mu, e, facets=FACETS):
     assert float(r.T_plus) == pytest.approx(0.5 * vp @ M @ vp, rel=1e-9, abs=1e-12)
 
 
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.EnergyGainWarning")  # e > 0: Kane
 @PROPS
 @given(sys_=systems(), mu=st.lists(st.floats(0.0, 2.0), min_size=8, max_size=8),
        e=st.floats(0.0, 1.0), facets=st.sampled_from([4, 8]))
@@ -572,6 +581,7 @@ def test_property_mu0_is_the_frictionless_problem(sys_, e):
     assert set(r.state.tolist()) <= {"separating", "sliding"}
 
 
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.EnergyGainWarning")  # e > 0: Kane
 @PROPS
 @given(sys_=systems(), e=st.floats(0.0, 1.0),
        gam=st.lists(st.floats(-2.0, -0.1), min_size=8, max_size=8),

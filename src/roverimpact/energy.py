@@ -21,6 +21,7 @@ mass matrix of any engine.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +31,7 @@ from ._kernels import masses as _masses
 from ._kernels import partition as _one
 from ._kernels.lanes_jit import lanes_kernel
 from ._validation import InputError, as_array, broadcast_batch, fmt_index
+from .exceptions import EnergyGainWarning
 
 #: Default relative tolerance of the rank decision (see :func:`partition`).
 RTOL = 1e-9
@@ -172,6 +174,26 @@ def _raise_status(status, M, A, v, iM, iA, iv, batch):
 #: The largest kinetic energy 1/2 v^T M v the partition computes [J], about 9e307: half
 #: the largest float64, since 2 T = |L^T v|^2 (M = L L^T) must be one.
 T_LIMIT = float(np.finfo(np.float64).max) / 2
+
+
+#: an energy gain above this fraction of T^- is warned about (round-off stays far below)
+GAIN_RTOL = 1e-9
+
+
+def warn_energy_gain(Tm: np.ndarray, Tp: np.ndarray, batch: tuple, cause: str) -> None:
+    """EnergyGainWarning when an impact ends with more kinetic energy than it began with
+    (``T^+ > T^-`` by more than :data:`GAIN_RTOL` of ``T^-``; one flat item each), naming
+    the count and the largest gain; ``cause`` says which law does it and what to use."""
+    gain = Tp - Tm
+    bad = gain > GAIN_RTOL * Tm
+    if not bad.any():
+        return
+    worst = int(np.argmax(np.where(bad, gain, -np.inf)))
+    idx = tuple(int(i) for i in np.unravel_index(worst, batch)) if batch else ()
+    count = f"{int(bad.sum())} of {bad.size} items, " if bad.size > 1 else ""
+    warnings.warn(f"the impact adds kinetic energy ({count}{fmt_index(idx)}: T+ = "
+                  f"{float(Tp[worst]):.4g} J from T- = {float(Tm[worst]):.4g} J): {cause}",
+                  EnergyGainWarning, stacklevel=3)
 
 
 def raise_overflow(T, M, v, iM, iv, batch):

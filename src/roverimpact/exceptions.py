@@ -44,6 +44,15 @@ class PullingContactWarning(HeldRowsWarning):
     the no-slip rows in it."""
 
 
+class EnergyGainWarning(UserWarning):
+    """An impact law returned a velocity after the impact with more kinetic energy than
+    before. Newton's kinematic restitution does this with Coulomb friction when a
+    contact's slip stops or reverses with ``e > 0`` (Kane's paradox), and without friction
+    when the contacts have different ``e`` and one separates before the impact. The result
+    is the law's answer, not a physical one: use ``e = 0``, or (frictionless) one ``e`` or
+    Poisson's law."""
+
+
 class GroundGapWarning(UserWarning):
     """A ground wheel of a scenario on flat ground (no ``[terrain]``) is off the plane
     z = 0 in its configuration: its ground rows treat it as touching all the same."""
@@ -53,5 +62,6 @@ class StudyInterrupted(KeyboardInterrupt):
     """A study stopped by Ctrl-C: its message says what is kept and how to continue."""
 
 
-__all__ = ["ConfigError", "GroundGapWarning", "HeldRowsWarning", "InputError", "ModelError",
-           "PullingContactWarning", "RoverImpactError", "SolverError", "StudyInterrupted"]
+__all__ = ["ConfigError", "EnergyGainWarning", "GroundGapWarning", "HeldRowsWarning",
+           "InputError", "ModelError", "PullingContactWarning", "RoverImpactError",
+           "SolverError", "StudyInterrupted"]

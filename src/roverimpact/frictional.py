@@ -92,7 +92,8 @@ Energy: with :math:`e = 0` the impact never adds energy,
 reverses (Kane's paradox; Stronge 2000, ch. 5): a rod end that slides in and sticks with
 ``e = 1`` keeps its whole normal rebound while its slip is stopped, and the impact gains
 energy (``test_energy_gain_when_slip_stops_without_reversing``: +0.1125 J of 0.68 J,
-the slip stopping in compression and never reversing). It does not when every contact
+the slip stopping in compression and never reversing); :func:`frictional_impact` then
+warns (:class:`~roverimpact.exceptions.EnergyGainWarning`). It does not when every contact
 is at rest or approaching before the impact with zero slip (a rolling rover), for any
 :math:`e_i` in [0, 1] (tested, both).
 """
@@ -109,7 +110,14 @@ from . import _validation
 from ._kernels.friction import MU_INF, friction_kernel
 from ._kernels.lemke import STATUS_INFEASIBLE, STATUS_LOCKED, STATUS_MAXITER
 from ._validation import as_array, broadcast_batch, check_rows, fmt_index
-from .energy import RTOL, flat_index, power_of_two_scale, raise_overflow, scalarize
+from .energy import (
+    RTOL,
+    flat_index,
+    power_of_two_scale,
+    raise_overflow,
+    scalarize,
+    warn_energy_gain,
+)
 from .exceptions import InputError, SolverError
 from .unilateral import TOL, check_residual
 
@@ -498,6 +506,12 @@ def frictional_impact(M, v, normal, tangent, mu, restitution=0.0, bilateral=None
         contacts with contradictory restitution), or a degenerate problem Lemke's
         algorithm cannot settle.
 
+    Warns
+    -----
+    EnergyGainWarning
+        ``T^+ > T^-`` (by more than 1e-9 of ``T^-``): Newton's restitution with friction
+        (``e > 0``, a slip that stops or reverses: Kane's paradox).
+
     Examples
     --------
     A 1 kg point hits the floor at 1 m/s with 0.6 m/s of slip. Sticking would need a
@@ -540,6 +554,10 @@ def frictional_impact(M, v, normal, tangent, mu, restitution=0.0, bilateral=None
         imp_b = np.zeros((*batch, 0))
     approaching = out["approaching"].reshape(*batch, k)
     Tm, Tp = out["Tm"], out["Tp"]
+    warn_energy_gain(Tm, Tp, batch, "Newton's restitution on the normal with Coulomb "
+                     "friction adds energy when a contact's slip stops or reverses with "
+                     "e > 0 (Kane's paradox; docs/active-set.md): the result is Newton's "
+                     "law, not a physical impact; use e = 0 for such contacts")
     return FrictionalImpactResult(
         v_plus=v_plus,
         impulse=imp,

@@ -37,7 +37,15 @@ import numpy as np
 
 from . import _validation
 from ._validation import InputError, as_array, broadcast_batch, fmt_index
-from .energy import RTOL, partition, prepare, row_scale, scalarize, whitened
+from .energy import (
+    RTOL,
+    partition,
+    prepare,
+    row_scale,
+    scalarize,
+    warn_energy_gain,
+    whitened,
+)
 
 __all__ = ["ImpactResult", "impulsive_impact"]
 
@@ -216,6 +224,10 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     T_minus = 0.5 * np.sum(u_minus**2, axis=-1)
     T_plus = 0.5 * np.sum(u_plus**2, axis=-1)
     lost = 0.5 * np.sum(-du * (2 * u_minus + du), axis=-1)
+    warn_energy_gain(np.ravel(T_minus), np.ravel(T_minus - lost), batch,
+                     "Newton's restitution with different e per row adds energy when a "
+                     "row is separating before the impact; use one e or e = 0 (or "
+                     "unilateral_impact with law='poisson')")
     gen = np.einsum("...ji,...j->...i", J, imp)
     if rows_scale is not None:
         imp = imp / rows_scale[..., None]

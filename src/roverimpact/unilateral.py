@@ -68,7 +68,7 @@ import numpy as np
 from . import _validation
 from ._kernels.lemke import STATUS_INFEASIBLE, STATUS_LOCKED, STATUS_MAXITER, impact_kernel
 from ._validation import as_array, broadcast_batch, check_rows, check_rtol, fmt_index
-from .energy import RTOL, flat_index, raise_overflow, scalarize
+from .energy import RTOL, flat_index, raise_overflow, scalarize, warn_energy_gain
 from .exceptions import InputError, SolverError
 
 #: Default tolerance of the complementarity decisions (relative to ``sqrt(2 T^-)``).
@@ -344,6 +344,9 @@ def unilateral_impact(M, v, unilateral, restitution=0.0, bilateral=None, *,
         imp_b = np.zeros((*batch, 0))
     Tm = out["Tm"]
     Tp = out["Tp"]
+    warn_energy_gain(Tm, Tp, batch, "Newton's restitution with different e per contact "
+                     "adds energy when a contact separates before the impact; use one e, "
+                     "e = 0 or law='poisson'")
     approaching = out["approaching"].reshape(*batch, k)
     return UnilateralImpactResult(
         v_plus=v_plus,
