@@ -347,10 +347,10 @@ def test_mu_above_mu_max_is_refused_not_solved_outside_the_cone():
     r"""A body with n = 2 and one contact whose sticking impulses
     :math:`K (P_n, P_t) = -(\gamma^-, s^-)` (K the 2 x 2 Delassus matrix) are
     (6.737, -1.722) N s: Coulomb's law sticks for every mu >= 0.256 and stops the body
-    (v+ = 0, the impact removes all of T^- = 3.4645 J). mu = 1e6 and inf give that. At
+    (v+ = 0, the impact removes all of T^- = 3.4645 J). mu = 1e4 and inf give that. At
     mu = 1e12 the solver returned "sliding" with P_n = -5.8e-12 N s and P_t = +5.75 N s,
     outside the cone |P_t| <= mu P_n, and T^+ = 17.4 J from 3.46 J with e = 0 (which no
-    Coulomb solution can gain); a finite mu above MU_MAX = 1e6 is now refused, naming
+    Coulomb solution can gain); a finite mu above MU_MAX = 1e4 is now refused, naming
     inf."""
     M = np.array([[2.6, -0.1], [-0.1, 1.3]])
     v = np.array([1.4, 1.3])
@@ -366,8 +366,20 @@ def test_mu_above_mu_max_is_refused_not_solved_outside_the_cone():
         np.testing.assert_allclose(r.v_plus, 0.0, atol=1e-14)
         assert float(r.energy_lost) == pytest.approx(3.4645, rel=1e-12)
     for mu in (1e12, [1e12]):
-        with pytest.raises(ri.InputError, match=r"mu must be at most 1e\+06 or inf .*got 1e\+12"):
+        with pytest.raises(ri.InputError, match=r"mu must be at most 10000 or inf .*got 1e\+12"):
             frictional_impact(M, v, N, T, mu, 0.0)
+    # two contacts at rest (N v = 1e-16, round-off) of a sliding body: nothing approaches,
+    # so no impulse and v+ = v-. At mu = 1e6 the solver put 5e-4 N s of friction on the
+    # first contact with P_n = 0 (and 1e-3 N s on the second with 1.5e-4)
+    M = [[1.3, -0.06, -0.33], [-0.06, 2.85, 0.15], [-0.33, 0.15, 1.54]]
+    v = [0.12319378798109365, 0.27943956785955437, 0.3064821066846725]
+    N, T = [[-0.3, 0.9, -0.7], [0.9, 0.7, -1.0]], [[[0.9, 0.9, 0.4]], [[-0.6, 0.7, -0.4]]]
+    for mu in (MU_MAX, np.inf):
+        r = frictional_impact(M, v, N, T, mu, 0.0)
+        assert np.abs(r.impulse).max() == 0 and np.abs(r.impulse_tangent).max() == 0
+        np.testing.assert_allclose(r.v_plus, v, rtol=1e-15)
+    with pytest.raises(ri.InputError, match=r"got 1e\+06 \(contact 0\)"):
+        frictional_impact(M, v, N, T, 1e6, 0.0)
 
 
 def test_mu_inf_no_friction_without_normal_impulse():
@@ -380,7 +392,7 @@ def test_mu_inf_no_friction_without_normal_impulse():
     K [P_t, P_n] = -[slip_1, gamma_1] with K its 2 x 2 Delassus matrix, gives
     P_n = 1.056, P_t = -1.572 (any mu >= 1.49), and contact 2 then separates
     (gamma_2^+ = 0.284 > 0): a Coulomb solution for every mu >= 1.49, which
-    frictional_impact returns for mu = 10 and 1e6. With mu = inf the locked-set iteration
+    frictional_impact returns for mu = 10 and 1e4. With mu = inf the locked-set iteration
     kept both contacts locked from its all-locked start and stopped the body (v+ = 0,
     T_c^- 1.650 J instead of 1.332 J): contact 1 then took P_t = -6.5 N s with P_n = 0.
     """
@@ -394,7 +406,7 @@ def test_mu_inf_no_friction_without_normal_impulse():
     v_hand = v + np.linalg.solve(M, J.T @ [Pt, Pn])
     assert Pn > 0 and abs(Pt) <= 1.5 * Pn and N[1] @ v_hand > 0.28
     T_c_hand = 0.5 * (J @ v) @ np.linalg.solve(K, J @ v)
-    for mu in (10.0, 1e6, np.inf):
+    for mu in (10.0, 1e4, np.inf):
         r = frictional_impact(M, v, N, T, mu, 0.0)
         assert r.state.tolist() == ["sticking", "separating"], mu
         np.testing.assert_allclose(r.v_plus, v_hand, rtol=1e-9, atol=1e-12)
