@@ -19,6 +19,7 @@ References, independent of the solver:
 
 from __future__ import annotations
 
+import itertools
 import os
 import warnings
 
@@ -751,6 +752,62 @@ def test_infeasible_raises_solver_error():
     with pytest.raises(ri.SolverError, match="no solution"):
         frictional_impact(np.eye(2), [-1.0, 0.3], [[1.0, 0.0], [-1.0, 0.0]],
                           [[[0.0, 1.0]], [[0.0, 1.0]]], 0.5, [0.8, 0.2])
+
+
+def _planar_solutions(M, v, N, t, mu, e):
+    """Every solution of a planar frictional impact (one tangent row ``t[i]`` per contact)
+    by enumerating the contact modes (separating, sticking, sliding either way), each a
+    linear system in the impulses; an independent reference for small problems."""
+    k = len(N)
+    W = np.linalg.solve(M, np.hstack([N.T, t.T]))  # dv per unit (p, tau)
+    found = []
+    for modes in itertools.product(range(4), repeat=k):
+        rows, rhs = [], []
+        for i, md in enumerate(modes):
+            ep, et = np.eye(2 * k)[i], np.eye(2 * k)[k + i]
+            if md == 0:
+                rows += [ep, et]
+                rhs += [0.0, 0.0]
+                continue
+            rows.append(N[i] @ W)
+            rhs.append(-(1 + e) * N[i] @ v)
+            if md == 1:
+                rows.append(t[i] @ W)
+                rhs.append(-t[i] @ v)
+            else:  # slip of sign s after the impact, tau = -s mu p
+                rows.append(et + (1 if md == 2 else -1) * mu * ep)
+                rhs.append(0.0)
+        A, b = np.array(rows), np.array(rhs)
+        x = np.linalg.lstsq(A, b, rcond=None)[0]
+        if np.linalg.norm(A @ x - b) > 1e-9:
+            continue
+        p, tau, vp = x[:k], x[k:], v + W @ x
+        slip = t @ vp
+        ok = (p >= -1e-9).all() and (N @ vp + e * (N @ v) >= -1e-9).all()
+        for i, md in enumerate(modes):
+            ok &= {0: True, 1: abs(tau[i]) <= mu * p[i] + 1e-9, 2: slip[i] >= -1e-9,
+                   3: slip[i] <= 1e-9}[md]
+        if ok:
+            found.append(modes)
+    return found
+
+
+def test_no_solution_with_restitution_is_said_so_not_ill_conditioning():
+    """Three planar contacts, the first and third identical (dependent rows), e = 0.5:
+    a search of every contact mode (:func:`_planar_solutions`) finds solutions at mu = 0.5
+    and none at mu = 3 or 1e4 (Newton's restitution with Coulomb friction). At mu = 3 the
+    error said "no solution"; at mu = 1e4 it said only "the problem is too ill-conditioned;
+    check the scaling of M and of the contact rows". It now names the restitution too."""
+    M = np.array([[1.49, 0.33], [0.33, 1.44]])
+    v = np.array([0.26, 1.72])
+    N = np.array([[-0.08, -0.78], [-0.58, -0.79], [-0.08, -0.78]])
+    t = np.array([[-0.61, 0.03], [-0.42, 0.95], [-0.61, 0.03]])
+    assert _planar_solutions(M, v, N, t, 0.5, 0.5)
+    frictional_impact(M, v, N, t[:, None], 0.5, 0.5)
+    for mu in (3.0, 1e4):
+        assert not _planar_solutions(M, v, N, t, mu, 0.5)
+        with pytest.raises(ri.SolverError, match="Newton's restitution"):
+            frictional_impact(M, v, N, t[:, None], mu, 0.5)
 
 
 # ------------------------------------------------------------------------------------

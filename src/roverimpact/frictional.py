@@ -408,13 +408,13 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
     out["Pt"] /= s[..., None]
     out["slack"] *= s
     out["slip"] *= s[..., None]
-    _raise_status(out, M, idx[0], batch)
+    _raise_status(out, M, idx[0], batch, restitution=bool((e > 0).any()))
     if not np.isfinite(out["Tm"]).all():  # finite M and v, 1/2 v^T M v above float64
         raise_overflow(out["Tm"], M, v, idx[0], idx[4], batch)
     return out, batch, dict(M=M, v=v, N=N, Tg=Tg, B=B, n=n, k=k, tm=tm, pb=pb)
 
 
-def _raise_status(out, M, iM, batch):
+def _raise_status(out, M, iM, batch, *, restitution=False):
     status = out["status"]
     if status.any():
         bad = int(np.flatnonzero(status)[0])
@@ -442,7 +442,17 @@ def _raise_status(out, M, iM, batch):
                 "problem is degenerate; remove redundant contact rows or use fewer facets"
             )
         raise _validation.mass_matrix_error(M, int(iM[bad]), code)
-    check_residual(out["resid"], batch)
+    try:
+        check_residual(out["resid"], batch)
+    except SolverError as err:
+        if not restitution:
+            raise
+        # no solution, seen as a residual: e.g. two identical contacts and a third with
+        # e = 0.5 at mu = 1e4, where a search of every contact mode finds none
+        raise SolverError(f"{err}; or, with restitution e > 0 at contacts with friction, "
+                          "the problem may have no solution (a known property of Newton's "
+                          "restitution law with Coulomb friction): try e = 0, or mu = 0 at "
+                          "the contacts that slide") from None
 
 
 def frictional_impact(M, v, normal, tangent, mu, restitution=0.0, bilateral=None, *,
