@@ -886,6 +886,10 @@ def test_holding_rows_obstacle_friction_and_bilateral_labels():
         ({"mu": {"obstacle:front": 0.3}}, r"missing \['ground:rear'\]"),
         ({"mu": {"ground:rear": 0.3, "obstacle:front": 0.3, "x": 1.0}}, "unknown"),
         ({"obstacle_row": 7}, "obstacle_row must index"),
+        # a finite mu beyond float64 in the friction cone: named by contact (it was
+        # frictional_impact's "contact 0")
+        ({"mu": {"ground:rear": 1e9, "default": 0.5}},
+         r"contacts.mu of ground:rear is 1e\+09: give at most 10000, or inf"),
     ],
 )
 def test_holding_rows_bad_input(kwargs, match):

@@ -1015,6 +1015,21 @@ def friction_of(contacts: ContactsSpec) -> dict:
 
 
 def _mu_of(mu, labels, uni) -> np.ndarray:
+    """One friction coefficient per unilateral row, each at most ``MU_MAX`` or inf."""
+    mu = _mu_values(mu, labels, uni)
+    from ..frictional import MU_MAX
+
+    big = np.isfinite(mu) & (mu > MU_MAX)
+    if big.any():
+        i = int(np.argmax(big))
+        raise ConfigError(f"contacts.mu of {labels[uni[i]].rpartition(':')[0]} is "
+                          f"{float(mu[i]):g}: give at most {MU_MAX:g}, or inf for a contact "
+                          "that cannot slip (a larger finite mu is beyond float64 in the "
+                          "friction cone)")
+    return mu
+
+
+def _mu_values(mu, labels, uni) -> np.ndarray:
     """One friction coefficient per unilateral row (by contact name for a mapping)."""
     if mu is None:
         raise ConfigError('contacts.ground = "coulomb" needs contacts.mu, the friction '
