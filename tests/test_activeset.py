@@ -259,6 +259,22 @@ def test_newton_different_e_with_a_separating_contact_adds_energy():
     assert np.dot(N[1], r1.v_plus) == pytest.approx(-3.0)
 
 
+def test_newton_with_a_moving_bilateral_row_adds_energy_and_warns():
+    r"""One e = 1, one contact, but the bilateral row moving before the impact (B v- = -0.84):
+    unit point mass, v- = (0.6, -1), contact row (0.2, 0.5) approaching at 0.38 m/s, bilateral
+    row (0.1, 0.9). Newton: (0.2, 0.5) v+ = 0.38 and (0.1, 0.9) v+ = 0 give
+    v+ = (0.342, -0.038) / 0.13 = (2.631, -0.292), T+ = 3.503 J from T- = 0.68 J (impulse
+    13.5 N s >= 0: a solution). Poisson's law takes it to 0.250 J, as e = 0 does. The
+    warning says so (it was silent)."""
+    v, N, B = [0.6, -1.0], [[0.2, 0.5]], [[0.1, 0.9]]
+    with pytest.warns(EnergyGainWarning, match=r"T\+ = 3\.503 J from T- = 0\.68 J.*moving"):
+        r = unilateral_impact(np.eye(2), v, N, 1.0, bilateral=B)
+    np.testing.assert_allclose(r.v_plus, [0.342 / 0.13, -0.038 / 0.13], rtol=1e-12)
+    rp = unilateral_impact(np.eye(2), v, N, 1.0, bilateral=B, law="poisson")
+    assert float(rp.T_plus) == pytest.approx(
+        float(unilateral_impact(np.eye(2), v, N, 0.0, bilateral=B).T_plus), rel=1e-12)
+
+
 def test_newtons_cradle_is_one_simultaneous_impact():
     r"""Three unit balls touching in a row, the first at 1 m/s, e = 1 (rows v2 - v1,
     v3 - v2). The LCP treats both contacts in one impact: by hand, both hold with

@@ -245,7 +245,7 @@ def test_energy_gain_with_restitution_and_slip():
     assert abs(Pt) <= 0.5 * Pn
     gain = 0.5 * Pt * sm
     assert gain > 0.4
-    with pytest.warns(EnergyGainWarning, match="Kane's paradox"):
+    with pytest.warns(EnergyGainWarning, match="slip stops or reverses"):
         r = frictional_impact(M, v, [n], [[t]], 0.5, 1.0)
     assert r.state.tolist() == ["sticking"]
     assert -r.energy_lost == pytest.approx(gain, rel=1e-12)
@@ -574,6 +574,7 @@ def test_property_no_energy_gain_without_initial_slip(sys_, mu, e, gam):
     assert float(r.energy_lost) >= -1e-10 * (1 + r.T_minus)
 
 
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.EnergyGainWarning")  # B v- != 0
 @PROPS
 @given(sys_=systems(), e=st.floats(0.0, 1.0))
 def test_property_mu0_is_the_frictionless_problem(sys_, e):

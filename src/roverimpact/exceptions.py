@@ -46,10 +46,11 @@ class PullingContactWarning(HeldRowsWarning):
 
 class EnergyGainWarning(UserWarning):
     """An impact law returned a velocity after the impact with more kinetic energy than
-    before. Newton's kinematic restitution does this with Coulomb friction when a
-    contact's slip stops or reverses with ``e > 0`` (Kane's paradox), and without friction
-    when the contacts have different ``e`` and one separates before the impact. The result
-    is the law's answer, not a physical one: use ``e = 0``, or (frictionless) one ``e`` or
+    before. Newton's kinematic restitution with ``e > 0`` does this with Coulomb friction
+    when a contact's slip stops or reverses (Kane's paradox), and with or without friction
+    when the contacts have different ``e`` and one separates before the impact, or when
+    bilateral (persistent) rows move before the impact. The result is the law's answer, not
+    a physical one: use ``e = 0``, or (frictionless) one ``e``, bilateral rows at rest, or
     Poisson's law."""
 
 

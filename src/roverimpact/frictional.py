@@ -565,10 +565,10 @@ def frictional_impact(M, v, normal, tangent, mu, restitution=0.0, bilateral=None
         imp_b = np.zeros((*batch, 0))
     approaching = out["approaching"].reshape(*batch, k)
     Tm, Tp = out["Tm"], out["Tp"]
-    warn_energy_gain(Tm, Tp, batch, "Newton's restitution on the normal with Coulomb "
-                     "friction adds energy when a contact's slip stops or reverses with "
-                     "e > 0 (Kane's paradox; docs/active-set.md): the result is Newton's "
-                     "law, not a physical impact; use e = 0 for such contacts")
+    warn_energy_gain(Tm, Tp, batch, "Newton's restitution with e > 0 adds energy when a "
+                     "contact's slip stops or reverses (Kane's paradox; docs/active-set.md), "
+                     "with different e per contact, or with bilateral rows moving before the "
+                     "impact: the result is Newton's law, not a physical impact; use e = 0")
     return FrictionalImpactResult(
         v_plus=v_plus,
         impulse=imp,

@@ -225,9 +225,9 @@ def impulsive_impact(M, A, v, restitution=0.0, persistent=None, *, rtol: float =
     T_plus = 0.5 * np.sum(u_plus**2, axis=-1)
     lost = 0.5 * np.sum(-du * (2 * u_minus + du), axis=-1)
     warn_energy_gain(np.ravel(T_minus), np.ravel(T_minus - lost), batch,
-                     "Newton's restitution with different e per row adds energy when a "
-                     "row is separating before the impact; use one e or e = 0 (or "
-                     "unilateral_impact with law='poisson')")
+                     "Newton's restitution adds energy with different e per row when a row "
+                     "is separating before the impact, or with e > 0 and persistent rows "
+                     "moving before it; use one e and persistent rows at rest, or e = 0")
     gen = np.einsum("...ji,...j->...i", J, imp)
     if rows_scale is not None:
         imp = imp / rows_scale[..., None]

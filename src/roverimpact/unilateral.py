@@ -344,9 +344,10 @@ def unilateral_impact(M, v, unilateral, restitution=0.0, bilateral=None, *,
         imp_b = np.zeros((*batch, 0))
     Tm = out["Tm"]
     Tp = out["Tp"]
-    warn_energy_gain(Tm, Tp, batch, "Newton's restitution with different e per contact "
-                     "adds energy when a contact separates before the impact; use one e, "
-                     "e = 0 or law='poisson'")
+    warn_energy_gain(Tm, Tp, batch, "Newton's restitution adds energy with different e "
+                     "per contact and one separating before the impact, or with e > 0 and "
+                     "bilateral rows moving before the impact (B v- != 0); use one e and "
+                     "bilateral rows at rest, e = 0, or law='poisson'")
     approaching = out["approaching"].reshape(*batch, k)
     return UnilateralImpactResult(
         v_plus=v_plus,
