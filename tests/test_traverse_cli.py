@@ -89,6 +89,10 @@ def test_traverse_writes_tables_figures_report(short, capfd):
     assert man["stations"] == len(P) and man["executor"] == "serial"
     html = (out / "report.html").read_text()
     assert "data:image/png;base64" in html and "Strongest impacts" in html
+    # its redraw command names the output folder, not the staging folder it was drawn in
+    # (it said "roverimpact traverse-report .out.partial-f8m0jc8v", a folder gone)
+    assert f"<code>roverimpact traverse-report {out}</code>" in html
+    assert ".partial" not in html
     # the copy of the file reads back as the same traverse
     assert load_traverse(out / "traverse.toml") == load_traverse(f)
 

@@ -146,7 +146,8 @@ def traverse_cmd(
             res = run_traverse(config, work, workers=workers, scheduler=scheduler, csv=csv,
                                progress=update,
                                note=lambda text: err_console.print(f"note: {text}"))
-        path = traverse_report(work, config=res.config) if report else None
+        path = (traverse_report(work, config=res.config, shown_as=out) if report
+                else None)
     path = out / Path(path).name if path is not None else None
     res.files = {k: out / Path(p).name for k, p in res.files.items()}
     table = summary(res.poses, res.wheels, res.config)

@@ -318,13 +318,16 @@ def _terrain_file_of_the_run(folder: Path, config, man: dict):
         update={"file": str(f)})})
 
 
-def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
+def traverse_report(folder: str | Path, *, terrain=None, config=None,
+                    shown_as: str | Path | None = None) -> Path:
     """Draw ``map.png/svg`` and ``speed.png/svg`` (per path: ``map-<path>``..., the path's
     name made a file name by :func:`~roverimpact.traverse.schema.file_tag`: "route 1/a"
     gives ``map-route_1_a.png``) and write ``report.html`` in a traverse output folder;
     ``terrain`` and ``config`` default to those of the folder's ``traverse.toml``, which
     must be the copy the run wrote (``config_sha256`` of ``manifest.json``; folders
-    written before the fingerprint are not checked)."""
+    written before the fingerprint are not checked). ``shown_as``: the folder's name in
+    the report's redraw command (default ``folder``; ``roverimpact traverse`` draws the
+    report in a staging folder beside the output folder and gives the output folder's)."""
     from ..traverse.run import build_terrain
     from ..traverse.schema import file_tag, traverse_from_dict
 
@@ -411,7 +414,8 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None) -> Path:
     parts.append(f"<h2>Software versions</h2><table>{vers}</table>")
     parts.append("<p class='small'>Tables: poses.parquet (one row per station), "
                  "wheels.parquet (per station and wheel), segments.parquet. Redraw with "
-                 f"<code>roverimpact traverse-report {html.escape(str(folder))}</code>.</p>")
+                 f"<code>roverimpact traverse-report "
+                 f"{html.escape(str(folder if shown_as is None else shown_as))}</code>.</p>")
     doc = (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>"
            f"{html.escape(config.name)}</title><style>{REPORT_CSS}</style></head><body>"
            + "\n".join(parts) + "</body></html>")
