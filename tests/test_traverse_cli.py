@@ -737,3 +737,92 @@ def test_copy_of_the_traverse_file_runs_from_the_output_folder(tmp_path, monkeyp
     assert main(["traverse", str(copy), "-o", str(tmp_path / "again"), "--json",
                  "--no-report"]) == 0, capfd.readouterr().err
     assert main(["traverse-report", str(tmp_path / "out")]) == 0, capfd.readouterr().err
+
+
+def _other_code_in_tasks(monkeypatch):
+    """Dask workers of this process's in-process cluster answer the command's code identity
+    to the command's check (``Client.run``) and another roverimpact source in tasks: as a
+    worker started from another checkout (the same version string) that joined after the
+    check does."""
+    from distributed import get_worker
+
+    from roverimpact.studies import executors, store
+
+    def code_identity(dask_worker=None):  # (Client.run gives its worker as dask_worker)
+        if dask_worker is not None:
+            return store.code_identity()
+        try:
+            get_worker()
+        except ValueError:  # the command
+            return store.code_identity()
+        return store.code_identity() | {"roverimpact source": "0123456789abcdef"}
+
+    monkeypatch.setattr(executors, "code_identity", code_identity)
+
+
+def test_traverse_worker_of_other_code_that_joins_is_refused(tmp_path, monkeypatch):
+    """On a running scheduler, a worker of other code that joins after the command's check
+    computed its chunks with no word: the traverse's
+    chunks carried no code identity, as a study's do. Now its chunk is refused on the
+    worker and the command stops with one line, the output folder not made. Reference: the
+    study's check (tests/test_study_dask_scheduler.py)."""
+    pytest.importorskip("dask.distributed")
+    from dask.distributed import LocalCluster
+
+    from roverimpact.exceptions import RoverImpactError
+
+    f = _flat_traverse(tmp_path)
+    _other_code_in_tasks(monkeypatch)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        with pytest.raises(RoverImpactError, match=r"runs other code than this command "
+                           r"\(roverimpact source 0123456789abcdef there.*it joined while "
+                           r"the traverse ran: nothing was written"):
+            run_traverse(f, tmp_path / "out", scheduler=cluster.scheduler_address)
+    assert not (tmp_path / "out").exists()
+
+
+def test_traverse_workers_with_a_cold_kernel_cache_are_said_to_compile(tmp_path, monkeypatch):
+    """Workers of a running scheduler whose numba cache lacks the traverse's kernels
+    compile them before their first chunk (30-70 s) with no word: a study says so, a
+    traverse did not ask. Now it asks them (the kernels of the stations, and the weight
+    model's with it) and says it; with a warm cache it says nothing."""
+    pytest.importorskip("dask.distributed")
+    import sys
+    import types
+
+    from dask.distributed import LocalCluster
+
+    from roverimpact._kernels._jit import Kernel
+    from roverimpact.traverse import run
+
+    cfg = load_traverse(_flat_traverse(tmp_path))
+    assert run.traverse_kernels(cfg) == run.TRAVERSE_KERNELS   # T_allow: no weight model
+    weight = cfg.model_copy(update={"limits": cfg.limits.model_copy(
+        update={"T_allow": None, "F_allow": 100.0})})
+    assert run.traverse_kernels(weight) == run.TRAVERSE_KERNELS + run.WEIGHT_MODEL_KERNELS
+    for home in run.TRAVERSE_KERNELS + run.WEIGHT_MODEL_KERNELS:   # the real ones resolve
+        module, _, name = home.partition(":")
+        assert isinstance(getattr(__import__(module, fromlist=[name]), name), Kernel)
+
+    class Fake:
+        def __init__(self, cached):
+            self.compiled, self._cached = False, cached
+
+        def cached(self):
+            return self._cached
+
+    fake = types.ModuleType("fake_kernels")
+    fake.cold, fake.warm = Fake(cached=False), Fake(cached=True)
+    monkeypatch.setitem(sys.modules, "fake_kernels", fake)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp",
+                      dashboard_address=None) as cluster:
+        for kernels, said in ((("fake_kernels:warm",), False),
+                              (("fake_kernels:warm", "fake_kernels:cold"), True)):
+            monkeypatch.setattr(run, "TRAVERSE_KERNELS", kernels)
+            notes: list[str] = []
+            run_traverse(cfg, scheduler=cluster.scheduler_address, note=notes.append)
+            compiling = [n for n in notes if "compile roverimpact's kernels" in n]
+            assert bool(compiling) is said
+            if said:
+                assert "numba's cache there lacks cold)" in compiling[0]

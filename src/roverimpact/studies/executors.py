@@ -42,11 +42,13 @@ __all__ = [
     "as_finished",
     "check_scheduler",
     "check_workers",
+    "compile_note",
     "compute_chunk",
     "compute_chunk_file",
     "kernels_to_compile",
     "local_cluster",
     "need_dask",
+    "other_code_error",
     "other_code_message",
     "reworded",
     "run_dask",
@@ -268,11 +270,10 @@ def compute_chunk_file(evaluator, base, normalized_base, cases, params, simulate
 
     ``code``: the submitting command's :func:`~.store.code_identity`; a worker of another
     (one that joined after :func:`check_workers`) returns an error instead of rows."""
-    if code is not None and code_identity() != dict(code):
-        return RoverImpactError(
-            other_code_message(_this_worker(), code_identity(), code) + "; it joined while "
-            "the study ran: the finished chunks are kept, rerun with --resume once it is "
-            "stopped")
+    wrong = other_code_error(code, "it joined while the study ran: the finished chunks are "
+                                   "kept, rerun with --resume once it is stopped")
+    if wrong is not None:
+        return wrong
     try:
         df = compute_chunk(evaluator, base, normalized_base, cases, params, simulate)
     except InputError as exc:
@@ -280,6 +281,26 @@ def compute_chunk_file(evaluator, base, normalized_base, cases, params, simulate
     buf = io.BytesIO()
     df.to_parquet(buf, index=False, **PARQUET_WRITE)
     return ChunkFile(len(df), buf.getvalue())
+
+
+def other_code_error(code: Mapping[str, str] | None, then: str) -> RoverImpactError | None:
+    """On a Dask worker, running a chunk: the error to return instead of its rows where
+    this worker runs other code than the command that submitted the chunk (``code``: the
+    command's :func:`~.store.code_identity`; a worker that joined after
+    :func:`check_workers`), ``then`` saying what is kept and what to do; None if the same
+    (or no ``code``)."""
+    if code is None or code_identity() == dict(code):
+        return None
+    return RoverImpactError(other_code_message(_this_worker(), code_identity(), code)
+                            + "; " + then)
+
+
+def compile_note(cold: Sequence[str]) -> str:
+    """What the command says when :func:`check_workers` found workers that compile the
+    kernels ``cold`` (homes) before their first chunk."""
+    return (f"the Dask workers compile roverimpact's kernels before their first chunk "
+            f"(numba's cache there lacks {', '.join(k.rpartition(':')[2] for k in cold)}): "
+            "the first chunks wait for it (30-70 s on a 2-core machine)")
 
 
 def _this_worker() -> str:

@@ -39,6 +39,7 @@ from .executors import (
     LazyCluster,
     check_scheduler,
     check_workers,
+    compile_note,
     compute_chunk,
     need_dask,
     reworded,
@@ -308,9 +309,7 @@ def run_study(
         scheduler = check_scheduler(scheduler, note=note)
         cold = check_workers(scheduler, study_kernels(prep.study))
         if cold and note is not None:
-            note(f"the Dask workers compile roverimpact's kernels before their first chunk "
-                 f"(numba's cache there lacks {', '.join(k.rpartition(':')[2] for k in cold)}"
-                 "): the first chunks wait for it (30-70 s on a 2-core machine)")
+            note(compile_note(cold))
     elif workers is not None:
         need_dask()
     out_dir = Path(out_dir)

@@ -37,8 +37,9 @@ from .limits import band_laws, contact_duration, peak_force, speed_limit_energy,
 from .path import Stations, stations
 from .schema import TerrainSpec, TraverseConfig, load_traverse, traverse_from_dict
 
-__all__ = ["POSES", "SEGMENTS", "WHEELS", "TraverseResult", "build_terrain",
-           "path_stations", "run_traverse", "traverse_chunk"]
+__all__ = ["POSES", "SEGMENTS", "TRAVERSE_KERNELS", "WEIGHT_MODEL_KERNELS", "WHEELS",
+           "TraverseResult", "build_terrain", "path_stations", "run_traverse",
+           "traverse_chunk", "traverse_kernels"]
 
 POSES, WHEELS, SEGMENTS = "poses.parquet", "wheels.parquet", "segments.parquet"
 CONFIG_COPY, MANIFEST = "traverse.toml", "manifest.json"
@@ -171,9 +172,40 @@ def _check_inputs(cfg: TraverseConfig, where: str) -> None:
 
 
 # ------------------------------------------------------------------------ one chunk
-def traverse_chunk(cfg_dict: dict, path_index: int, i0: int, i1: int
-                   ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Stations ``i0:i1`` of path ``path_index``: the poses table and the wheels table."""
+#: The compiled kernels (``module:attribute``) a traverse's stations use (the
+#: lane-parallel partition, the effective masses of single rows, Lemke's impact kernel),
+#: and those the weight model adds: what a running scheduler's workers are asked about
+#: (:func:`~roverimpact.studies.executors.check_workers`); ``cli._traverse._compile_plan``
+#: compiles the same ahead for a run here
+TRAVERSE_KERNELS = ("roverimpact._kernels.lanes_jit:LANES",
+                    "roverimpact._kernels.masses:masses_kernel",
+                    "roverimpact._kernels.lemke:impact_kernel")
+WEIGHT_MODEL_KERNELS = ("roverimpact._kernels.reduced:rk4_peaks",
+                        "roverimpact._kernels.reduced:stiff_peaks")
+
+
+def traverse_kernels(cfg: TraverseConfig) -> tuple[str, ...]:
+    """:data:`TRAVERSE_KERNELS`, and :data:`WEIGHT_MODEL_KERNELS` with ``F_allow`` and the
+    weight model."""
+    weight = cfg.limits.F_allow is not None and cfg.limits.model == "weight"
+    return TRAVERSE_KERNELS + (WEIGHT_MODEL_KERNELS if weight else ())
+
+
+def traverse_chunk(cfg_dict: dict, path_index: int, i0: int, i1: int, *,
+                   code: dict | None = None):
+    """Stations ``i0:i1`` of path ``path_index``: the poses table and the wheels table.
+
+    ``code``: the submitting command's :func:`~roverimpact.studies.store.code_identity`;
+    on a Dask worker of other code (one that joined after the command's
+    :func:`~roverimpact.studies.executors.check_workers`) the chunk returns that error
+    instead of its rows."""
+    if code is not None:
+        from ..studies.executors import other_code_error
+
+        wrong = other_code_error(code, "it joined while the traverse ran: nothing was "
+                                 "written; run it again once that worker is stopped")
+        if wrong is not None:
+            return wrong
     cfg = traverse_from_dict(cfg_dict)
     mbm = build_model(cfg)
     terrain = build_terrain(cfg.terrain)
@@ -502,6 +534,7 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
     from ..studies.executors import (
         check_scheduler,
         check_workers,
+        compile_note,
         local_cluster,
         need_dask,
         worker_start_method,
@@ -532,7 +565,9 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
     if scheduler is not None:
         need_dask()
         scheduler = check_scheduler(scheduler, note=note)
-        check_workers(scheduler)
+        cold = check_workers(scheduler, traverse_kernels(cfg))
+        if cold and note is not None:
+            note(compile_note(cold))
     elif workers is not None:
         need_dask()
         worker_start_method()  # a bad ROVERIMPACT_WORKER_START fails before any work
@@ -598,10 +633,13 @@ def _run_dask(address, cfg_dict, chunks, parts, progress, total) -> int:
     from dask.distributed import Client, as_completed
 
     from ..studies.executors import as_finished, worker_result
+    from ..studies.store import code_identity
 
     done = 0
+    code = code_identity()   # each chunk checks it on its worker (other_code_error)
     with Client(address, timeout="10s") as client:
-        futures = {client.submit(traverse_chunk, cfg_dict, i, a, b, retries=2, pure=False): n
+        futures = {client.submit(traverse_chunk, cfg_dict, i, a, b, code=code, retries=2,
+                                 pure=False): n
                    for n, (i, a, b) in enumerate(chunks)}
         # every worker gone: a bounded wait for one, not for ever
         for fut in as_finished(as_completed(list(futures)), client, address,
