@@ -334,8 +334,9 @@ def test_summary_table_at_80_columns():
         lines = text.splitlines()
         body = [ln for ln in lines if ln.startswith((" straight", " route"))]
         assert body[0].split()[0] == "straight" and body[1].split()[:2] == ["route", "1/a"]
-        for number in ("0.005211", "59.39", "0.1764", "12345", "2346", "inf"):
+        for number in ("0.005211", "59.39", "0.1764", "12345", "2346"):
             assert any(number in ln.split() for ln in body), (width, number, text)
+        assert "no limit" in body[1], (width, text)      # inf: not split either
         assert "left out at" in text
     buf = io.StringIO()
     _print_summary(table, Console(width=160, file=buf, markup=False, emoji=False))
@@ -826,3 +827,18 @@ def test_traverse_workers_with_a_cold_kernel_cache_are_said_to_compile(tmp_path,
             assert bool(compiling) is said
             if said:
                 assert "numba's cache there lacks cold)" in compiling[0]
+
+
+def test_a_path_without_impacts_says_no_limit_not_inf(tmp_path, capfd):
+    """Flat ground, no top speed: no impact limits the speed. The summary printed "inf" as
+    the lowest limit [m/s], and report.html "inf" in the summary and every segment's
+    v_lim. Both now say "no limit" (the tables keep inf; --json has null and 0 impacts)."""
+    f = _flat_traverse(tmp_path)
+    capfd.readouterr()
+    assert main(["traverse", str(f), "-o", str(tmp_path / "out")]) == 0
+    text = capfd.readouterr().out
+    assert "no limit" in text and "inf" not in text
+    assert np.isinf(pd.read_parquet(tmp_path / "out" / "segments.parquet")["v_lim"]).all()
+    html = (tmp_path / "out" / "report.html").read_text()
+    cells = re.findall(r"<td>([^<]*)</td>", html)
+    assert "inf" not in cells and cells.count("no limit") == 2   # summary, one segment

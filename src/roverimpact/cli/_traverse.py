@@ -26,7 +26,11 @@ from ._app import (
 
 
 def _f(x, fmt="{:.4g}") -> str:
-    return "n/a" if x != x else ("inf" if x == float("inf") else fmt.format(x))
+    """A summary cell: "n/a" for NaN, "no limit" for an infinite speed limit (a path
+    without impacts and without ``drive.v_max``)."""
+    from ..report.traverse import NO_LIMIT
+
+    return "n/a" if x != x else (NO_LIMIT if x == float("inf") else fmt.format(x))
 
 
 #: The summary's columns left out first, in this order, where the terminal is too narrow

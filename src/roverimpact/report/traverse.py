@@ -229,11 +229,24 @@ def _img(path: Path, alt: str) -> str:
     return f"<img class='fig' alt='{html.escape(alt)}' src='data:image/png;base64,{data}'>"
 
 
+#: How an infinite speed limit (no impact limits the speed, and no ``drive.v_max``) is
+#: shown in the report's tables and the command's summary
+NO_LIMIT = "no limit"
+
+
+def _cell(v) -> str:
+    return "" if v != v else NO_LIMIT if v == math.inf else f"{v:.4g}"
+
+
 def _table(df: pd.DataFrame, max_rows: int = 60) -> str:
+    """``df`` as an HTML table: numbers to 4 digits, NaN empty, an infinite speed limit
+    :data:`NO_LIMIT` (not "inf")."""
     more = (f"<p class='small'>first {max_rows} of {len(df)} rows</p>"
             if len(df) > max_rows else "")
-    return df.head(max_rows).to_html(index=False, border=0, na_rep="",
-                                     float_format=lambda v: f"{v:.4g}") + more
+    df = df.head(max_rows)
+    floats = [c for c in df.columns if df[c].dtype.kind == "f"]
+    return df.to_html(index=False, border=0, na_rep="",
+                      formatters={c: _cell for c in floats}) + more
 
 
 def summary(poses: pd.DataFrame, wheels: pd.DataFrame, config=None) -> pd.DataFrame:
