@@ -275,3 +275,26 @@ def test_bad_inputs():
         first_contact_ahead(T, (0, 0, R), (0, 1, 0), R, (0, 1, 0), (0, 0, 0), max_travel=0.1)
     with pytest.raises(InputError, match="max_travel"):
         first_contact_ahead(T, (0, 0, R), (0, 1, 0), R, (1, 0, 0), (0, 0, 0), max_travel=-1)
+
+
+def test_a_step_sampled_in_a_height_field_is_met_as_a_step_29_27_as_high():
+    """What an operator's DEM of a curb gives. Catmull-Rom (Keys' cubic convolution,
+    a = -1/2) of a sampled step of height h overshoots to (1 + 2/27) h at dx/3 past the
+    edge and dips to -2/27 h before it, at every cell size dx (the kernel's closed form:
+    p(1/3) = 1 + 2/27 for the data 0, 1, 1, 1 around the edge); a wheel of radius r then
+    meets, as dx -> 0, the top edge of a step 29/27 h high: beta -> arccos((r - 29 h/27)/r)
+    (62.42 deg for h = r/2 instead of 60 deg), and the coarse grids lie below. Documented
+    in docs/traverse.md (Limits)."""
+    h = 0.05
+    betas = []
+    for dx in (0.01, 0.002):
+        n = round(1.0 / dx)
+        z = np.tile(np.where(np.arange(n + 1) >= n // 2, h, 0.0), (11, 1))
+        hf = HeightField(z, dx, origin=(-0.5, -5 * dx))
+        assert hf.height(dx / 3, 0.0) == pytest.approx(h * 29 / 27, rel=1e-9)
+        assert hf.height(-4 * dx / 3, 0.0) == pytest.approx(-h * 2 / 27, rel=1e-9)
+        c, p = np.array([-0.3, 0.0, R]), np.array([-0.3, 0.0, 0.0])
+        betas.append(np.degrees(_ahead(hf, c, p, max_travel=0.4).beta))
+    top = np.degrees(np.arccos((R - 29 / 27 * h) / R))
+    assert betas[0] < betas[1] < top and betas[1] == pytest.approx(top, abs=0.15)
+    assert betas[0] == pytest.approx(61.04, abs=0.02)    # 1 cm cells (docs/traverse.md)
