@@ -842,3 +842,32 @@ def test_a_path_without_impacts_says_no_limit_not_inf(tmp_path, capfd):
     html = (tmp_path / "out" / "report.html").read_text()
     cells = re.findall(r"<td>([^<]*)</td>", html)
     assert "inf" not in cells and cells.count("no limit") == 2   # summary, one segment
+
+
+def test_a_planar_rover_runs_on_a_strip_of_terrain(tmp_path):
+    """The 2-D rover on a profile extruded over a 4 cm strip (y in [-0.02, 0.02] m) was
+    refused: "path 'p' leaves the terrain ... within 0.762 m (the rover's reach and
+    look-ahead) of the edge", the reach taken from q[:2] of a planar base, which is (x, z)
+    (0.65 m for wheels 0.3 m from the base and 0.15 m in radius), and applied across the
+    plane the rover cannot leave. Now the reach is the wheels' horizontal 0.45 m and, across
+    the plane, two cells beside the wheels' own y: the strip gives the impact of the same
+    profile on a 4 m wide grid."""
+    dx, gamma = 0.005, np.radians(30.0)
+    x = -1.0 + dx * np.arange(801)
+    z = np.clip((x - 1.0) * np.tan(gamma), 0.0, 0.05)
+    out = {}
+    for name, rows in (("wide", 801), ("strip", 9)):
+        np.save(tmp_path / f"{name}.npy", np.tile(z, (rows, 1)))
+        cfg = {"terrain": {"kind": "file", "file": str(tmp_path / f"{name}.npy"),
+                           "spacing": dx, "origin": [-1.0, -(rows // 2) * dx]},
+               "path": {"name": "p", "waypoints": [[0.62, 0.0], [0.63, 0.0]],
+                        "spacing": 0.02},
+               "model": {"name": "rover2d"}, "drive": {"speed": 0.1, "look_ahead": 0.1},
+               "limits": {"T_allow": 0.01}}
+        out[name] = run_traverse(cfg).wheels
+    assert (out["wide"]["T_c_minus"] > 0).sum() == 1
+    pd.testing.assert_frame_equal(out["strip"], out["wide"])
+    # still refused where the path itself comes too close to the ends of the profile
+    cfg["path"]["waypoints"] = [[-0.6, 0.0], [0.63, 0.0]]
+    with pytest.raises(ConfigError, match=r"within 0\.560 m .*, 0\.010 m across its plane"):
+        run_traverse(cfg)

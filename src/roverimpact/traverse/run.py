@@ -144,11 +144,12 @@ def _check_inputs(cfg: TraverseConfig, where: str) -> None:
     # the rover's reach from its base: wheel centres + radius + look-ahead + 2 cells
     import pinocchio as pin
 
-    q = place(mbm)
+    q = place(mbm)   # the base at (x, y) = (0, 0) (q[:2] of a planar base is (x, z))
     data = mbm.model.createData()
     pin.framesForwardKinematics(mbm.model, data, q)
-    reach = max(np.hypot(*(data.oMf[mbm.model.getFrameId(w.frame)].translation[:2] - q[:2]))
-                + w.radius for w in mbm.wheels)
+    centres = np.array([data.oMf[mbm.model.getFrameId(w.frame)].translation
+                        for w in mbm.wheels])
+    reach = max(np.hypot(*c[:2]) + w.radius for c, w in zip(centres, mbm.wheels, strict=True))
     (xa, xb), (ya, yb) = terrain.extent if hasattr(terrain, "extent") else (
         (-math.inf, math.inf), (-math.inf, math.inf))
     res = terrain.resolution if math.isfinite(terrain.resolution) else 0.0
@@ -161,14 +162,18 @@ def _check_inputs(cfg: TraverseConfig, where: str) -> None:
                                   "with x1 > x0")
         st = path_stations(cfg, i)
         m = reach + cfg.look_ahead(p) + 2 * res
-        out = (st.x < xa + m) | (st.x > xb - m) | (st.y < ya + m) | (st.y > yb - m)
+        # a planar rover moves in its plane: its wheels' discs stay at their own y
+        my = (np.abs(centres[:, 1]).max() + 2 * res) if kind == "planar" else m
+        out = (st.x < xa + m) | (st.x > xb - m) | (st.y < ya + my) | (st.y > yb - my)
         if out.any():
             k = int(np.flatnonzero(out)[0])
+            across = "" if kind != "planar" else f", {my:.3f} m across its plane"
             raise ConfigError(
                 f"{where}: path {p.name!r} leaves the terrain: station {k} at (x, y) = "
                 f"({st.x[k]:.3f}, {st.y[k]:.3f}) m is within {m:.3f} m (the rover's reach "
-                f"and look-ahead) of the edge of the terrain (x in [{xa:.10g}, {xb:.10g}] m, y in "
-                f"[{ya:.10g}, {yb:.10g}] m); {int(out.sum())} of {len(st)} stations are")
+                f"and look-ahead{across}) of the edge of the terrain (x in [{xa:.10g}, "
+                f"{xb:.10g}] m, y in [{ya:.10g}, {yb:.10g}] m); {int(out.sum())} of "
+                f"{len(st)} stations are")
 
 
 # ------------------------------------------------------------------------ one chunk
