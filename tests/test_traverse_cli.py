@@ -93,6 +93,10 @@ def test_traverse_writes_tables_figures_report(short, capfd):
     # (it said "roverimpact traverse-report .out.partial-f8m0jc8v", a folder gone)
     assert f"<code>roverimpact traverse-report {out}</code>" in html
     assert ".partial" not in html
+    # every number column of its tables has its unit ("distance" and "v_lim" had none)
+    for head in ("distance [m]", "beta_deg [deg]", "T_c_minus [J]", "m_eff [kg]",
+                 "v_n [m/s]", "F_model [N]", "v_lim [m/s]", "s0 [m]", "T_c_max [J]"):
+        assert f"<th>{head}</th>" in html, head
     # the copy of the file reads back as the same traverse
     assert load_traverse(out / "traverse.toml") == load_traverse(f)
 

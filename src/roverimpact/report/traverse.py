@@ -238,15 +238,30 @@ def _cell(v) -> str:
     return "" if v != v else NO_LIMIT if v == math.inf else f"{v:.4g}"
 
 
+#: Units of the tables' columns, shown in the report's headers ("v_lim [m/s]"); a column
+#: whose name ends in ``_deg`` is in degrees
+UNITS = {"s": "m", "s0": "m", "s1": "m", "s_worst": "m", "distance": "m", "x_c": "m",
+         "y_c": "m", "z_c": "m", "T_c_minus": "J", "T_c_max": "J", "m_eff": "kg",
+         "v_n": "m/s", "v_lim": "m/s", "v_lim_closed": "m/s", "v_lim_band": "m/s",
+         "F_pred": "N", "F_model": "N", "F_lo": "N", "F_hi": "N", "F_pred_max": "N",
+         "F_model_max": "N", "T_c_flat_nominal": "J", "T_c_flat_best": "J"}
+
+
+def _with_unit(col: str) -> str:
+    unit = UNITS.get(col, "deg" if col.endswith("_deg") else None)
+    return col if unit is None else f"{col} [{unit}]"
+
+
 def _table(df: pd.DataFrame, max_rows: int = 60) -> str:
-    """``df`` as an HTML table: numbers to 4 digits, NaN empty, an infinite speed limit
-    :data:`NO_LIMIT` (not "inf")."""
+    """``df`` as an HTML table: headers with their units (:data:`UNITS`), numbers to 4
+    digits, NaN empty, an infinite speed limit :data:`NO_LIMIT` (not "inf")."""
     more = (f"<p class='small'>first {max_rows} of {len(df)} rows</p>"
             if len(df) > max_rows else "")
     df = df.head(max_rows)
     floats = [c for c in df.columns if df[c].dtype.kind == "f"]
-    return df.to_html(index=False, border=0, na_rep="",
-                      formatters={c: _cell for c in floats}) + more
+    return df.rename(columns=_with_unit).to_html(
+        index=False, border=0, na_rep="",
+        formatters={_with_unit(c): _cell for c in floats}) + more
 
 
 def summary(poses: pd.DataFrame, wheels: pd.DataFrame, config=None) -> pd.DataFrame:
