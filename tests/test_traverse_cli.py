@@ -229,6 +229,13 @@ def test_schema_refusals():
     bad({"limits.gravity": "venus"}, "gravity preset")
     bad({"limits.model": "exact"}, "weight")
     bad({"limits.window": 0.0}, "window")
+    # keys that would be ignored (they were, with no word)
+    bad({"limits.F_allow": None, "limits.T_allow": 0.1, "limits.gravity": "mars"},
+        r"limits.gravity: for limits.F_allow .* with limits.T_allow they would be ignored")
+    bad({"limits.F_allow": None, "limits.T_allow": 0.1, "limits.model": "closed-form"},
+        r"limits.model: for limits.F_allow")
+    bad({"limits.model": "closed-form", "limits.window": 0.01, "limits.gravity": "moon"},
+        r"limits.gravity, limits.window: for the weight model .* would be ignored")
     bad({"terrain.seed": -1}, "terrain.seed")
     bad({"terrain.rock_abundance": 1.0}, "rock_abundance")
     bad({"terrain.hurst": 1.2}, "hurst")

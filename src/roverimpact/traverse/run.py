@@ -579,7 +579,9 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
     _check_inputs(cfg, where)
     chunks = _chunks(cfg)
     total = sum(b - a for _, a, b in chunks)
-    cfg_dict = cfg.model_dump(mode="json")
+    # the keys given only: a default the schema would refuse as ignored (limits.gravity
+    # with T_allow) is not written out
+    cfg_dict = cfg.model_dump(mode="json", exclude_unset=True)
     t0 = time.perf_counter()
     parts: dict[int, tuple] = {}
     done = 0
@@ -694,7 +696,7 @@ def _write(res: TraverseResult, text: str | None, csv: bool) -> None:
             atomic_write_bytes(p, df.to_csv(index=False).encode())
             files[name.split(".")[0] + "_csv"] = p
     if text is None:
-        text = _toml(cfg.model_dump(mode="json", exclude_none=True))
+        text = _toml(cfg.model_dump(mode="json", exclude_none=True, exclude_unset=True))
     tomllib.loads(text)
     atomic_write_bytes(out / CONFIG_COPY, text.encode())
     manifest = {"name": cfg.name, "paths": [p.name for p in cfg.all_paths()],
