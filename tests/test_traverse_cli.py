@@ -589,6 +589,11 @@ def test_summary_length_is_the_path_length(tmp_path, capfd):
     row = out["summary"][0]
     assert row["stations"] == 4 and row["length [m]"] == pytest.approx(0.33)
     assert row["lowest limit [m/s]"] is None and row["impacts"] == 0   # inf: no impact
+    # report.html said "inf" in its summary and every segment's v_lim: now "no limit" (the
+    # tables keep inf; the terminal's summary: test_summary_table_at_80_columns)
+    assert np.isinf(pd.read_parquet(tmp_path / "out" / "segments.parquet")["v_lim"]).all()
+    cells = re.findall(r"<td>([^<]*)</td>", (tmp_path / "out" / "report.html").read_text())
+    assert "inf" not in cells and cells.count("no limit") == 2   # summary, one segment
     S = pd.read_parquet(tmp_path / "out" / "segments.parquet")
     assert S["s1"].iloc[-1] == pytest.approx(0.33)
     # with a top speed every station's limit is it: no station to name (it said s = 0)
@@ -838,21 +843,6 @@ def test_traverse_workers_with_a_cold_kernel_cache_are_said_to_compile(tmp_path,
             assert bool(compiling) is said
             if said:
                 assert "numba's cache there lacks cold)" in compiling[0]
-
-
-def test_a_path_without_impacts_says_no_limit_not_inf(tmp_path, capfd):
-    """Flat ground, no top speed: no impact limits the speed. The summary printed "inf" as
-    the lowest limit [m/s], and report.html "inf" in the summary and every segment's
-    v_lim. Both now say "no limit" (the tables keep inf; --json has null and 0 impacts)."""
-    f = _flat_traverse(tmp_path)
-    capfd.readouterr()
-    assert main(["traverse", str(f), "-o", str(tmp_path / "out")]) == 0
-    text = capfd.readouterr().out
-    assert "no limit" in text and "inf" not in text
-    assert np.isinf(pd.read_parquet(tmp_path / "out" / "segments.parquet")["v_lim"]).all()
-    html = (tmp_path / "out" / "report.html").read_text()
-    cells = re.findall(r"<td>([^<]*)</td>", html)
-    assert "inf" not in cells and cells.count("no limit") == 2   # summary, one segment
 
 
 def test_a_planar_rover_runs_on_a_strip_of_terrain(tmp_path):
