@@ -872,3 +872,31 @@ def test_a_planar_rover_runs_on_a_strip_of_terrain(tmp_path):
     cfg["path"]["waypoints"] = [[-0.6, 0.0], [0.63, 0.0]]
     with pytest.raises(ConfigError, match=r"within 0\.560 m .*, 0\.010 m across its plane"):
         run_traverse(cfg)
+
+
+def test_impacts_that_allow_no_speed_are_said(tmp_path):
+    """F_allow below the wheel's weight share (1 mN): the weight model's limit is 0 at the
+    2-D rover's front wheel before a 30 degree ramp, and the command said nothing (the
+    summary's lowest limit 0, the reason only in docs/traverse.md). Now a note says how
+    many, where and why. Reference: the preloaded support's static force m g / 2 = 118 N
+    is far above F_allow, so no speed keeps the force under it."""
+    dx, gamma = 0.005, np.radians(30.0)
+    x = -1.0 + dx * np.arange(801)
+    np.save(tmp_path / "ramp.npy", np.tile(np.clip((x - 1.0) * np.tan(gamma), 0.0, 0.05),
+                                           (9, 1)))
+    cfg = {"terrain": {"kind": "file", "file": str(tmp_path / "ramp.npy"), "spacing": dx,
+                       "origin": [-1.0, -4 * dx]},
+           "path": {"name": "p", "waypoints": [[0.62, 0.0], [0.63, 0.0]], "spacing": 0.02},
+           "model": {"name": "rover2d"}, "drive": {"speed": 0.1, "look_ahead": 0.1},
+           "limits": {"F_allow": 1e-3}, "contact_law": {"name": "hertz", "k": 1e7}}
+    notes = []
+    W = run_traverse(cfg, note=notes.append).wheels
+    assert (W["v_lim"] == 0).sum() == 1
+    assert notes == ["1 impact(s) at 1 station(s) allow no speed (v_lim = 0, the first at "
+                     "s = 0 m of path 'p'): the weight model's force exceeds limits.F_allow "
+                     "even at 1 % of drive.speed (the wheel's weight share), or the wheel is "
+                     "locked against the feature (m_eff infinite); drive round them, or check "
+                     "limits.F_allow"]
+    cfg["limits"]["F_allow"] = 150.0
+    notes.clear()
+    assert (run_traverse(cfg, note=notes.append).wheels["v_lim"] > 0).all() and not notes

@@ -612,11 +612,22 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
     wheels = pd.concat([parts[n][1] for n in range(len(chunks))], ignore_index=True)
     segments = segments_table(cfg, poses, wheels)
     timings = {"stations": float(elapsed)}
+    said = []
     rising = int(wheels["F_model_rising"].sum()) if "F_model_rising" in wheels else 0
     if rising:
-        msg = (f"{rising} impact(s) still loading when limits.window = "
-               f"{cfg.limits.window:g} s ended (wheels.parquet: F_model_rising): their F_model "
-               "is below the peak and their speed limits too high; lengthen the window")
+        said.append(f"{rising} impact(s) still loading when limits.window = "
+                    f"{cfg.limits.window:g} s ended (wheels.parquet: F_model_rising): their "
+                    "F_model is below the peak and their speed limits too high; lengthen the "
+                    "window")
+    stuck = wheels[wheels["v_lim"] == 0.0]
+    if len(stuck):
+        said.append(
+            f"{len(stuck)} impact(s) at {stuck['station'].nunique()} station(s) allow no speed "
+            f"(v_lim = 0, the first at s = {stuck['s'].iloc[0]:g} m of path "
+            f"{stuck['path'].iloc[0]!r}): the weight model's force exceeds limits.F_allow even "
+            "at 1 % of drive.speed (the wheel's weight share), or the wheel is locked against "
+            "the feature (m_eff infinite); drive round them, or check limits.F_allow")
+    for msg in said:
         if note:
             note(msg)
         else:
