@@ -567,6 +567,28 @@ def test_speed_figure_does_not_draw_stations_without_pose_as_unlimited():
     assert np.isnan(stairs[0].get_data().values[1])
 
 
+def test_speed_figure_without_top_speed_says_what_its_top_is():
+    """Without drive.v_max, stations with no impact (v_lim inf) and limits above the axis
+    were drawn at its top, 2 u_ref, as if the limit were 0.2 m/s: a flat path's figure
+    read "speed limit 0.2 m/s" where its tables say no limit. The top line is now labelled
+    "no limit, or one above 0.2 m/s"; where every limit is on the axis, there is no such
+    line (the axis' top: 2 u_ref, or up to 4 u_ref for the 95th percentile)."""
+    from roverimpact.report.traverse import plot_speed
+
+    W = pd.DataFrame({"path": "a", "s": [0.0], "station": [0], "wheel": ["w"],
+                      "T_c_minus": [0.01], "F_pred": [10.0]})
+    for v, said in (([np.inf, np.inf, np.inf], "0.2"), ([0.05, 0.9, 0.08], "0.4"),
+                    ([0.05, 0.12, 0.08], None)):
+        P = pd.DataFrame({"path": "a", "station": [0, 1, 2], "s": [0.0, 0.5, 1.0],
+                          "status": "ok", "v_lim": v})
+        S = pd.DataFrame({"path": "a", "s0": [0.0], "s1": [1.0], "v_lim": [min(v)]})
+        ax = plot_speed(P, S, W, v_ref=0.1).axes[0]
+        texts = [t.get_text() for t in ax.get_legend().get_texts()]
+        top = [t for t in texts if t.startswith("no limit")]
+        assert top == ([] if said is None else
+                       [f"no limit, or one above {said} m/s (drawn here)"]), (v, texts)
+
+
 def _flat_traverse(folder):
     """``folder/t.toml``: a 0.33 m path of the 2-D rover over ``folder/flat.npy`` (flat,
     1 cm cells), the height field named relative to the traverse file."""

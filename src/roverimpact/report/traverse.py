@@ -203,6 +203,13 @@ def plot_speed(poses: pd.DataFrame, segments: pd.DataFrame, wheels: pd.DataFrame
     ax.axhline(v_ref, color="tab:blue", ls="--", lw=1, label=f"reference speed {v_ref:g} m/s")
     if v_max:
         ax.axhline(v_max, color="k", ls=":", lw=1, label=f"top speed {v_max:g} m/s")
+    else:  # without a top speed, the axis' top holds "no limit" and limits above it
+        over = [x for x in (v, S["v_lim"].to_numpy(float),
+                            P["v_lim_band"].to_numpy(float) if "v_lim_band" in P else v)
+                if (x > top).any()]
+        if over:
+            ax.axhline(top, color="k", ls=":", lw=1,
+                       label=f"no limit, or one above {top:.3g} m/s (drawn here)")
     ax.set_ylim(0, top * 1.05)
     ax.set_ylabel("speed limit [m/s]")
     ax.legend(loc="lower right", fontsize=8, ncol=2, framealpha=0.85)
