@@ -236,6 +236,12 @@ def test_schema_refusals():
         r"limits.model: for limits.F_allow")
     bad({"limits.model": "closed-form", "limits.window": 0.01, "limits.gravity": "moon"},
         r"limits.gravity, limits.window: for the weight model .* would be ignored")
+    # the copy of a traverse file written before this check holds every default (and
+    # traverse-report reads it): taken
+    traverse_from_dict(dict(base, limits={"T_allow": 0.1, "model": "weight", "gravity":
+                                          "earth", "window": 0.05,
+                                          "ground_law": {"name": "hunt-crossley",
+                                                         "k": 1.0e7, "e": 0.2}}))
     bad({"terrain.seed": -1}, "terrain.seed")
     bad({"terrain.rock_abundance": 1.0}, "rock_abundance")
     bad({"terrain.hurst": 1.2}, "hurst")

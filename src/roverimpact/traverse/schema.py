@@ -311,9 +311,9 @@ class LimitsSpec(StrictModel):
     (:mod:`roverimpact.traverse.refine`: ``gravity``, the supports' ``ground_law``, the
     ``window`` [s] in which the peak is sought), or ``"closed-form"``: the 1-DoF closed form
     of (m_eff, v_n), no weight and rigid supports (low where the weight share is of the
-    order of the impact force, docs/traverse.md). Keys that would be ignored are refused:
-    ``model`` and the weight model's with ``T_allow``, the weight model's with
-    ``"closed-form"``."""
+    order of the impact force, docs/traverse.md). Keys that would be ignored are refused
+    where they differ from the defaults: ``model`` and the weight model's with ``T_allow``,
+    the weight model's with ``"closed-form"``."""
 
     T_allow: float | None = Field(None, gt=0.0, allow_inf_nan=False)
     F_allow: float | None = Field(None, gt=0.0, allow_inf_nan=False)
@@ -336,17 +336,23 @@ class LimitsSpec(StrictModel):
     def _one(self):
         if (self.T_allow is None) == (self.F_allow is None):
             raise ValueError("give exactly one of limits.T_allow [J] or limits.F_allow [N]")
-        # keys given that would be ignored: the weight model's without it
+        # keys given that would be ignored: the weight model's without it. Values other
+        # than the defaults: the copies of traverse files written before this check hold
+        # every default (gravity = "earth" with T_allow) and traverse-report reads them
         weight_keys = ("gravity", "ground_law", "window")
+
+        def other(k):
+            return getattr(self, k) != type(self).model_fields[k].default
+
         if self.T_allow is not None:
-            given = [k for k in ("model", *weight_keys) if k in self.model_fields_set]
+            given = [k for k in ("model", *weight_keys) if other(k)]
             if given:
                 raise ValueError(
                     f"limits.{', limits.'.join(given)}: for limits.F_allow (the peak force "
                     "and its model) only; with limits.T_allow they would be ignored: remove "
                     "them")
         elif self.model == "closed-form":
-            given = [k for k in weight_keys if k in self.model_fields_set]
+            given = [k for k in weight_keys if other(k)]
             if given:
                 raise ValueError(
                     f"limits.{', limits.'.join(given)}: for the weight model (limits.model = "
