@@ -379,3 +379,49 @@ def test_rigid_planar_rover_before_a_ramp_against_hand_and_scipy(tmp_path):
 
     assert r["F_model"] == pytest.approx(peak(u), rel=2e-4)          # 163.3 N
     assert peak(r["v_lim"]) == pytest.approx(F_allow, rel=3e-3)      # at 0.0907 m/s
+
+
+def test_robot_files_steering_locked_as_in_a_scenario():
+    """The Sawppy-like URDF of examples/sawppy_like_beta.toml holds its four steering
+    joints with contacts.locked, as its scenario does. The traverse refused them
+    ("contacts.locked: 'steer_left_front' is not a suspension joint of 'sawppy_like'
+    ([])": a plain URDF declares no suspension joints) and its pose solver took them for
+    pose unknowns. Now any 1-DoF joint is locked as in a scenario: on level ground before a
+    step across the left wheels' path, the left front wheel's T_c^-, m_eff and v_n equal
+    the scenario's at beta = arccos((r - h)/r) with the same locked rows."""
+    from pathlib import Path
+
+    import tomllib
+
+    from roverimpact.scenario.build import make_model
+    from roverimpact.scenario.schema import ContactsSpec, LoopSpec, ModelSpec
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    raw = tomllib.loads((ex / "sawppy_like_beta.toml").read_text())
+    raw["model"]["file"] = str(ex / raw["model"]["file"])
+    loops = [LoopSpec.model_validate(lp) for lp in raw["contacts"]["loops"]]
+    mbm = make_model(ModelSpec.model_validate(raw["model"]), loops=loops)
+    contacts = ContactsSpec(locked=raw["contacts"]["locked"])
+    names = [w.name for w in mbm.wheels]
+    w = names.index("left_front")
+    r_w, h = mbm.wheels[w].radius, 0.02
+    data = mbm.model.createData()
+    q0 = np.array(mbm.params.get("q_nominal", pin.neutral(mbm.model)))
+    pin.framesForwardKinematics(mbm.model, data, q0)
+    xf, yf = data.oMf[mbm.model.getFrameId(mbm.wheels[w].frame)].translation[:2]
+    x_e = xf + np.sqrt(2 * r_w * h - h * h) + 0.01
+    terrain = FunctionTerrain(lambda x, y: np.where((x >= x_e) & (y * np.sign(yf) > 0.05),
+                                                    h, 0.0))
+    res = evaluate_stations(mbm, terrain, [0.0], [0.0], [0.0], u=0.3, max_travel=0.05,
+                            contacts=contacts)
+    assert res.pose.status[0] == "ok"
+    assert res.hit["found"][0].tolist() == [n == "left_front" for n in names]
+    beta = np.arccos((r_w - h) / r_w)
+    assert res.hit["beta"][0, w] == pytest.approx(beta, abs=1e-7)
+    sc = dict(raw, obstacle={"wheel": "left_front", "beta_deg": float(np.degrees(beta))})
+    sc.pop("simulation")
+    en = ri.ImpactSetup.from_scenario(ri.Scenario.model_validate(sc)).partition()
+    assert res.impact.T_c_minus[0, w] == pytest.approx(float(en.T_c_minus), rel=1e-8)
+    assert res.impact.m_eff[0, w] == pytest.approx(float(en.m_eff), rel=1e-8)
+    assert res.impact.v_n[0, w] == pytest.approx(float(en.v_n), rel=1e-8)
+    assert all(f"lock:{j}" in res.impact.held[0, w] for j in contacts.locked)

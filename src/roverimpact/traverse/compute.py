@@ -465,8 +465,8 @@ def evaluate_stations(mbm, terrain, x, y, yaw, *, u: float, max_travel: float,
     max_travel : float
         Look-ahead of every wheel [m].
     contacts : ContactsSpec
-        ``ground``, ``mu``, ``locked`` (held fixed in the pose and as rows),
-        ``loop_closure``.
+        ``ground``, ``mu``, ``locked`` (rows of every impact; the suspension joints among
+        them also held at the nominal in the pose), ``loop_closure``.
     constraints : "auto", "all" or list of str
     wheels : sequence of str, optional
         Wheels placed on the terrain (default all).
@@ -479,7 +479,9 @@ def evaluate_stations(mbm, terrain, x, y, yaw, *, u: float, max_travel: float,
     """
     if not (np.isfinite(u) and u > 0):
         raise InputError(f"the reference speed must be > 0 m/s, got {u}")
-    fixed = list(contacts.locked)
+    # the locked joints that are pose unknowns (suspension joints) stay at the nominal;
+    # the others (a robot file's steering) are not solved for anyway
+    fixed = [j for j in contacts.locked if j in mbm.lockable_joints]
     pose = place_on_path(mbm, terrain, x, y, yaw, wheels=wheels, fixed=fixed, stride=stride,
                          q0=q0)
     ok = np.asarray(pose.status) == "ok"

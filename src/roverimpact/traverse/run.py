@@ -125,10 +125,13 @@ def _check_inputs(cfg: TraverseConfig, where: str) -> None:
         bad = [v for v in vals if v not in names]
         if bad:
             raise ConfigError(f"{where}: {key}: unknown wheel(s) {bad}; wheels: {names}")
-    for j in cfg.contacts.locked:
-        if j not in mbm.lockable_joints:
-            raise ConfigError(f"{where}: contacts.locked: {j!r} is not a suspension joint "
-                              f"of {mbm.name!r} ({mbm.lockable_joints})")
+    from ..models.joints import lock_row
+
+    for j in cfg.contacts.locked:  # any 1-DoF joint, as a scenario's (a robot's steering)
+        try:
+            lock_row(mbm, j)
+        except (ModelError, InputError) as exc:
+            raise ConfigError(f"{where}: {exc}") from None
     lim = cfg.limits
     if lim.F_allow is not None and lim.model == "weight":
         from .refine import model_speed_cap
