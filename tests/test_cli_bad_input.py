@@ -124,6 +124,7 @@ def _write_inputs(d: Path) -> None:
         "opt_malformed.toml": "[optimize\n",
         "opt_nbeta1.toml": OPT.replace("n_beta = 4", "n_beta = 1"),
         "opt_negative.toml": OPT.replace("h = [0.3, 0.45]", "wheelbase = [-0.45, 0.8]"),
+        "opt_seed.toml": OPT + "seed = -1\n",
         # traverses (traverse, traverse-report)
         "trav_good.toml": TRAV,
         "trav_malformed.toml": "[terrain\n",
@@ -554,6 +555,9 @@ CASES = [
     ("optimize-malformed", ["optimize", "{d}/opt_malformed.toml"], [], "malformed TOML",
      None),
     ("optimize-missing", ["optimize", "{d}/nope.toml"], [], "no such file", None),
+    # a negative seed ended in numpy's "expected non-negative integer" traceback, exit 1
+    ("optimize-negative-seed", ["optimize", "{d}/opt_seed.toml", "--no-simulate"], [],
+     "optimize.seed", None),
     ("optimize-plot-unwritable", ["optimize", "{ex}/reconfigure_rover2d.toml",
                                   "--no-simulate", "--plot", "{rodir}/p"],
      ["{rodir}/p.png", "{rodir}/p.svg"],

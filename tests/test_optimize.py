@@ -143,6 +143,8 @@ def _bad(section, **kw):
     (_bad("optimize", variables={}), "variables"),
     (_bad("optimize", beta_deg=[10, 120]), "beta_deg"),
     (_bad("optimize", objective="best"), "objective"),
+    # a negative seed passed validation and ended in numpy's ValueError (a traceback)
+    (_bad("optimize", seed=-1), "optimize.seed"),
     (_bad("scenario", model={"name": "rigid_body"}), "rover2d"),
     ({**PROBLEM, "simulation": {"mu": 0.1}}, r"write \[scenario.simulation\]"),
     # no speed anywhere: named as optimize.speed or scenario.velocity.u (it said
@@ -248,3 +250,10 @@ def test_a_nominal_outside_the_bounds_is_not_the_optimum():
     assert res.best.objective <= min(grid) * (1 + 1e-9)
     assert res.best.objective == pytest.approx(worst(res.best.values["h"]), rel=1e-9)
     assert res.reduction < 0  # worse than the nominal, which the bounds exclude
+
+
+def test_degrees_that_look_like_radians_warn():
+    from roverimpact.studies.optimize import load_optimization
+
+    with pytest.warns(UserWarning, match=r"If you meant radians, write \[20.05, 89.95\]"):
+        load_optimization(_bad("optimize", beta_deg=[0.35, 1.57]))

@@ -100,7 +100,7 @@ class OptimizeSpec(StrictModel):
     stability_margin: float = Field(0.05, allow_inf_nan=False)
     min_clearance: float = Field(0.0, allow_inf_nan=False)
     n_starts: int = Field(6, ge=1, le=1000)
-    seed: int = 0
+    seed: int = Field(0, ge=0)
     maxiter: int = Field(100, ge=1)
 
     _bounds = field_validator("variables")(finite_bounds)
@@ -112,6 +112,13 @@ class OptimizeSpec(StrictModel):
         if not (0.0 < lo <= hi <= 90.0):
             raise ValueError(f"beta_deg must be [lo, hi] with 0 < lo <= hi <= 90 degrees, got "
                              f"{list(b)}")
+        if hi <= math.pi / 2:  # [0.35, 1.57] is 20-90 deg in radians
+            import warnings
+
+            warnings.warn(f"optimize.beta_deg = {list(b)} is in degrees: obstacle angles of at "
+                          f"most {hi:g} deg. If you meant radians, write "
+                          f"[{math.degrees(lo):.4g}, {math.degrees(hi):.4g}]", UserWarning,
+                          stacklevel=2)
         return b
 
     @model_validator(mode="after")
