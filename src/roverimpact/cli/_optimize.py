@@ -9,7 +9,15 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, check_output, console, new_table, print_json, print_paths
+from ._app import (
+    app,
+    check_output,
+    console,
+    new_table,
+    print_json,
+    print_paths,
+    progress_bar,
+)
 
 
 @app.command("optimize")
@@ -24,11 +32,12 @@ def optimize_cmd(
     """Suspension reconfiguration: minimise the worst-case (or mean) T_c^- over beta."""
     from ..report.plots import figure_files
     from ..report.reconfiguration import plot_reconfiguration
-    from ..studies.optimize import optimize_setting
+    from ..studies.optimize import optimize_setting, param_unit
 
     for path in figure_files(plot) if plot is not None else ():
         check_output(path, folder=False, option="--plot")
-    res = optimize_setting(file, simulate=simulate)
+    with progress_bar("optimize", unit="starts + simulations", to_stderr=as_json) as update:
+        res = optimize_setting(file, simulate=simulate, progress=update)
     spec = res.problem.spec
     figures = plot_reconfiguration(res, plot) if plot is not None else {}
     n, b = res.nominal, res.best
@@ -42,21 +51,45 @@ def optimize_cmd(
                     "nominal": point(n, res.F_sim_nominal if simulate else None),
                     "optimum": point(b, res.F_sim_best if simulate else None),
                     "reduction": res.reduction, "nominal_in_bounds": res.nominal_in_bounds,
+                    "at_bound": res.at_bound(),
+                    "active_constraints": res.active_constraints(),
+                    "nominal_violations": res.nominal_violations(),
+                    "units": {**{k: param_unit(k) for k in res.problem.names},
+                              "objective_T_c_minus": "J", "beta_worst_deg": "deg",
+                              "F_pred": "N", "F_sim": "N", "stability_margin": "m",
+                              "clearance": "m"},
                     "figures": figures})
         return
     tab = new_table(f"Suspension setting ({spec.objective}-case T_c^-, beta "
                     f"{spec.beta_deg[0]:g}-{spec.beta_deg[1]:g} deg)", "", "nominal", "optimum")
+    at_bound, active = res.at_bound(), res.active_constraints()
+
+    def note(text):
+        return f" ({text})" if text else ""
+
     for name in res.problem.names:
-        tab.add_row(name, f"{n.values[name]:.4g}", f"{b.values[name]:.4g}")
+        tab.add_row(f"{name} [{param_unit(name)}]", f"{n.values[name]:.4g}",
+                    f"{b.values[name]:.4g}{note(at_bound.get(name))}")
     tab.add_row(f"{spec.objective} T_c^- [J]", f"{n.objective:.4g}", f"{b.objective:.4g}")
     tab.add_row("worst beta [deg]", f"{n.beta_worst_deg:.3g}", f"{b.beta_worst_deg:.3g}")
     tab.add_row("predicted F_max [N]", f"{n.F_pred:.4g}", f"{b.F_pred:.4g}")
     if simulate:
         tab.add_row("simulated F_max [N]", f"{res.F_sim_nominal:.4g}", f"{res.F_sim_best:.4g}")
-    tab.add_row("stability margin [m]", f"{n.margin:.4g}", f"{b.margin:.4g}")
-    tab.add_row("clearance [m]", f"{n.clearance:.4g}", f"{b.clearance:.4g}")
+    tab.add_row("stability margin [m]", f"{n.margin:.4g}",
+                f"{b.margin:.4g}{note('active' if 'stability margin' in active else '')}")
+    tab.add_row("clearance [m]", f"{n.clearance:.4g}",
+                f"{b.clearance:.4g}{note('active' if 'clearance' in active else '')}")
     console.print(tab)
     console.print(f"T_c^- reduced by {100 * res.reduction:.1f} %")
+    if at_bound:
+        console.print("note: the optimum lies on a bound (" + ", ".join(
+            f"{k}: {v}" for k, v in at_bound.items()) + "): a wider range may lower T_c^- "
+            "further", highlight=False)
+    violated = res.nominal_violations()
+    if violated:
+        console.print("note: the nominal setting violates the limits (" + ", ".join(violated)
+                      + "): the reduction is measured from a setting they refuse",
+                      highlight=False)
     if not res.nominal_in_bounds:
         console.print("note: the nominal setting lies outside the bounds of [optimize] "
                       "variables, so it was not a candidate: the optimum is the best setting "

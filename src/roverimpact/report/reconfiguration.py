@@ -15,14 +15,16 @@ def plot_reconfiguration(result, target: str | Path) -> dict[str, Path]:
     ``<target>.png`` and ``<target>.svg``; returns the paths by type."""
     from matplotlib.figure import Figure
 
+    from ..studies.optimize import param_unit
+
     fig = Figure(figsize=(6.0, 3.8), layout="constrained")
     ax = fig.subplots()
     b = result.betas_deg
     fmt = ", ".join
     ax.plot(b, result.nominal.T_c, "o-", label="nominal: " + fmt(
-        f"{k} = {v:.3g}" for k, v in result.nominal.values.items()))
+        f"{k} = {v:.3g} {param_unit(k)}" for k, v in result.nominal.values.items()))
     ax.plot(b, result.best.T_c, "s-", label="optimum: " + fmt(
-        f"{k} = {v:.3g}" for k, v in result.best.values.items()))
+        f"{k} = {v:.3g} {param_unit(k)}" for k, v in result.best.values.items()))
     ax.set_xlabel(r"obstacle angle $\beta$ [deg]")
     ax.set_ylabel(r"$T_c^-$ [J]")
     ax.set_title(f"{result.problem.spec.objective}-case $T_c^-$ reduced by "
