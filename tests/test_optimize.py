@@ -343,3 +343,34 @@ def test_degrees_that_look_like_radians_warn():
 
     with pytest.warns(UserWarning, match=r"If you meant radians, write \[20.05, 89.95\]"):
         load_optimization(_bad("optimize", beta_deg=[0.35, 1.57]))
+
+
+def test_a_terrain_is_refused():
+    """The limits are measured on the plane z = 0. The rocker-bogie posed on a 10 % slope
+    stands on all six wheels (each wheel's lowest point against the slope's normal lies on
+    the plane, checked below), but only the lowest wheels within 0.1 mm of the lowest z
+    counted as support: stability margin -inf, and the command answered "no setting within
+    the bounds satisfies stability margin >= 0.05 m" for a rover that stands. A terrain
+    is now refused at load, naming scenario.terrain."""
+    import pinocchio as pin
+
+    from roverimpact.models.constraints import wheel_contact_point
+    from roverimpact.models.geometry import stability_margin
+    from roverimpact.scenario import ImpactSetup, scenario_from_dict
+    from roverimpact.studies.optimize import load_optimization
+
+    n = np.array([-0.1, 0.0, 1.0]) / np.hypot(0.1, 1.0)
+    scn = {"model": {"name": "rocker_bogie"}, "velocity": {"u": 0.2},
+           "obstacle": {"wheel": "left_front", "beta_deg": 45.0},
+           "terrain": {"plane": {"normal": n.tolist()}}}
+    setup = ImpactSetup.from_scenario(scenario_from_dict(scn))
+    mbm, data = setup.model, setup.model.model.createData()
+    pin.forwardKinematics(mbm.model, data, setup.q)
+    pin.updateFramePlacements(mbm.model, data)
+    heights = [n @ wheel_contact_point(data, mbm.model.getFrameId(w.frame), w, n)
+               for w in mbm.wheels]
+    assert np.ptp(heights) < 1e-6  # six wheels on the slope
+    assert stability_margin(mbm, setup.q) == -np.inf  # what the flat-ground margin says
+    spec = {"variables": {"chassis_com_above_pivot": [0.0, 0.2]}, "n_beta": 2}
+    with pytest.raises(ConfigError, match=r"scenario.terrain: optimize measures"):
+        load_optimization({"scenario": scn, "optimize": spec})

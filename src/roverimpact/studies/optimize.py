@@ -207,6 +207,15 @@ def load_optimization(source: str | Path | Mapping[str, Any]) -> OptimizeProblem
         raise ConfigError(f"{where}: scenario: {exc}") from None
     if setup.scenario.obstacle.wheel is None:
         raise ConfigError(f"{where}: scenario.obstacle must name a wheel")
+    ts = setup.scenario.terrain
+    if ts is not None and ts != type(ts)():
+        # the limits are measured on the plane z = 0: on a slope only the lowest wheels
+        # count as support (margin -inf for the rocker-bogie) and the clearance is taken
+        # from z = 0, so every setting looked unstable or every limit meaningless
+        raise ConfigError(f"{where}: scenario.terrain: optimize measures the stability "
+                          "margin and the clearance on flat ground (the plane z = 0) and "
+                          "does not take a terrain; remove [scenario.terrain], or sweep "
+                          "the variables over the terrain scenario with a study")
     if not (setup.scenario.velocity.u or 0.0) > 0.0:  # the approach speed of the prediction
         raise ConfigError(f"{where}: give the driving speed, optimize.speed or "
                           "scenario.velocity.u > 0 [m/s]: the predicted peak force (and the "
