@@ -338,11 +338,22 @@ def test_a_nominal_outside_the_bounds_is_not_the_optimum():
     assert res.reduction < 0  # worse than the nominal, which the bounds exclude
 
 
-def test_degrees_that_look_like_radians_warn():
+def test_degrees_that_look_like_radians_warn(tmp_path):
+    """A file's beta_deg = [0.35, 1.57] (20-90 deg in radians) warns; a dict (what a
+    traverse's segments pass, whose faces may be that flat) does not."""
+    import warnings
+
     from roverimpact.studies.optimize import load_optimization
 
+    f = tmp_path / "opt.toml"
+    f.write_text('[scenario]\nmodel = { name = "rover2d" }\nvelocity = { u = 0.3 }\n'
+                 'obstacle = { wheel = "front", beta_deg = 45 }\n[optimize]\n'
+                 'variables = { h = [0.3, 0.45] }\nbeta_deg = [0.35, 1.57]\n')
     with pytest.warns(UserWarning, match=r"If you meant radians, write \[20.05, 89.95\]"):
-        load_optimization(_bad("optimize", beta_deg=[0.35, 1.57]))
+        load_optimization(f)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_optimization(_bad("optimize", beta_deg=[1.0, 1.5]))
 
 
 def test_a_terrain_is_refused():

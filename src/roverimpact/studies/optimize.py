@@ -114,13 +114,6 @@ class OptimizeSpec(StrictModel):
         if not (0.0 < lo <= hi <= 90.0):
             raise ValueError(f"beta_deg must be [lo, hi] with 0 < lo <= hi <= 90 degrees, got "
                              f"{list(b)}")
-        if hi <= math.pi / 2:  # [0.35, 1.57] is 20-90 deg in radians
-            import warnings
-
-            warnings.warn(f"optimize.beta_deg = {list(b)} is in degrees: obstacle angles of at "
-                          f"most {hi:g} deg. If you meant radians, write "
-                          f"[{math.degrees(lo):.4g}, {math.degrees(hi):.4g}]", UserWarning,
-                          stacklevel=2)
         return b
 
     @model_validator(mode="after")
@@ -191,6 +184,16 @@ def load_optimization(source: str | Path | Mapping[str, Any]) -> OptimizeProblem
     where = str(source) if isinstance(source, (str, Path)) else "optimisation"
     raw = read_toml(Path(source)) if isinstance(source, (str, Path)) else dict(source)
     f = validate(OptimizeFile, raw, where)
+    lo, hi = f.optimize.beta_deg
+    if isinstance(source, (str, Path)) and hi <= math.pi / 2:
+        # a user's file: [0.35, 1.57] is 20-90 deg in radians (a traverse's segments, which
+        # pass dicts, may meet such small angles)
+        import warnings
+
+        warnings.warn(f"{where}: optimize.beta_deg = {[lo, hi]} is in degrees: obstacle "
+                      f"angles of at most {hi:g} deg. If you meant radians, write "
+                      f"[{math.degrees(lo):.4g}, {math.degrees(hi):.4g}]", UserWarning,
+                      stacklevel=2)
     scn = dict(f.scenario)
     if f.optimize.speed is not None:
         scn["velocity"] = {**dict(scn.get("velocity") or {}), "u": f.optimize.speed}
