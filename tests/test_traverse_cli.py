@@ -259,6 +259,10 @@ def test_schema_refusals():
     # and the refusal ended in segments.parquet's setting_note)
     bad({"suspension": {"variables": {"chassis_com_above_pivot": [0.0, 0.2]}, "n_beta": 1}},
         "n_beta")
+    # a negative seed: numpy's ValueError in the middle of the run (a traceback), then the
+    # optimiser's refusal in every segment's setting_note
+    bad({"suspension": {"variables": {"chassis_com_above_pivot": [0.0, 0.2]}, "seed": -1}},
+        "suspension.seed")
     for key, value in (("hurst", 0.5), ("rock_abundance", 0.3), ("seed", 1)):
         raw = json.loads(json.dumps(base))
         raw["terrain"] = {"kind": "file", "file": "dem.npy", "spacing": 0.05, key: value}

@@ -373,7 +373,7 @@ class SuspensionSpec(StrictModel):
     min_clearance: float = Field(0.0, allow_inf_nan=False)
     n_starts: int = Field(3, ge=1, le=100)
     n_beta: int = Field(5, ge=2, le=100)  # over each segment's range of beta
-    seed: int = 0
+    seed: int = Field(0, ge=0)  # the optimiser's (a negative one ended in each segment's note)
 
     _bounds = field_validator("variables")(finite_bounds)
 
