@@ -67,3 +67,38 @@ def test_an_interrupted_or_failed_figure_leaves_the_previous_one(tmp_path):
     assert (tmp_path / "one.PDF").read_bytes()[:5] == b"%PDF-"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["figure.png", "figure.svg",
                                                            "one.PDF"]
+
+
+def test_save_figure_lays_the_figure_out_once(tmp_path, monkeypatch):
+    """A constrained-layout figure (the traverse map and speed profile, the trust and
+    contact figures) was laid out twice by save_figure, for the PNG and again for the SVG:
+    half of a traverse figure's drawing time. Now once: the SVG keeps the PNG's layout
+    (the axes at the same place in both, to a fraction of a point), and the figure keeps
+    its layout engine."""
+    import re
+
+    import pytest
+    from matplotlib.figure import Figure
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    from roverimpact.report.plots import save_figure
+
+    runs = []
+    execute = ConstrainedLayoutEngine.execute
+    monkeypatch.setattr(ConstrainedLayoutEngine, "execute",
+                        lambda self, fig: runs.append(fig) or execute(self, fig))
+    fig = Figure(figsize=(4.0, 3.0), layout="constrained")
+    ax = fig.subplots()
+    ax.plot([0, 1], [0, 1])
+    ax.set_ylabel("a long label that takes room [N]")
+    fig.colorbar(ax.imshow([[0.0, 1.0]]), ax=ax, location="bottom")
+    paths = save_figure(fig, tmp_path / "f", dpi=110)
+    assert len(runs) == 1
+    assert isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
+    # the axes' lower-left corner in the SVG (points, y down) and the figure's (inches)
+    svg = paths["svg"].read_text()
+    x0, y0 = map(float, re.search(r'<g id="patch_2">\s*<path d="M ([\d.]+) ([\d.]+)',
+                                  svg).groups())
+    box = ax.get_position()
+    assert x0 == pytest.approx(box.x0 * 4.0 * 72, abs=0.01)
+    assert y0 == pytest.approx((1 - box.y0) * 3.0 * 72, abs=0.01)

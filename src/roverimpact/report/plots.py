@@ -210,9 +210,17 @@ def save_figure(fig, stem: str | Path, dpi: float | None = None) -> dict[str, Pa
     the paths. The suffixes are added to the whole name: a stem holding a dot
     (``map-route_1.5``) keeps it (replacing its "suffix" wrote the maps of routes 1.5 and
     1.7 both to ``map-route_1.png``)."""
-    out = {}
-    for ext in ("png", "svg"):
-        out[ext] = savefig(fig, Path(f"{stem}.{ext}"), dpi=dpi or "figure")
+    out = {"png": savefig(fig, Path(f"{stem}.png"), dpi=dpi or "figure")}
+    # the layout (constrained or tight: about half of a traverse figure's drawing time)
+    # is computed once, for the PNG; the SVG keeps it instead of computing it again
+    engine = fig.get_layout_engine()
+    if engine is not None:
+        fig.set_layout_engine("none")
+    try:
+        out["svg"] = savefig(fig, Path(f"{stem}.svg"), dpi=dpi or "figure")
+    finally:
+        if engine is not None:
+            fig.set_layout_engine(engine)
     return out
 
 
