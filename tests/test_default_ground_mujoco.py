@@ -23,9 +23,7 @@ import roverimpact as ri
 
 pytest.importorskip("mujoco")
 
-from roverimpact.models import rocker_bogie
-from roverimpact.simulate import SimulationConfig, initial_state
-from roverimpact.simulate.engines import simulate_impact_mujoco
+from .doctool import doc_numbers
 
 BETAS = (10.0, 20.0, 30.0, 45.0, 60.0, 70.0, 80.0, 90.0)
 
@@ -39,14 +37,12 @@ def _T_c(beta, **contacts):
 
 @pytest.fixture(scope="module")
 def mujoco_peaks():
-    mbm = rocker_bogie()
-    F = []
-    for beta in BETAS:
-        cfg = SimulationConfig(speed=0.3, beta_deg=beta, mu=0.5,
-                               obstacle_wheels=["left_front"], t_after=0.05)
-        q0, v0 = initial_state(mbm, cfg)
-        F.append(simulate_impact_mujoco(mbm, cfg, q0=q0, v0=v0).F_max_total)
-    return np.array(F)
+    """The eight MuJoCo runs (rocker_bogie(), speed 0.3 m/s, mu = 0.5, the face ahead of
+    left_front, t_after = 0.05 s), run once per session: tools/doc_numbers.py runs the same
+    for the table of docs/active-set.md (tests/test_doc_numbers.py)."""
+    dn = doc_numbers()
+    assert dn.GROUND_BETAS == BETAS
+    return np.array(dn.default_ground_mujoco_peaks())
 
 
 # "noslip" holds wheels that would pull (the warning is right): it ranks worse

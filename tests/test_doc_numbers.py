@@ -12,26 +12,17 @@
 
 from __future__ import annotations
 
-import importlib.util
 import re
 import shutil
-import sys
 from pathlib import Path
 
 import pytest
 
+from .doctool import doc_numbers
+
 ROOT = Path(__file__).resolve().parents[1]
 
-
-def _load_tool():
-    spec = importlib.util.spec_from_file_location("doc_numbers", ROOT / "tools" / "doc_numbers.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["doc_numbers"] = mod      # dataclasses look their module up by name
-    spec.loader.exec_module(mod)
-    return mod
-
-
-dn = _load_tool()
+dn = doc_numbers()
 
 
 @pytest.fixture(scope="module")

@@ -13,6 +13,8 @@ import pytest
 from roverimpact import experiments as ex
 from roverimpact.exceptions import ConfigError, InputError
 
+from .doctool import doc_numbers
+
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "experiment"
 
 
@@ -245,8 +247,10 @@ def test_compare_with_model_rank_statistics():
 
 @pytest.fixture(scope="module")
 def scenario_comparison():
-    res = ex.run_experiment(EXAMPLE / "trials.toml")
-    return ex.compare_with_model(res.trials, ex.scenario_model(res.config.model, res.base_dir))
+    """``compare_with_model`` of the shipped set with the scenario model rover.toml (14
+    simulations), computed once per session: tools/doc_numbers.py makes the same call for
+    docs/experiments.md (tests/test_doc_numbers.py)."""
+    return doc_numbers().synthetic_comparison()[1]
 
 
 def test_scenario_model_ranks_the_synthetic_set(scenario_comparison):

@@ -26,6 +26,7 @@ claim stops the run with the producer's name.
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import re
 import sys
@@ -223,23 +224,38 @@ def active_auto_rows():
 
 
 # =========================================================================== contact.md
+#: beta [deg] of the default-ground check (tests/test_default_ground_mujoco.py)
+GROUND_BETAS = (10.0, 20.0, 30.0, 45.0, 60.0, 70.0, 80.0, 90.0)
+
+
+@functools.cache
+def default_ground_mujoco_peaks() -> tuple[float, ...]:
+    """MuJoCo's first-impact peak force [N] of the six-wheel rocker-bogie at 0.3 m/s, all
+    wheels on the ground with mu = 0.5, a face ahead of the left front wheel, at each of
+    :data:`GROUND_BETAS`. Computed once per process: tests/test_default_ground_mujoco.py
+    checks the same eight runs."""
+    from roverimpact.models import rocker_bogie
+    from roverimpact.simulate import SimulationConfig, initial_state
+    from roverimpact.simulate.engines import simulate_impact_mujoco
+
+    mbm = rocker_bogie()
+    F = []
+    for b in GROUND_BETAS:
+        cfg = SimulationConfig(speed=0.3, beta_deg=b, mu=0.5, obstacle_wheels=["left_front"],
+                               t_after=0.05)
+        q0, v0 = initial_state(mbm, cfg)
+        F.append(float(simulate_impact_mujoco(mbm, cfg, q0=q0, v0=v0).F_max_total))
+    return tuple(F)
+
+
 @produces("active.mujoco_ground_table")
 def active_default_ground_mujoco():
     """The six-wheel rocker-bogie in MuJoCo with mu = 0.5 (tests/test_default_ground_mujoco)."""
     import roverimpact as ri
-    from roverimpact.models import rocker_bogie
-    from roverimpact.simulate import SimulationConfig, initial_state
-    from roverimpact.simulate.engines import simulate_impact_mujoco
     from roverimpact.studies.stats import rank_correlation
 
-    betas = (10.0, 20.0, 30.0, 45.0, 60.0, 70.0, 80.0, 90.0)
-    mbm = rocker_bogie()
-    F = []
-    for b in betas:
-        cfg = SimulationConfig(speed=0.3, beta_deg=b, mu=0.5, obstacle_wheels=["left_front"],
-                               t_after=0.05)
-        q0, v0 = initial_state(mbm, cfg)
-        F.append(simulate_impact_mujoco(mbm, cfg, q0=q0, v0=v0).F_max_total)
+    betas = GROUND_BETAS
+    F = list(default_ground_mujoco_peaks())
     rows = []
     for label, contacts in (('"normal" (default)', {}),
                             ('"coulomb", mu = 0.5', {"ground": "coulomb", "mu": 0.5}),
@@ -939,16 +955,25 @@ def reconfiguration_rocker_bogie():
 
 
 # =========================================================================== experiments.md
+@functools.cache
+def synthetic_comparison():
+    """``(run_experiment(examples/experiment/trials.toml), its compare_with_model with the
+    model scenario rover.toml)``, once per process: the model side simulates the 14
+    conditions; tests/test_experiment.py checks the same two results."""
+    from roverimpact.experiments import compare_with_model, run_experiment, scenario_model
+
+    res = run_experiment(ROOT / "examples" / "experiment" / "trials.toml")
+    return res, compare_with_model(res.trials, scenario_model(res.config.model, res.base_dir))
+
+
 @produces("exp.n_recordings", "exp.table", "exp.baselines")
 def experiments_synthetic():
     """The shipped synthetic trials (examples/experiment) against their truth and the model
     scenario rover.toml (k 20 % below the data's)."""
     import pandas as pd
 
-    from roverimpact.experiments import compare_with_model, run_experiment, scenario_model
-
     folder = ROOT / "examples" / "experiment"
-    res = run_experiment(folder / "trials.toml")
+    res, cmp = synthetic_comparison()
     truth = pd.read_csv(folder / "truth.csv")
     m = res.trials.merge(truth, on="file", suffixes=("", "_true"))
     assert len(m) == len(truth) == len(res.trials), "a trial failed or has no truth"
@@ -956,7 +981,6 @@ def experiments_synthetic():
     def err(col):
         return float((m[col] / m[f"{col}_true"] - 1.0).abs().max())
 
-    cmp = compare_with_model(res.trials, scenario_model(res.config.model, res.base_dir))
     st, t = cmp.stats, cmp.table
     lo, hi = float(t["F_ratio"].min()), float(t["F_ratio"].max())
     rows = [
