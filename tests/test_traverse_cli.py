@@ -60,6 +60,13 @@ def short(tmp_path_factory):
     return f, out
 
 
+@pytest.fixture(scope="module")
+def serial(short):
+    """The short traverse (chunks of 40 stations) run serially in this process, once: the
+    reference of the tests that run it otherwise."""
+    return run_traverse(load_traverse(short[0]))
+
+
 def test_traverse_writes_tables_figures_report(short, capfd):
     f, out = short
     for name in ("poses.parquet", "wheels.parquet", "segments.parquet", "poses.csv",
@@ -147,7 +154,7 @@ def test_report_refuses_an_edited_traverse_file(short, tmp_path, capfd):
     assert main(["traverse-report", str(d)]) == 0
 
 
-def test_dask_equals_serial(short, monkeypatch):
+def test_dask_equals_serial(short, serial, monkeypatch):
     """Chunks of 40 stations on 2 forked workers (the cluster forced on: this traverse
     alone would not pay for one): the same tables as serially."""
     pytest.importorskip("dask.distributed")
@@ -155,8 +162,8 @@ def test_dask_equals_serial(short, monkeypatch):
 
     f, _ = short
     cfg = load_traverse(f)
-    cfg = cfg.model_copy(update={"run": cfg.run.model_copy(update={"chunk": 40})})
-    a = run_traverse(cfg)
+    assert cfg.run.chunk == 40
+    a = serial
     monkeypatch.setattr(executors, "worth_a_cluster", lambda *a, **k: True)
     b = run_traverse(cfg, workers=2)
     assert (a.executor, b.executor) == ("serial", "dask local 2 workers")
@@ -182,8 +189,8 @@ def test_bad_worker_start_method_fails_before_any_station(short, monkeypatch):
     (2, 500, "a single chunk"),
     (1, 40, "one worker is no faster"),
 ])
-def test_small_traverse_runs_serially_and_says_so(short, tmp_path, workers, chunk, why,
-                                                  monkeypatch):
+def test_small_traverse_runs_serially_and_says_so(short, serial, tmp_path, workers, chunk,
+                                                  why, monkeypatch):
     """--workers on less work than a cluster's start-up (timed on a probe of a few
     stations), on one chunk, or with one worker: serial, no cluster started, the same
     tables; the note and the manifest say why. The start-up is taken as a minute: the
@@ -196,7 +203,7 @@ def test_small_traverse_runs_serially_and_says_so(short, tmp_path, workers, chun
     f, _ = short
     cfg = load_traverse(f)
     cfg = cfg.model_copy(update={"run": cfg.run.model_copy(update={"chunk": chunk})})
-    a = run_traverse(cfg)
+    a = serial if chunk == 40 else run_traverse(cfg)     # SHORT's chunk is 40
     notes = []
     b = run_traverse(cfg, tmp_path / "w", workers=workers, note=notes.append)
     assert len(notes) == 1 and why in notes[0] and b.executor == notes[0]
@@ -616,7 +623,10 @@ def test_summary_length_is_the_path_length(tmp_path, capfd):
     0.1 m spacing (the segments end at 0.33 m). It is the polyline's length."""
     f = _flat_traverse(tmp_path)
     capfd.readouterr()
-    assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json"]) == 0
+    # the summary and the tables only: the report of this folder is drawn by
+    # test_copy_of_the_traverse_file_runs_from_the_output_folder
+    assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json",
+                 "--no-report"]) == 0
     out = json.loads(capfd.readouterr().out)
     row = out["summary"][0]
     assert row["stations"] == 4 and row["length [m]"] == pytest.approx(0.33)
@@ -630,7 +640,8 @@ def test_summary_length_is_the_path_length(tmp_path, capfd):
     assert S["s1"].iloc[-1] == pytest.approx(0.33)
     # with a top speed every station's limit is it: no station to name (it said s = 0)
     f.write_text(f.read_text().replace("speed = 0.1\n", "speed = 0.1\nv_max = 0.3\n"))
-    assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json"]) == 0
+    assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json",
+                 "--no-report"]) == 0
     row = json.loads(capfd.readouterr().out)["summary"][0]
     assert row["lowest limit [m/s]"] == 0.3 and row["at s [m]"] is None
 
@@ -723,13 +734,13 @@ def test_report_redraws_on_the_height_field_of_the_run(tmp_path, monkeypatch, ca
         '[path]\nstart = [-0.2, 0.0]\nend = [0.0, 0.0]\nspacing = 0.1\n'
         '[model]\nname = "rocker_bogie"\n[drive]\nspeed = 0.1\n[limits]\nT_allow = 0.01\n')
     out = tmp_path / "out"
-    assert main(["traverse", str(src / "t.toml"), "-o", str(out)]) == 0
+    assert main(["traverse", str(src / "t.toml"), "-o", str(out), "--no-report"]) == 0
     man = json.loads((out / "manifest.json").read_text())
     assert man["terrain_file"]["path"] == str((src / "dem.npy").resolve())
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     monkeypatch.chdir(elsewhere)
-    (out / "report.html").unlink()
+    assert not (out / "report.html").exists()
     capsys.readouterr()
     assert main(["traverse-report", str(out)]) == 0
     assert (out / "report.html").is_file()
