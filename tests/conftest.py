@@ -41,3 +41,58 @@ def compile_plan(monkeypatch):
     monkeypatch.setattr(_jit.Kernel, "get",
                         lambda self: plan.got.append(name(self)) or real_get(self))
     return plan
+
+
+# --- numba's cache filled by a second process while the session starts (tests/prewarm.py)
+def _start_prewarm():
+    """The prewarm process and the file it writes, or None: switched off
+    (``ROVERIMPACT_TEST_PREWARM=0``), one core, no cache, or every kernel cached."""
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    if os.environ.get("ROVERIMPACT_TEST_PREWARM", "1") == "0" or (os.cpu_count() or 1) < 2:
+        return None
+    from roverimpact._kernels._jit import NJIT_OPTIONS
+
+    from .prewarm import kernels
+
+    if not NJIT_OPTIONS["cache"] or all(k.cached() for k in kernels()):
+        return None
+    out = Path(tempfile.mkdtemp(prefix="roverimpact-prewarm-")) / "helpers.json"
+    src = str(Path(kernels()[0].py_func.__code__.co_filename).resolve().parents[2])
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (src, env.get("PYTHONPATH")) if p)
+    proc = subprocess.Popen([sys.executable, str(Path(__file__).with_name("prewarm.py")),
+                             str(out)], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, env=env)
+    return proc, out
+
+
+_PREWARM = _start_prewarm()
+
+
+def pytest_unconfigure(config):
+    """A prewarm still running when the session ends (a short run) is stopped."""
+    if _PREWARM is None:
+        return
+    import shutil
+
+    if _PREWARM[0].poll() is None:
+        _PREWARM[0].kill()
+        _PREWARM[0].wait()
+    shutil.rmtree(_PREWARM[1].parent, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def prewarm_helpers():
+    """The helpers the prewarm process compiled (name -> signatures), waiting for it; an
+    empty dict when it did not run (a warm cache) or failed."""
+    import json
+
+    if _PREWARM is None:
+        return {}
+    proc, out = _PREWARM
+    proc.wait(timeout=600)
+    return json.loads(out.read_text()) if proc.returncode == 0 and out.is_file() else {}

@@ -59,7 +59,7 @@ def test_readonly_and_writable_inputs_share_one_compiled_kernel():
     assert len(friction_kernel.get().signatures) == 1
 
 
-def test_kernel_helpers_are_compiled_once():
+def test_kernel_helpers_are_compiled_once(prewarm_helpers):
     """numba compiles a helper once more for each literal argument type: a variable that
     starts as a literal (``r = 0``) and is passed on compiles it for ``Literal[int](0)``
     as well as for ``int64``. Found and removed: five helpers of the frictional kernel
@@ -69,43 +69,22 @@ def test_kernel_helpers_are_compiled_once():
     callers pass a read-only one: ``factor`` and ``partition_factored``, called by the
     one-item, lane, impact, frictional, effective-mass and ``T_c_at`` kernels, have one
     compiled version (``T_c_at``'s and the effective-mass kernel pass their writable arrays
-    through ``partition.readonly``). Checked on the helpers
-    this process compiled (none when the kernels came from numba's cache, as after a first
-    run; CI starts from an empty one)."""
-    from numba import types
-    from numba.core.registry import CPUDispatcher
+    through ``partition.readonly``). Checked on the helpers this process compiled and on
+    those the session's prewarm process compiled (tests/prewarm.py: the same calls); none
+    when the kernels came from numba's cache, as after a first run; CI starts from an
+    empty one."""
+    from .prewarm import compile_helpers, compiled_helpers
 
-    from roverimpact import energy
-    from roverimpact._kernels import friction, lemke, partition, terrain
-    from roverimpact.models.terrain import HeightField, wheel_ground_contact
-    from roverimpact.scenario import ImpactSetup
-
-    M = np.diag([2.0, 3.0, 4.0])
-    frictional_impact(M, [0.2, -1.0, 0.1], [[0.0, 1.0, 0.0]], [[[1.0, 0.0, 0.0]]], 0.5)
-    ri.active_set(M, [0.0, -1.0, -1.0], [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-    ri.partition(M, [0.0, 1.0, 0.0], [0.2, -1.0, 0.1])
-    k = energy.LANES_MIN_BATCH  # a batch that takes the effective-mass kernel
-    m_eff = energy.row_masses(np.broadcast_to(M, (k, 3, 3)), np.tile([0.0, 1.0, 1.0], (k, 1)),
-                              [0.0, 0.0, 1.0])[0]
-    np.testing.assert_allclose(m_eff, 3.0, rtol=1e-6)
-    setup = ImpactSetup.from_scenario(ri.Scenario.model_validate({
-        "model": {"name": "rover2d"}, "velocity": {"u": 0.5},
-        "obstacle": {"wheel": "front", "beta_deg": 45.0}}))
-    assert setup.T_c_at(setup.q) > 0.0  # T_c_at's kernel calls partition_factored too
-    hf = HeightField(np.random.default_rng(0).normal(size=(8, 8)) * 0.01, 0.5)
-    assert np.isfinite(wheel_ground_contact(hf, [1.5, 1.5, 0.3], (0, 1, 0), 0.2).gap)
-    helpers = {id(d): d for mod in (friction, lemke, partition, terrain)
-               for d in vars(mod).values()
-               if isinstance(d, CPUDispatcher)}.values()
-    compiled = [d for d in helpers if d.signatures]
-    if not compiled:
+    compile_helpers()
+    for where, compiled in (("here", compiled_helpers()), ("prewarm", prewarm_helpers)):
+        literal = sorted(name for name, sigs in compiled.items() for sig in sigs
+                         if "Literal" in sig)
+        assert literal == [], where
+        shared = {name: len(compiled[name]) for name in ("factor", "partition_factored")
+                  if name in compiled}
+        assert set(shared.values()) <= {1}, (where, shared)
+    if not compiled_helpers() and not prewarm_helpers:
         pytest.skip("the kernels came from numba's cache: no helper compiled here")
-    literal = sorted(d.py_func.__name__ for d in compiled for sig in d.signatures
-                     if any(isinstance(t, types.Literal) for t in sig))
-    assert literal == []
-    shared = {d.py_func.__name__: len(d.signatures)
-              for d in (partition.factor, partition.partition_factored) if d.signatures}
-    assert set(shared.values()) <= {1}, shared
 
 
 def _python(code: str, cache: Path, **env) -> str:
@@ -127,11 +106,12 @@ def test_import_compiles_nothing(tmp_path):
 def test_background_compile_fills_the_cache_and_is_loaded(tmp_path):
     """On an empty cache the kernel is compiled by another process; the caller's ``get``
     waits for it and loads the result (numba reports a cache hit); a warm cache starts
-    nothing."""
+    nothing. The effective-mass kernel: a Kernel as any other, the quickest to compile
+    (2 s; the one-item partition kernel took 7 s, three times in three processes)."""
     code = """
 import json
 from roverimpact._kernels._jit import compile_in_background
-from roverimpact._kernels.partition import partition_kernel as k
+from roverimpact._kernels.masses import masses_kernel as k
 before = k.cached()
 sent = [x.home for x in compile_in_background(k)]
 d = k.get()
@@ -140,8 +120,7 @@ print(json.dumps([before, sent, k.cached(), sum(d.stats.cache_hits.values()),
 """
     force = {"ROVERIMPACT_BACKGROUND_COMPILE": "1"}  # whatever the machine's load
     before, sent, after, hits, misses = json.loads(_python(code, tmp_path, **force))
-    assert (before, sent, after) == (False, ["roverimpact._kernels.partition:partition_kernel"],
-                                     True)
+    assert (before, sent, after) == (False, ["roverimpact._kernels.masses:masses_kernel"], True)
     assert (hits, misses) == (1, 0)
     before, sent, after, hits, misses = json.loads(_python(code, tmp_path, **force))
     assert (before, sent, after, hits) == (True, [], True, 1)
