@@ -516,6 +516,23 @@ def test_traverse_compile_plan(tmp_path, monkeypatch, compile_plan, model, worke
     assert got == []
 
 
+def test_a_path_off_the_terrain_is_refused_before_any_compile(tmp_path, compile_plan, capfd):
+    """A traverse whose path leaves the terrain compiled the lane partition, the effective
+    masses and the Runge-Kutta kernel before checking it: on a fresh install the one-line
+    error came after 45 s of compile. The inputs are checked first; the kernels are
+    compiled once they pass (and still before any station)."""
+    example = Path(__file__).resolve().parents[1] / "examples" / "traverse_rocky.toml"
+    bad = tmp_path / "off.toml"
+    bad.write_text(example.read_text().replace("[40.0, 0.0]]", "[41.5, 0.0]]"))
+    capfd.readouterr()
+    assert main(["traverse", str(bad), "-o", str(tmp_path / "o")]) == 2
+    assert "leaves the terrain" in capfd.readouterr().err
+    assert compile_plan.got == []
+    f = _flat_traverse(tmp_path)          # a good one: compiled, then the stations
+    assert main(["traverse", str(f), "-o", str(tmp_path / "ok"), "--no-report"]) == 0
+    assert compile_plan.got[:2] == ["LANES", "masses_kernel"]
+
+
 @pytest.mark.parametrize("end, n_seg, last", [(1.7, 2, (1.0, 1.7)), (2.0, 2, (1.0, 2.0)),
                                               (0.6, 1, (0.0, 0.6))])
 def test_segments_end_at_the_end_of_the_path(end, n_seg, last):

@@ -146,10 +146,11 @@ def traverse_cmd(
     with staged_folder(out, TRAVERSE_FILES, ("manifest.json", "traverse.toml"),
                        "traverse") as work:
         with progress_bar(config.stem, unit="stations", to_stderr=as_json) as update:
-            compile_ahead(now=now)
+            # compiled once the inputs are checked: a bad path is refused at once
             res = run_traverse(config, work, workers=workers, scheduler=scheduler, csv=csv,
                                progress=update,
-                               note=lambda text: err_console.print(f"note: {text}"))
+                               note=lambda text: err_console.print(f"note: {text}"),
+                               prepare=lambda: compile_ahead(now=now))
         path = (traverse_report(work, config=res.config, shown_as=out) if report
                 else None)
     path = out / Path(path).name if path is not None else None

@@ -513,7 +513,8 @@ def _local_or_serial(cfg_dict, chunks, total, workers) -> str | None:
 def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | None = None,
                  scheduler: str | None = None, csv: bool = False,
                  progress: Callable[[int, int], None] | None = None,
-                 note: Callable[[str], None] | None = None) -> TraverseResult:
+                 note: Callable[[str], None] | None = None,
+                 prepare: Callable[[], None] | None = None) -> TraverseResult:
     """Run a traverse file (path, dict or :class:`TraverseConfig`) and write its tables.
 
     Parameters
@@ -532,6 +533,10 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         ``note(text)``: why ``workers`` were asked for but the stations ran here (a
         single chunk, or less work than the cluster costs to start, timed on a probe of
         a few stations first; :func:`_local_or_serial`).
+    prepare : callable, optional
+        ``prepare()``: called once the inputs are checked, before any station and before
+        a local cluster forks its workers (the command line compiles its kernels there:
+        a path that leaves the terrain is refused without waiting for a compile).
 
     Raises
     ------
@@ -580,6 +585,8 @@ def run_traverse(source, out_dir: str | Path | None = None, *, workers: int | No
         need_dask()
         worker_start_method()  # a bad ROVERIMPACT_WORKER_START fails before any work
     _check_inputs(cfg, where)
+    if prepare is not None:
+        prepare()
     chunks = _chunks(cfg)
     total = sum(b - a for _, a, b in chunks)
     # the keys given only: a default the schema would refuse as ignored (limits.gravity
