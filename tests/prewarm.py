@@ -5,9 +5,10 @@ On an empty cache (CI, a fresh clone) the kernels took 90 s of compile in the te
 one after the other, while the machine's second core idled: the frictional kernel 35 s,
 the lane partition 20 s, Lemke's impact kernel 15 s, the stiff and classic Runge-Kutta
 peaks 14 s, the one-item partition 7 s, the effective masses 2 s. This process compiles
-them meanwhile, in the order the tests first need them; the test process loads from the
-cache what is there by then and compiles the rest itself, as before (a kernel half built
-here is built there too: numba has no lock across processes).
+them meanwhile, from the frictional kernel on (the test process compiles the first two
+itself, in its first tests); the test process loads from the cache what is there by then
+and compiles the rest itself, as before (a kernel half built here is built there too:
+numba has no lock across processes).
 
 Run as a script, it writes which helper functions it compiled and for which signatures
 (``python tests/prewarm.py OUT.json``): tests/test_kernels_jit.py checks those as it
@@ -75,9 +76,12 @@ def kernels():
 
 
 def main(out: str) -> None:
-    compile_helpers()
-    for k in kernels():              # the others (the traverse's lanes, Runge-Kutta peaks)
+    # the test process compiles the one-item partition and the impact kernel itself, in
+    # its first tests: this one starts with what it needs next (the frictional kernel,
+    # in tests/test_activeset.py), then the traverse's, then the rest of the calls
+    for k in kernels()[2:]:
         k.get()
+    compile_helpers()
     with open(out, "w", encoding="utf-8") as f:
         json.dump(compiled_helpers(), f)
 
