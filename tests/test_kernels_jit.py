@@ -107,7 +107,7 @@ def test_background_compile_fills_the_cache_and_is_loaded(tmp_path):
     """On an empty cache the kernel is compiled by another process; the caller's ``get``
     waits for it and loads the result (numba reports a cache hit); a warm cache starts
     nothing. The effective-mass kernel: a Kernel as any other, the quickest to compile
-    (2 s; the one-item partition kernel took 7 s, three times in three processes)."""
+    (2 s of compile against the one-item partition kernel's 7 s)."""
     code = """
 import json
 from roverimpact._kernels._jit import compile_in_background
