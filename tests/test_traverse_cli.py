@@ -637,7 +637,8 @@ def _flat_traverse(folder):
 
 def test_summary_length_is_the_path_length(tmp_path, capfd):
     """The summary's "length [m]" was the last station's s: 0.3 m for a 0.33 m path at
-    0.1 m spacing (the segments end at 0.33 m). It is the polyline's length."""
+    0.1 m spacing (the segments end at 0.33 m). It is the polyline's length. No impact:
+    the lowest limit is none (JSON null), not inf."""
     f = _flat_traverse(tmp_path)
     capfd.readouterr()
     # the summary and the tables only: the report of this folder is drawn by
@@ -650,9 +651,8 @@ def test_summary_length_is_the_path_length(tmp_path, capfd):
     assert row["lowest limit [m/s]"] is None and row["impacts"] == 0   # inf: no impact
     # report.html said "inf" in its summary and every segment's v_lim: now "no limit" (the
     # tables keep inf; the terminal's summary: test_summary_table_at_80_columns)
+    # report.html: test_copy_of_the_traverse_file_runs_from_the_output_folder
     assert np.isinf(pd.read_parquet(tmp_path / "out" / "segments.parquet")["v_lim"]).all()
-    cells = re.findall(r"<td>([^<]*)</td>", (tmp_path / "out" / "report.html").read_text())
-    assert "inf" not in cells and cells.count("no limit") == 2   # summary, one segment
     S = pd.read_parquet(tmp_path / "out" / "segments.parquet")
     assert S["s1"].iloc[-1] == pytest.approx(0.33)
     # with a top speed every station's limit is it: no station to name (it said s = 0)
@@ -814,6 +814,10 @@ def test_copy_of_the_traverse_file_runs_from_the_output_folder(tmp_path, monkeyp
     assert main(["traverse", str(copy), "-o", str(tmp_path / "again"), "--json",
                  "--no-report"]) == 0, capfd.readouterr().err
     assert main(["traverse-report", str(tmp_path / "out")]) == 0, capfd.readouterr().err
+    # no impact on the flat path: report.html said "inf" in its summary and in every
+    # segment's v_lim; now "no limit" (the tables keep inf: test_summary_length_is_...)
+    cells = re.findall(r"<td>([^<]*)</td>", (tmp_path / "out" / "report.html").read_text())
+    assert "inf" not in cells and cells.count("no limit") == 2   # summary, one segment
 
 
 def _other_code_in_tasks(monkeypatch):
