@@ -37,7 +37,7 @@ def _trials_toml(path, files, *, gains=(250.0, 240.0), extra=""):
         "[filter]", "cutoff_hz = 300.0", "order = 4", "",
     ]
     for i, f in enumerate(files):
-        lines += ["[[trial]]", f'file = "{f}"', f"beta_deg = {10.0 * i}", "speed = 0.5", ""]
+        lines += ["[[trial]]", f'file = "{f}"', f"beta_deg = {10.0 * i % 100}", "speed = 0.5", ""]
     Path(path).write_text("\n".join(lines) + extra)
     return Path(path)
 
@@ -221,6 +221,21 @@ def test_trials_file_errors(tmp_path):
                  'file = "x.csv"\nbeta_deg = 0\nspeed = 1\n')
     with pytest.raises(ConfigError, match="gains has 1 values for 2 channels"):
         ex.load_trials(p)
+
+
+def test_face_angle_outside_0_90_is_refused_at_load(tmp_path):
+    """beta is the obstacle face angle of DETC2015-47747, 0 (horizontal) to 90 deg (wall).
+    A trial at 120 deg used to be processed (every recording read and filtered) and only
+    the model comparison then failed with "scenario: invalid scenario:
+    obstacle.beta_deg must be in [0, 90]", naming no trial; without a [model] it went into
+    trials.csv unchecked. Now the trials file is refused at load, naming the trial."""
+    p = tmp_path / "t.toml"
+    for beta in (120.0, -30.0):
+        p.write_text('[sensors]\nchannels = ["a"]\ngains = [1.0]\n[[trial]]\n'
+                     f'file = "x.csv"\nbeta_deg = 45\nspeed = 1\n[[trial]]\n'
+                     f'file = "y.csv"\nbeta_deg = {beta}\nspeed = 1\n')
+        with pytest.raises(ConfigError, match=r"trial\.1\.beta_deg: .*\[0, 90\] degrees"):
+            ex.load_trials(p)
 
 
 # ---------------------------------------------------------------------------------------

@@ -6,7 +6,7 @@ import math
 from pathlib import Path
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from .._io import read_toml
 from .._schema import StrictModel, validate
@@ -114,13 +114,22 @@ class DetectionConfig(StrictModel):
 
 class TrialConfig(StrictModel):
     """``[[trial]]``: one recording. ``file`` is relative to the trials file; ``speed`` is
-    the approach speed [m/s]; ``beta_deg`` the face angle [deg]."""
+    the approach speed [m/s]; ``beta_deg`` the face angle [deg], in [0, 90] as the
+    scenario's ``obstacle.beta_deg`` (0: horizontal, 90: vertical wall)."""
 
     file: str
     beta_deg: float = Field(allow_inf_nan=False)
     speed: float = Field(gt=0, allow_inf_nan=False)
     repeat: int = 1
     notes: str = ""
+
+    @field_validator("beta_deg")
+    @classmethod
+    def _beta_range(cls, v: float) -> float:
+        if not 0.0 <= v <= 90.0:
+            raise ValueError(f"the face angle must be in [0, 90] degrees (0: horizontal, "
+                             f"90: vertical wall), got {v:g}")
+        return v
 
 
 class ScenarioModelConfig(StrictModel):
