@@ -76,7 +76,7 @@ def process_recording(path, cfg: TrialsFile):
     _check_sign(name, t, raw, F, thr, cfg.sensors)
     imp = detect_impacts(t, F, thr, min_separation_s=cfg.detection.min_separation_s,
                          split_fraction=cfg.detection.split_fraction,
-                         cutoff_hz=cfg.filter.cutoff_hz)
+                         cutoff_hz=cfg.filter.cutoff_hz, order=cfg.filter.order)
     if imp.empty:
         raise TrialDataError(
             f"{name}: no impact found (force never exceeds the threshold {thr:.3g} N; "
