@@ -120,6 +120,24 @@ def test_short_impact_warned_in_the_outputs(tmp_path):
     assert json.loads(files["summary"].read_text())["warnings"] == [w]
 
 
+def test_short_impact_at_a_low_sample_rate_asks_for_a_higher_rate(tmp_path):
+    """A 1000 N, 2 ms half-sine sampled at 1 kHz (samples of 707 N; filtered peak 632 N): no
+    cut-off below the Nyquist frequency (500 Hz) measures it, since 2.5 periods of 500 Hz
+    are 5 ms. The warning used to advise "raise [filter] cutoff_hz (below 500 Hz)", which
+    cannot help; it now asks for a higher sample rate."""
+    fs = 1000.0
+    t = np.arange(int(fs)) / fs
+    f = _half_sine(t, 0.5005, 0.002, 1000.0) + np.random.default_rng(2).normal(0, 0.5, len(t))
+    pd.DataFrame({"time_s": t, "ch1_N": f}).to_csv(tmp_path / "a.csv", index=False)
+    (tmp_path / "trials.toml").write_text(
+        '[sensors]\nchannels = ["ch1"]\nunits = "N"\ngains = [1.0]\n\n'
+        '[[trial]]\nfile = "a.csv"\nbeta_deg = 30.0\nspeed = 0.3\n')
+    res = ex.run_experiment(tmp_path / "trials.toml")
+    (w,) = res.warnings
+    assert "record at a higher sample rate" in w and "raise [filter]" not in w
+    assert "Nyquist frequency 500 Hz" in w
+
+
 def test_ringing_of_a_low_cutoff_is_not_an_impact():
     """At a 50-100 Hz cut-off the zero-phase filter's ringing lobes (3.7 % of the peak for
     order 4, up to 2 periods away: beyond ``min_separation_s``) stayed above a low-noise

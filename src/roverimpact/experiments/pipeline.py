@@ -135,14 +135,23 @@ class ExperimentResult:
         if self.impacts.empty or "short" not in self.impacts:
             return []
         fc = self.config.filter.cutoff_hz
-        return [
-            f"trial {r.trial} ({r.file}), impact {r.impact}: duration {1e3 * r.duration:.3g} ms "
-            f"is under {SHORT_PERIODS:g} periods of the {fc:g} Hz low-pass "
-            f"({1e3 * SHORT_PERIODS / fc:.3g} ms): its peak {r.F_peak:.4g} N is attenuated "
-            f"by the filter; raise [filter] cutoff_hz (below {0.5 * r.fs:g} Hz, the Nyquist "
-            "frequency) to measure it"
-            for r in self.impacts[self.impacts["short"]].itertuples()
-        ]
+        out = []
+        for r in self.impacts[self.impacts["short"]].itertuples():
+            need = SHORT_PERIODS / r.duration  # the cut-off that would measure it [Hz]
+            if need < 0.5 * r.fs:
+                remedy = (f"raise [filter] cutoff_hz (to {need:.3g} Hz or more, below "
+                          f"{0.5 * r.fs:g} Hz, the Nyquist frequency) to measure it")
+            else:  # no cut-off below the Nyquist frequency can: the samples are too few
+                remedy = (f"no cut-off below the Nyquist frequency {0.5 * r.fs:g} Hz "
+                          f"measures it (it spans {r.duration * r.fs:.3g} samples): record "
+                          f"at a higher sample rate, above {2 * need:.4g} Hz (the filter lengthens "
+                          "the measured duration: the pulse may be shorter still)")
+            out.append(
+                f"trial {r.trial} ({r.file}), impact {r.impact}: duration "
+                f"{1e3 * r.duration:.3g} ms is under {SHORT_PERIODS:g} periods of the "
+                f"{fc:g} Hz low-pass ({1e3 * SHORT_PERIODS / fc:.3g} ms): its peak "
+                f"{r.F_peak:.4g} N is attenuated by the filter; {remedy}")
+        return out
 
     @property
     def failures_table(self) -> pd.DataFrame:
