@@ -33,6 +33,26 @@ def test_linear_drift_is_removed(L, rate):
     np.testing.assert_allclose(off, 3.0, atol=0.1)
 
 
+
+@pytest.mark.parametrize("rest_from", [0.41, 0.43])
+def test_load_held_after_the_impact_is_not_the_zero(rest_from):
+    """A 1500 N, 20 ms hit at 0.4 s, then the wheel rests on the obstacle with 100 N to
+    the end of the 1 s record (60 % of it), on a 30 N offset + 20 N/s drift. The robust
+    first line went through the held load and took it as the zero: offset 130 N, peak
+    1400 N (-6.7 %), the held load read 0 N; or, the load starting after a gap, 'too few
+    samples away from impacts'. The unloaded start (baseline_s) reads below such a line,
+    so the first line is the start's offset: the known input back."""
+    t = np.arange(int(FS)) / FS
+    rng = np.random.default_rng(4)
+    f = np.maximum(_half_sine(t, 0.4, 0.02, 1500.0), np.where(t > rest_from, 100.0, 0.0))
+    F, thr, off = ex.normal_force(t, (f + 30 + 20 * t + rng.normal(0, 0.5, len(t)))[:, None],
+                                  [1.0], FS)
+    np.testing.assert_allclose(off, 30.0, atol=0.2)
+    np.testing.assert_allclose(np.median(F[t > 0.9]), 100.0, atol=0.2)
+    imp = ex.detect_impacts(t, F, thr, cutoff_hz=300.0)
+    np.testing.assert_allclose(imp["F_peak"].max(), 1500.0, rtol=1e-3)
+
+
 def test_synthetic_generator_with_long_records(tmp_path):
     """The package's own generator with record_s = 2 (same drift and noise as the shipped
     0.5 s set): every trial runs and recovers its true peak (2 of 3 failed before)."""

@@ -192,24 +192,42 @@ def normal_force(t, raw, gains, fs: float, filt: FilterConfig = FilterConfig(),
         raise InputError(f"recording of {t[-1] - t[0]:.3g} s is too short for a baseline of "
                          f"{det.baseline_s:g} s")
     tr = (t - t[0])[:, None]
-    coef = _robust_line(t, forces)
-    quiet = None
-    for _ in range(5):
+
+    def quiet_samples(coef, quiet):
+        """Samples away from impacts (and a guard band) of the force left by ``coef``,
+        and the median of that force over the quiet start."""
         s0 = lowpass(forces - coef[0] - tr * coef[1], fs, filt.cutoff_hz, filt.order).sum(axis=1)
         noise = s0[:nb] if quiet is None else s0[quiet]
-        active = np.abs(s0) > _threshold(det, s0, noise)
+        thr = _threshold(det, s0, noise)
         new = np.ones(len(t), bool)
-        for s, e in _regions(active, 0):
-            guard = max(e - s, int(0.01 * fs))
+        for s, e in _regions(np.abs(s0) > thr, 0):
+            guard = max(min(e - s, nb), int(0.01 * fs))  # at most the baseline's length
             new[max(s - guard, 0): e + guard] = False
+        return new, float(np.median(s0[:nb])) < -thr
+
+    # the first line: robust through all samples. When a load held after the impact (a
+    # wheel resting on the obstacle) fills most of the recording, that line goes through
+    # the load, and the unloaded start reads below it (a load reads positive): then the
+    # first line is the offset of the quiet start (baseline_s), no drift
+    coef = _robust_line(t, forces)
+    new, start_below = quiet_samples(coef, None)
+    if start_below:
+        coef = np.stack([np.median(forces[:nb], axis=0), np.zeros(forces.shape[1])])
+        new, _ = quiet_samples(coef, None)
+    quiet = None
+    for _ in range(5):
         if new.sum() < nb:
-            raise InputError("too few samples away from impacts to fit the sensor offset")
+            raise InputError(
+                f"too few samples away from impacts to fit the sensor offset ({new.sum()} "
+                f"quiet samples, need {nb}: baseline_s = {det.baseline_s:g} s); the "
+                "recording should start with the sensors unloaded")
         if quiet is not None and np.array_equal(new, quiet):
             break
         quiet = new
         # offset + linear drift per channel, least squares on the quiet samples
         X = np.stack([np.ones(quiet.sum()), t[quiet] - t[0]], axis=1)
         coef, *_ = np.linalg.lstsq(X, forces[quiet], rcond=None)
+        new, _ = quiet_samples(coef, quiet)
     F = lowpass(forces - coef[0] - tr * coef[1], fs, filt.cutoff_hz, filt.order).sum(axis=1)
     return F, _threshold(det, F, F[quiet]), coef[0]
 
