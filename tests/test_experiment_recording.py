@@ -283,3 +283,20 @@ def test_rows_of_bare_commas_are_no_samples(tmp_path):
     tt, raw, fs, _ = read_recording(tmp_path / "r.csv",
                                     SensorsConfig(channels=["ch1"], gains=[250.0]))
     assert len(tt) == 200 and raw.shape == (200, 1) and fs == pytest.approx(FS)
+
+
+def test_time_in_milliseconds_is_told(tmp_path):
+    """time_s written in ms (0 ... 999.8 for a 1 s record at 5 kHz): the file failed with
+    'filter cutoff_hz = 300 must be between 0 and the Nyquist frequency 2.5 Hz', which does
+    not say where 2.5 Hz came from. Now: the rate the time column gives, and the question."""
+    t = np.arange(5000) / 5000.0
+    f = np.where(np.abs(t - 0.4) < 0.01, 1000.0, 0.0)
+    pd.DataFrame({"time_s": 1e3 * t, "ch1_N": f}).to_csv(tmp_path / "a.csv", index=False)
+    (tmp_path / "trials.toml").write_text(
+        '[sensors]\nchannels = ["ch1"]\nunits = "N"\ngains = [1.0]\n\n'
+        '[[trial]]\nfile = "a.csv"\nbeta_deg = 30.0\nspeed = 0.3\n')
+    (fail,) = ex.run_experiment(tmp_path / "trials.toml").failures
+    assert "a.csv: the time column gives a sample rate of 5 Hz" in fail.message
+    assert "cutoff_hz = 300" in fail.message
+    assert "Is time_s in milliseconds? It must be in seconds (the rate would be 5000 Hz)" \
+        in fail.message

@@ -69,6 +69,14 @@ def process_recording(path, cfg: TrialsFile):
     t, raw, fs, n_filled = read_recording(path, cfg.sensors,
                                           max_nan_run=cfg.detection.max_nan_run)
     name = Path(path).name
+    fc = cfg.filter.cutoff_hz
+    if fc >= 0.5 * fs:
+        ms = (" Is time_s in milliseconds? It must be in seconds (the rate would be "
+              f"{1e3 * fs:.6g} Hz)." if fc < 0.5e3 * fs else "")
+        raise TrialDataError(
+            f"{name}: the time column gives a sample rate of {fs:.6g} Hz ({len(t)} samples "
+            f"over {t[-1] - t[0]:.6g} s), whose Nyquist frequency {0.5 * fs:.6g} Hz is not "
+            f"above [filter] cutoff_hz = {fc:g}.{ms}")
     try:
         F, thr, _ = normal_force(t, raw, cfg.sensors.gains, fs, cfg.filter, cfg.detection)
     except InputError as exc:
