@@ -343,6 +343,38 @@ def test_cli_exit_codes(tmp_path, capsys):
     assert "malformed TOML" in err and "Traceback" not in err
 
 
+def test_cli_prints_the_p_values_of_a_few_conditions(tmp_path, capsys):
+    """Three conditions ranked in the same order by the peaks and T_c^-: rho = tau = 1,
+    which the command printed alone ("Spearman rho = 1.000"). With three conditions that
+    happens by chance for 2 of the 3! = 6 orderings: p = 1/3 (enumerated here), which it
+    now prints, with the number of conditions."""
+    from itertools import permutations
+
+    from scipy import stats as sps
+
+    from roverimpact.cli import main
+
+    text = (EXAMPLE / "trials.toml").read_text()
+    head, *blocks = text.split("[[trial]]")
+    keep = [b for b in blocks if "v0.3_r1" in b and any(f"beta{a}_" in b for a in (30, 40, 50))]
+    model = "[model]" + text.split("[model]")[1]
+    d = tmp_path / "three"
+    d.mkdir()
+    for f in ("rover.toml", *(f"trial_0{i}_beta{a}_v0.3_r1.csv" for i, a in
+                              enumerate((30, 40, 50)))):
+        (d / f).write_bytes((EXAMPLE / f).read_bytes())
+    trials = "".join("[[trial]]" + b.split("[model]")[0] for b in keep)
+    (d / "trials.toml").write_text(head + trials + model)
+    assert main(["experiment", str(d / "trials.toml"), "-o", str(tmp_path / "o"),
+                 "--no-simulate", "--no-plot"]) == 0
+    printed = " ".join(capsys.readouterr().out.split())
+    rhos = [sps.spearmanr([1, 2, 3], p).statistic for p in permutations([1, 2, 3])]
+    p = np.mean(np.abs(rhos) >= 1 - 1e-12)
+    assert p == pytest.approx(1 / 3)
+    assert (f"Kendall tau = 1.000 (p = {sps.kendalltau([1, 2, 3], [1, 2, 3]).pvalue:.2g}), "
+            f"Spearman rho = 1.000 (p = {p:.2g}) over 3 conditions") in printed
+
+
 @pytest.mark.parametrize("how", ["--no-simulate", "simulate = false"])
 def test_no_simulate_ranks_the_peaks_by_T_c_alone(tmp_path, capsys, monkeypatch, how):
     """The indicator needs no contact parameters and no integration, so neither does the
@@ -371,7 +403,8 @@ def test_no_simulate_ranks_the_peaks_by_T_c_alone(tmp_path, capsys, monkeypatch,
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "not simulated" in printed and "F_max" not in printed
-    assert "Kendall tau = 0.956, Spearman rho = 0.991" in printed
+    assert "Kendall tau = 0.956 (p = 2.4e-09), Spearman rho = 0.991 (p = 6.5e-12) over 14 " \
+        "conditions" in " ".join(printed.split())
     summary = json.loads((tmp_path / "out" / "summary.json").read_text(),
                          parse_constant=lambda c: pytest.fail(f"{c} in summary.json"))
     assert summary["model"]["simulate"] is False

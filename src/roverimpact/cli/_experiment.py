@@ -125,11 +125,17 @@ def experiment_cmd(
         def fmt(x):
             return "n/a (< 3 conditions)" if math.isnan(x) else f"{x:.3f}"
 
+        def ranks(key):  # the statistics with their p-values and the number of conditions
+            tau, rho = s[f"kendall_tau_{key}"], s[f"spearman_rho_{key}"]
+            if math.isnan(tau):
+                return f"Kendall tau = {fmt(tau)}, Spearman rho = {fmt(rho)}"
+            return (f"Kendall tau = {fmt(tau)} (p = {s[f'kendall_p_{key}']:.2g}), Spearman "
+                    f"rho = {fmt(rho)} (p = {s[f'spearman_p_{key}']:.2g}) over "
+                    f"{s[f'n_conditions_{key}']} conditions")
+
         console.print(
-            f"rank agreement, peak vs T_c^-: Kendall tau = {fmt(s['kendall_tau_Tc'])}, "
-            f"Spearman rho = {fmt(s['spearman_rho_Tc'])}"
-            + (f"; peak vs model F_max: Kendall tau = {fmt(s['kendall_tau_Fmax'])}, "
-               f"Spearman rho = {fmt(s['spearman_rho_Fmax'])}" if simulated else ""),
+            f"rank agreement, peak vs T_c^-: {ranks('Tc')}"
+            + (f"; peak vs model F_max: {ranks('Fmax')}" if simulated else ""),
             highlight=False,
         )
         if comparison.indicators is not None:
