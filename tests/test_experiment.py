@@ -223,6 +223,16 @@ def test_trials_file_errors(tmp_path):
         ex.load_trials(p)
 
 
+def test_one_recording_listed_twice_is_refused(tmp_path):
+    """A [[trial]] block copied for the next condition without changing its file: the
+    same recording was processed twice and counted under both conditions (peak 458.6 N
+    at beta 30 and 40 deg), moving the rank statistics, with no word. Now the trials file
+    is refused at load, naming both trials."""
+    p = _trials_toml(tmp_path / "t.toml", ["a.csv", "b.csv", "./a.csv"])
+    with pytest.raises(ConfigError, match=r"trial 2 lists the file './a.csv' of trial 0"):
+        ex.load_trials(p)
+
+
 def test_face_angle_outside_0_90_is_refused_at_load(tmp_path):
     """beta is the obstacle face angle of DETC2015-47747, 0 (horizontal) to 90 deg (wall).
     A trial at 120 deg used to be processed (every recording read and filtered) and only

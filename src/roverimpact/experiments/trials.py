@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 from typing import Literal
 
@@ -156,6 +157,19 @@ class TrialsFile(StrictModel):
     trial: list[TrialConfig] = Field(min_length=1)
     model: ScenarioModelConfig | None = None
     description: str = ""
+
+    @model_validator(mode="after")
+    def _one_recording_per_trial(self):
+        seen: dict[str, int] = {}
+        for i, tr in enumerate(self.trial):
+            key = os.path.normpath(tr.file)
+            if key in seen:
+                raise ValueError(
+                    f"trial {i} lists the file {tr.file!r} of trial {seen[key]}: one "
+                    "recording per trial (a copied [[trial]] block whose file was not "
+                    "changed would count one recording under two conditions)")
+            seen[key] = i
+        return self
 
 
 def load_trials(path: str | Path) -> tuple[TrialsFile, Path]:
