@@ -233,6 +233,24 @@ def test_one_recording_listed_twice_is_refused(tmp_path):
         ex.load_trials(p)
 
 
+def test_force_unit_channel_with_a_unit_gain_is_refused(tmp_path):
+    """A channel already in kN (a calibrated force sensor) with gains = [1.0]: the units
+    are labels, the gain is N per unit, so every force read 1000 times low (a 1500 N hit
+    as 1.5 N) with no word. 1 kN = 1000 N, 1 lbf = 4.448 N: a gain of a force unit must
+    be within a factor 2 of it; 1000 (N per kN) and 980 (a correction) are accepted."""
+    p = tmp_path / "t.toml"
+    trial = '[[trial]]\nfile = "x.csv"\nbeta_deg = 30\nspeed = 1\n'
+    for units, gains in (('"kN"', "[1.0]"), ('["lbf"]', "[1.0]"), ('"mN"', "[1.0]")):
+        p.write_text(f'[sensors]\nchannels = ["a"]\nunits = {units}\ngains = {gains}\n'
+                     + trial)
+        with pytest.raises(ConfigError, match=r"channel 'a' reads \w+, a force: its gain 1 "):
+            ex.load_trials(p)
+    for gains in ("[1000.0]", "[980.0]"):
+        p.write_text(f'[sensors]\nchannels = ["a"]\nunits = "kN"\ngains = {gains}\n' + trial)
+        assert ex.load_trials(p)[0].sensors.gains[0] == float(gains[1:-1])
+    assert ex.trials.FORCE_UNITS["lbf"] == pytest.approx(4.4482216152605)  # 0.45359237 kg * g_n
+
+
 def test_face_angle_outside_0_90_is_refused_at_load(tmp_path):
     """beta is the obstacle face angle of DETC2015-47747, 0 (horizontal) to 90 deg (wall).
     A trial at 120 deg used to be processed (every recording read and filtered) and only

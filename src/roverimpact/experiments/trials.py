@@ -13,6 +13,7 @@ from .._io import read_toml
 from .._schema import StrictModel, validate
 
 __all__ = [
+    "FORCE_UNITS",
     "DetectionConfig",
     "FilterConfig",
     "ScenarioModelConfig",
@@ -21,6 +22,12 @@ __all__ = [
     "TrialsFile",
     "load_trials",
 ]
+
+
+#: Force units a channel may read, in newtons: the gain of such a channel (N per unit) must
+#: be within a factor 2 of this (a kN channel with gain 1 would read 1000 times low).
+FORCE_UNITS = {"N": 1.0, "mN": 1e-3, "kN": 1e3, "daN": 10.0, "lbf": 4.4482216152605,
+               "kgf": 9.80665}
 
 
 class SensorsConfig(StrictModel):
@@ -64,6 +71,14 @@ class SensorsConfig(StrictModel):
         if fsl is not None and not all(map(math.isfinite, fsl if isinstance(fsl, list)
                                            else [fsl])):
             raise ValueError("full_scale must be finite")
+        for ch, unit, g in zip(self.channels, self.unit_list, self.gains, strict=True):
+            to_n = FORCE_UNITS.get(unit)
+            if to_n is not None and not 0.5 * to_n <= g <= 2.0 * to_n:
+                raise ValueError(
+                    f"channel {ch!r} reads {unit}, a force: its gain {g:g} is in N per {unit} "
+                    f"and 1 {unit} = {to_n:g} N, so it should be about {to_n:g} (a "
+                    f"calibration correction within a factor 2); the units are not "
+                    "converted otherwise")
         if len(set(self.channels)) != len(self.channels):
             raise ValueError(f"channel names must be unique, got {self.channels}")
         return self
