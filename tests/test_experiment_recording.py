@@ -169,6 +169,18 @@ def test_other_delimiters_are_named(tmp_path, sep, said):
         ex.read_recording(tmp_path / "a.csv", sensors)
 
 
+def test_a_line_of_text_with_a_semicolon_is_not_a_delimiter(tmp_path):
+    """A trials file listed as a recording (its description holds a ';') was told "the
+    columns are separated by semicolons ... save it as comma-separated CSV"; it has no
+    time_s column, which the message now says, showing the line it read as the header."""
+    (tmp_path / "a.csv").write_text('description = "offset drift; noise"\n[sensors]\n')
+    sensors = ex.SensorsConfig(channels=["ch1"], units="N", gains=[1.0])
+    with pytest.raises(ex.TrialDataError, match=r"no 'time_s' column \(header is "
+                       r"\['description = \"offset drift; noise\"'\]\)") as err:
+        ex.read_recording(tmp_path / "a.csv", sensors)
+    assert "semicolons" not in str(err.value)
+
+
 def test_metadata_line_without_hash_is_one_line(tmp_path):
     """Metadata lines above the header without '#' gave pandas' raw 'Error tokenizing
     data. C error: Expected 1 fields in line 3, saw 2' (over two lines)."""

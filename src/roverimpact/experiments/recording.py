@@ -179,8 +179,12 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
     df.columns = [str(c).strip() for c in df.columns]
     df = df.dropna(how="all")   # rows of bare commas (',,' : a spreadsheet's empty rows)
     if "time_s" not in df.columns:
+        names = ("time", *(f"{ch.lower()}_" for ch in sensors.channels))
         for sep, said in ((";", "semicolons"), ("\t", "tabs")):
-            if any(sep in c for c in df.columns):
+            # a header of such columns: one of them the time or a channel (not a line of
+            # text with a ';' in it, e.g. a trials file given as a recording)
+            parts = [p.strip().lower() for c in df.columns for p in str(c).split(sep)]
+            if any(sep in c for c in df.columns) and any(p.startswith(names) for p in parts):
                 raise TrialDataError(
                     f"{path.name}: the columns are separated by {said} (header "
                     f"{_header(df.columns)}), not commas: save it as comma-separated CSV "
