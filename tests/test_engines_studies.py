@@ -330,6 +330,36 @@ def test_statements_follow_the_statistics():
 
 
 # ------------------------------------------------------------------- fixed v_n study
+def test_statements_do_not_credit_a_t_c_that_does_not_rank():
+    """A constant baseline cannot rank, but T_c^- earns nothing over it unless T_c^- ranks
+    F_max itself: with T_c^- reversed (scipy rho = -1) or unrelated to F_max (rho near 0,
+    its interval across 0), the verdict once read "T_c^- earns its keep against v_n,
+    ...". Reference: scipy's spearmanr on the same table."""
+    from roverimpact.studies.indicators import compare_indicators
+
+    rng = np.random.default_rng(0)
+    n = 30
+    F = np.linspace(100.0, 1000.0, n)
+    for T in (1.0 / F, rng.permutation(F)):
+        t = pd.DataFrame({"F_max": F, "T_c_minus": T, "v_n": np.full(n, 0.3),
+                          "m_total": 24.0, "m_eff_free": 10.0})
+        c = compare_indicators(t, "F_max", n_boot=200, seed=0)
+        rho = c.result("T_c_minus").agreement.spearman
+        assert rho.value == pytest.approx(sps.spearmanr(T, F).statistic, abs=1e-12)
+        assert rho.low <= 0.0
+        assert c.result("v_n").constant
+        text = " ".join(c.statements)
+        assert "earns its keep against v_n" not in text
+        assert c.statements[0].startswith("T_c^- does not rank F_max here")
+        assert c.statements[-1] == ("In short: T_c^- does not rank F_max in this study, "
+                                    "so it earns its keep against no baseline.")
+    # and when it ranks (rho = 1), the constant baselines are beaten as before
+    t = pd.DataFrame({"F_max": F, "T_c_minus": F / 500.0, "v_n": np.full(n, 0.3),
+                      "m_total": 24.0, "m_eff_free": 10.0})
+    c = compare_indicators(t, "F_max", n_boot=0)
+    assert "earns its keep against v_n" in c.statements[-1]
+
+
 def test_fixed_vn_study_holds_vn_and_mass_fixed():
     from roverimpact.studies import run_study
     from roverimpact.studies.config import load_study

@@ -199,23 +199,39 @@ def statements(comp: IndicatorComparison, force_label: str = "F_max") -> list[st
     """Where T_c^- earns its keep in ``comp`` and where not: one sentence per baseline
     and a summary, every claim read off the statistics.
 
-    A baseline is *beaten* if it is constant (it cannot rank the cases) or if the paired
-    bootstrap interval of Spearman(T_c^-) - Spearman(baseline) lies above 0; *ahead* if
-    it lies below 0; *equal* if both coefficients are the same; otherwise the study does
-    not tell them apart (interval across 0, or no interval without bootstrap).
+    T_c^- *ranks* the force if its own Spearman interval lies above 0 (without bootstrap:
+    if rho > 0). Only then can it earn its keep: a baseline is *beaten* if it is
+    constant (it cannot rank the cases) or if the paired bootstrap interval of
+    Spearman(T_c^-) - Spearman(baseline) lies above 0; *ahead* if it lies below 0;
+    *equal* if both coefficients are the same; otherwise the study does not tell them
+    apart (interval across 0, or no interval without bootstrap). Where T_c^- does not
+    rank the force (random or reversed order), the statements say so and no baseline
+    counts as beaten (a constant baseline once did, whatever T_c^-'s rho: "earns its
+    keep" at rho = -1).
     """
     tc = comp.result("T_c_minus")
     if tc is None or not math.isfinite(tc.agreement.spearman.value):
         return []
     rho = tc.agreement.spearman.value
+    low, high = tc.agreement.spearman.low, tc.agreement.spearman.high
     pct = round(100 * tc.agreement.confidence)
+    ranks = low > 0.0 if math.isfinite(low) else rho > 0.0
     out, beaten, not_beaten, ahead = [], [], [], []
+    if not ranks:
+        ci = (f"{pct}% CI [{_f(low)}, {_f(high)}]" if math.isfinite(low)
+              else "no bootstrap interval")
+        out.append(f"T_c^- does not rank {force_label} here: Spearman {_f(rho)} ({ci}"
+                   + (", not above 0" if math.isfinite(low) else "") + ").")
     for r in comp.results:
         if r.spearman_gain is None:
             continue
         g = r.spearman_gain
         rb = r.agreement.spearman.value
-        if r.constant:
+        if r.constant and not ranks:
+            not_beaten.append(r.label)
+            out.append(f"{r.label} is the same for every case here, so it cannot rank them; "
+                       f"nor does T_c^- (Spearman {_f(rho)}).")
+        elif r.constant:
             beaten.append(r.label)
             out.append(f"{r.label} is the same for every case here, so it cannot rank them; "
                        f"T_c^- ranks {force_label} with Spearman {_f(rho)}.")
@@ -228,7 +244,7 @@ def statements(comp: IndicatorComparison, force_label: str = "F_max") -> list[st
             out.append(f"{r.label} ranks {force_label} exactly as T_c^- does (Spearman "
                        f"{_f(rho)} both): T_c^- adds nothing over it here.")
         elif math.isfinite(g.low) and g.low > 0.0:
-            beaten.append(r.label)
+            (beaten if ranks else not_beaten).append(r.label)
             out.append(f"T_c^- ranks {force_label} better than {r.label}: Spearman "
                        f"{_f(rho)} vs {_f(rb)}, difference {_g(g.value)} ({pct}% CI "
                        f"[{_g(g.low)}, {_g(g.high)}]).")
@@ -244,10 +260,11 @@ def statements(comp: IndicatorComparison, force_label: str = "F_max") -> list[st
             out.append(f"T_c^- vs {r.label}: Spearman {_f(rho)} vs {_f(rb)}, difference "
                        f"{_g(g.value)} ({ci}): this study (n = {comp.n}) does not tell "
                        "them apart.")
-    summary = []
+    summary = [] if ranks else [f"T_c^- does not rank {force_label} in this study, so it "
+                                "earns its keep against no baseline"]
     if beaten:
         summary.append(f"T_c^- earns its keep against {', '.join(beaten)}")
-    if not_beaten:
+    if not_beaten and ranks:
         summary.append(("not against " if beaten else "T_c^- does not earn its keep against ")
                        + ", ".join(not_beaten) + " (same ranking, or not told apart)")
     if ahead:
