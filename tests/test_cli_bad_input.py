@@ -253,6 +253,15 @@ def _not_a_study_table(o: Path, res: Path) -> None:
     pd.DataFrame({"x": [1.0]}).to_parquet(o / "res" / "results.parquet")
 
 
+def _empty_table(o: Path, res: Path) -> None:
+    """The study's own table with every row gone (the columns kept)."""
+    import pandas as pd
+
+    _results_copy(o, res)
+    path = o / "res" / "results.parquet"
+    pd.read_parquet(path).iloc[:0].to_parquet(path)
+
+
 def _full_reproduction(o: Path, res: Path) -> None:
     """A folder whose manifests say it holds the full built-in studies."""
     from roverimpact._io import read_toml
@@ -274,6 +283,7 @@ def _existing_folder(o: Path, res: Path) -> None:
 
 SETUP = {"results": _results_copy, "corrupt_results": _corrupt_results,
          "corrupt_manifest": _corrupt_manifest, "not_a_table": _not_a_study_table,
+         "empty_table": _empty_table,
          "full": _full_reproduction, "exists": _existing_folder,
          "traverse_bad_manifest": _traverse_bad_manifest}
 
@@ -516,6 +526,9 @@ CASES = [
      "corrupt_manifest"),
     ("report-not-a-table", ["report", "{o}/res"], ["{o}/res"], "not a study results table",
      "not_a_table"),
+    # an empty table once gave an empty figure, "the simulator gave no result", exit 0
+    ("report-empty-table", ["report", "{o}/res"], ["{o}/res"], "has no cases (0 rows",
+     "empty_table"),
     ("report-n-boot", ["report", "{o}/res", "--n-boot", "-1"], ["{o}/res"], "--n-boot",
      "results"),
     # one resample gave an "interval" of one number: 0 (none) or at least 100

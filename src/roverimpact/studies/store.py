@@ -557,6 +557,14 @@ def load_results(out_dir: str | Path, *, read_table: bool = True
     if missing:
         raise ConfigError(f"{path}: not a study results table (no column "
                           f"{', '.join(missing)})")
+    if table is not None and len(table) == 0:
+        # a study writes one row per case (an empty grid is refused before any work), so
+        # an empty table is a damaged or foreign file: its report once showed an empty
+        # figure and "the compliant-contact simulator gave no result"
+        raise ConfigError(f"{path}: the results table has no cases (0 rows"
+                          + (f"; the manifest counts {manifest['n_cases']}"
+                             if isinstance(manifest.get("n_cases"), int) else "")
+                          + "); rerun the study with --overwrite")
     study = None
     if (out_dir / STUDY_COPY).is_file():
         try:
