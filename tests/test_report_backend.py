@@ -102,3 +102,28 @@ def test_save_figure_lays_the_figure_out_once(tmp_path, monkeypatch):
     box = ax.get_position()
     assert x0 == pytest.approx(box.x0 * 4.0 * 72, abs=0.01)
     assert y0 == pytest.approx((1 - box.y0) * 3.0 * 72, abs=0.01)
+
+
+def test_study_figure_without_legend_says_what_its_lines_are():
+    """A sweep over beta x h x u x suspension draws 8 lines of T_c^- and 8 of F_max: too
+    many for a legend, and the figure once drew none, with nothing saying which line is
+    which. The count is pandas' number of (h, u, suspension) groups."""
+    import numpy as np
+    import pandas as pd
+
+    from roverimpact.report.plots import label, plot_study
+
+    rng = np.random.default_rng(0)
+    g = pd.MultiIndex.from_product([[20.0, 60.0, 90.0], [0.25, 0.45], [0.3, 0.6],
+                                    ["rocker", "rigid"]],
+                                   names=["obstacle.beta_deg", "model.params.h", "velocity.u",
+                                          "model.params.suspension"]).to_frame(index=False)
+    t = g.assign(T_c_minus=rng.uniform(0.1, 2, len(g)), F_max=rng.uniform(100, 900, len(g)))
+    others = ["model.params.h", "velocity.u", "model.params.suspension"]
+    fig = plot_study(t, "obstacle.beta_deg", group_by=others)
+    ax = fig.axes[0]
+    assert ax.get_legend() is None
+    n = t.groupby(others).ngroups
+    text = " ".join(x.get_text() for x in ax.texts)
+    assert f"{n} lines each (h, u, suspension" in text.replace("\n", " ")
+    assert "N/m" in label("contact_law.k")   # k [N/m^n] as the docs give it

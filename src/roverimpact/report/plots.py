@@ -24,7 +24,7 @@ LABELS = {
     "model.params.com_height": r"COM height $h$ [m]",
     "model.params.h": r"COM height $h$ [m]",
     "velocity.u": r"speed $u$ [m/s]",
-    "contact_law.k": r"contact stiffness $k$",
+    "contact_law.k": r"contact stiffness $k$ [N/m$^n$]",
     "contact_law.e": r"coefficient of restitution $e$",
     "motion.speed": r"speed $u$ [m/s]",
     "T_c_minus": r"effective kinetic energy $T_c^-$ [J]",
@@ -174,6 +174,14 @@ def plot_study(table: pd.DataFrame, x: str, *, title: str = "", subtitle: str = 
         handles, labels_ = handles + h2, labels_ + l2
     if len(handles) <= 9:
         ax1.legend(handles, labels_, fontsize=7, loc="best")
+    elif len(groups) > 1:  # too many lines for a legend: say what they are
+        names = ", ".join(g.split(".")[-1] for g in group_by)
+        ax1.text(0.01, 0.99, "\n".join(textwrap.wrap(
+            f"{len(groups)} lines each ({names}: one line per combination, lighter to "
+            "darker in increasing order); solid: " + (r"$T_c^-$, dashed: peak force"
+                                                      if ax2 is not None else r"$T_c^-$"),
+            70)), transform=ax1.transAxes, fontsize=6.5, va="top", ha="left", color="0.25",
+            bbox={"facecolor": "white", "alpha": 0.8, "lw": 0, "pad": 1})
     lines = [typeset(ln) for text in (title, subtitle) if text
              for ln in textwrap.wrap(text, 78, break_on_hyphens=False)]
     ax1.set_title("\n".join(lines), fontsize=10 if len(lines) <= 2 else 9)
