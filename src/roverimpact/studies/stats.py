@@ -208,25 +208,51 @@ def _rowwise_pearson(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.where(den > 0, np.sum(a * b, axis=1) / np.where(den > 0, den, 1.0), np.nan)
 
 
+#: Elements (resamples x cases) of one block of bootstrap resamples: the resampled and
+#: ranked arrays of a block stay near 100 MB whatever n_boot and n (the whole
+#: (n_boot, n) arrays at once took 6.5 GB for a report of 1e5 cases).
+BOOT_BLOCK = 4_000_000
+
+
+def _pairs(counts: np.ndarray) -> int:
+    counts = counts.astype(np.int64)
+    return int(np.sum(counts * (counts - 1) // 2))
+
+
 def _boot_stats(x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """(n_boot, 4) Spearman, Kendall tau-b, Pearson, concordant fraction of resamples.
 
-    Vectorized over resamples; the pair statistics use the sign matrices
-    ``sign(x_i - x_j) sign(y_i - y_j)`` in blocks (loop over scipy for large n).
+    Vectorized over blocks of resamples (:data:`BOOT_BLOCK` elements at a time); the pair
+    statistics use the sign matrices ``sign(x_i - x_j) sign(y_i - y_j)`` for n <= 400,
+    above one ``scipy.stats.kendalltau`` per resample, its concordant fraction from tau-b
+    and the tie counts (counted from the groups of equal values of the sample).
     """
     n_boot, n = idx.shape
-    X, Y = x[idx], y[idx]
     out = np.full((n_boot, 4), np.nan)
-    out[:, 2] = _rowwise_pearson(X, Y)
-    out[:, 0] = _rowwise_pearson(sps.rankdata(X, axis=1), sps.rankdata(Y, axis=1))
+    step = max(1, BOOT_BLOCK // n)
+    for s0 in range(0, n_boot, step):
+        X, Y = x[idx[s0:s0 + step]], y[idx[s0:s0 + step]]
+        out[s0:s0 + step, 2] = _rowwise_pearson(X, Y)
+        out[s0:s0 + step, 0] = _rowwise_pearson(sps.rankdata(X, axis=1),
+                                                sps.rankdata(Y, axis=1))
     if n > 400:
+        gx = np.unique(x, return_inverse=True)[1].ravel()
+        gy = np.unique(y, return_inverse=True)[1].ravel()
+        gxy = np.unique(gx * (int(gy.max()) + 1) + gy, return_inverse=True)[1].ravel()
+        n0 = n * (n - 1) // 2
         for b in range(n_boot):
-            out[b, 1] = sps.kendalltau(X[b], Y[b], variant="b").statistic
-            out[b, 3] = concordant_pair_fraction(X[b], Y[b])[0]
+            i = idx[b]
+            tau_b = sps.kendalltau(x[i], y[i], variant="b").statistic
+            out[b, 1] = tau_b
+            n1, n2 = _pairs(np.bincount(gx[i])), _pairs(np.bincount(gy[i]))
+            untied = n0 - n1 - n2 + _pairs(np.bincount(gxy[i]))
+            if untied > 0 and math.isfinite(tau_b):
+                diff = tau_b * math.sqrt(float(n0 - n1) * float(n0 - n2))
+                out[b, 3] = round((untied + diff) / 2) / untied
         return out
     block = max(1, int(4e6 // (n * n)))
     for s0 in range(0, n_boot, block):
-        xs, ys = X[s0:s0 + block], Y[s0:s0 + block]
+        xs, ys = x[idx[s0:s0 + block]], y[idx[s0:s0 + block]]
         sx = np.sign(xs[:, :, None] - xs[:, None, :])
         sy = np.sign(ys[:, :, None] - ys[:, None, :])
         prod = sx * sy
@@ -329,9 +355,13 @@ def spearman_difference(x1, x2, y, *, n_boot: int = 1000, confidence: float = 0.
     low = high = nan
     if n_boot and math.isfinite(value):
         idx = np.random.default_rng(seed).integers(0, a.size, (n_boot, a.size))
-        ry = sps.rankdata(c[idx], axis=1)
-        diff = (_rowwise_pearson(sps.rankdata(a[idx], axis=1), ry)
-                - _rowwise_pearson(sps.rankdata(b[idx], axis=1), ry))
+        diff = np.empty(n_boot)
+        step = max(1, BOOT_BLOCK // a.size)  # bounded memory, as _boot_stats
+        for s0 in range(0, n_boot, step):
+            i = idx[s0:s0 + step]
+            ry = sps.rankdata(c[i], axis=1)
+            diff[s0:s0 + step] = (_rowwise_pearson(sps.rankdata(a[i], axis=1), ry)
+                                  - _rowwise_pearson(sps.rankdata(b[i], axis=1), ry))
         diff = diff[np.isfinite(diff)]
         if diff.size >= n_boot / 2:
             q = (1.0 - confidence) / 2.0
