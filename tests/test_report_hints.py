@@ -106,3 +106,28 @@ def test_report_says_which_cases_the_statistics_leave_out(tmp_path, capsys):
     out = " ".join(capsys.readouterr().out.split())
     assert "2 cases with F_max, at least 3 are needed" in out
     assert "gave no result" not in (tmp_path / "two" / "report.html").read_text()
+
+
+def test_folder_of_studies_with_one_interrupted_says_so(tmp_path, capsys):
+    """A folder of two studies, one interrupted (its chunks and manifest, no
+    results.parquet): the report showed the other alone, exit 0, without a word about
+    the second; now a note (stderr and the report) names it and the command finishing
+    it, which works."""
+    import shutil
+
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY)
+    root = tmp_path / "all"
+    assert main(["sweep", str(f), "-o", str(root / "a"), "--no-report"]) == 0
+    shutil.copytree(root / "a", root / "b")
+    (root / "b" / "results.parquet").unlink()
+    capsys.readouterr()
+    assert main(["report", str(root), "--n-boot", "0"]) == 0
+    err = " ".join(capsys.readouterr().err.split())
+    hint = f"roverimpact sweep {root / 'b' / 'study.toml'} -o {root / 'b'} --resume"
+    assert "Not in this report: b, a study without results.parquet" in err and hint in err
+    assert "Not in this report: b" in (root / "report.html").read_text()
+    assert main([*hint.split()[1:], "--no-report"]) == 0
+    capsys.readouterr()
+    assert main(["report", str(root), "--n-boot", "0"]) == 0
+    assert "Not in this report" not in capsys.readouterr().err

@@ -25,6 +25,7 @@ from ..studies.indicators import IndicatorComparison, compare_indicators, with_b
 from ..studies.stats import Agreement, ForceRatios, agreement, check_n_boot, force_ratios
 from ..studies.store import (
     CHUNKS,
+    MANIFEST,
     RESULTS,
     STUDY_COPY,
     WHOLE_WINDOW,
@@ -540,23 +541,33 @@ def write_report(path: str | Path, sections: list[StudySection], *, title: str,
 
 
 def missing_studies_note(root: str | Path) -> str:
-    """A sentence naming the built-in studies missing from a reproduction folder (one whose
-    subfolders include a built-in study: the others' results deleted or never run), or
-    ``""``."""
+    """A sentence naming the studies of ``root`` that the report leaves out, or ``""``:
+    the built-in studies missing from a reproduction folder (one whose subfolders include
+    a built-in study: the others' results deleted or never run), and any subfolder holding
+    a study without its results (an interrupted run: its ``chunks/`` or ``manifest.json``
+    but no ``results.parquet``; such a study was once left out without a word)."""
     from ..studies.reproduce import BUILTIN_STUDIES
 
     root = Path(root)
-    if (root / RESULTS).is_file():
+    if (root / RESULTS).is_file() or not root.is_dir():
         return ""
     have = {p.parent.name for p in root.glob(f"*/{RESULTS}")}
-    if not have & set(BUILTIN_STUDIES):
-        return ""
-    missing = [f"{s} ({BUILTIN_STUDIES[s]})" for s in BUILTIN_STUDIES if s not in have]
-    if not missing:
-        return ""
-    return (f"Not in this report: {', '.join(missing)}: no {RESULTS} in its subfolder of "
-            f"{root} (deleted, or the reproduction did not finish); run `roverimpact "
-            f"reproduce -o {root}` again to recompute it.")
+    missing = []
+    if have & set(BUILTIN_STUDIES):
+        missing = [f"{s} ({BUILTIN_STUDIES[s]})" for s in BUILTIN_STUDIES if s not in have]
+    unfinished = [p for p in sorted(root.iterdir())
+                  if p.is_dir() and p.name not in have and p.name not in BUILTIN_STUDIES
+                  and ((p / MANIFEST).is_file() or any((p / CHUNKS).glob("*.parquet")))]
+    parts = []
+    if missing:
+        parts.append(f"Not in this report: {', '.join(missing)}: no {RESULTS} in its "
+                     f"subfolder of {root} (deleted, or the reproduction did not finish); "
+                     f"run `roverimpact reproduce -o {root}` again to recompute it.")
+    for p in unfinished:
+        parts.append(f"Not in this report: {p.name}, a study without {RESULTS}"
+                     f"{_stopped(p)}; finish it with `roverimpact sweep {p / STUDY_COPY} "
+                     f"-o {p} --resume`, then report again.")
+    return " ".join(parts)
 
 
 def build_report(root: str | Path, *, title: str | None = None, intro: str = "",
