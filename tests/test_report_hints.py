@@ -131,3 +131,33 @@ def test_folder_of_studies_with_one_interrupted_says_so(tmp_path, capsys):
     capsys.readouterr()
     assert main(["report", str(root), "--n-boot", "0"]) == 0
     assert "Not in this report" not in capsys.readouterr().err
+
+
+def test_constant_peak_force_is_named_not_shown_as_a_correlation(tmp_path, capsys):
+    """F_max the same in every case: scipy's spearmanr is NaN (zero variance), the report
+    showed n/a everywhere without saying why; now a note names the constant column."""
+    import json
+    import warnings
+
+    import numpy as np
+    import pandas as pd
+    from scipy import stats as sps
+
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY)
+    out = tmp_path / "out"
+    assert main(["sweep", str(f), "-o", str(out), "--no-report"]) == 0
+    path = out / "results.parquet"
+    t = pd.read_parquet(path).assign(F_max=250.0)
+    t.to_parquet(path)
+    m = json.loads((out / "manifest.json").read_text())
+    (out / "manifest.json").write_text(json.dumps(m | {"simulate": True}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert np.isnan(sps.spearmanr(t["T_c_minus"], t["F_max"]).statistic)
+    capsys.readouterr()
+    assert main(["report", str(out), "--n-boot", "0"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "F_max is the same in all 5 cases used" in text
+    assert "1.000" not in text
+    assert "F_max is the same in all 5 cases" in (out / "report.html").read_text()

@@ -219,6 +219,7 @@ def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> 
         agr = engines[0].agreement
         if n_failed:
             note = _failed_note(n_failed)
+        note = " ".join(t for t in (_constant_note(kept, "F_max"), note) if t)
     elif n_with >= 3:
         note = (f"F_max agreement not computed: fewer than 3 cases left once the "
                 f"{int(whole.sum())} whole-window cases are excluded.")
@@ -361,6 +362,22 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
 
 #: Dots drawn in the summary figure of a large study (a random subset of the sample).
 PLOT_SAMPLE = 3000
+
+
+def _constant_note(table: pd.DataFrame, force: str) -> str:
+    """Why the correlations are n/a although there are enough cases: T_c^- or the force
+    is the same in every case used (a correlation of a constant is undefined; it is
+    never shown as 1), or ``""``."""
+    x = table["T_c_minus"].to_numpy(float)
+    y = table[force].to_numpy(float)
+    ok = np.isfinite(x) & np.isfinite(y)
+    same = [name for name, v in (("T_c^-", x[ok]), (force, y[ok]))
+            if v.size >= 3 and np.ptp(v) == 0]
+    if not same:
+        return ""
+    return (f"Correlations not defined: {' and '.join(same)} "
+            f"{'is' if len(same) == 1 else 'are'} the same in all {int(ok.sum())} cases "
+            "used, so nothing can be ranked.")
 
 
 def _failed_note(n_failed: int) -> str:
