@@ -161,3 +161,33 @@ def test_constant_peak_force_is_named_not_shown_as_a_correlation(tmp_path, capsy
     assert "F_max is the same in all 5 cases used" in text
     assert "1.000" not in text
     assert "F_max is the same in all 5 cases" in (out / "report.html").read_text()
+
+
+def test_many_cases_are_drawn_binned_not_as_a_wall_of_markers(tmp_path):
+    """A table of 4000 cases read whole was drawn point by point (1e5 cases: a solid red
+    and blue block); now as the large-study summary (per-bin range, band and median of
+    every case, PLOT_SAMPLE dots), and the figure says so. (Pipeline check: the binned
+    aggregates themselves are tested against numpy in test_study_scale.)"""
+    import numpy as np
+    import pandas as pd
+
+    from roverimpact.report.html import PLOT_SAMPLE, analyse_folder
+
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY)
+    out = tmp_path / "out"
+    assert main(["sweep", str(f), "-o", str(out), "--no-report"]) == 0
+    path = out / "results.parquet"
+    t = pd.read_parquet(path)
+    rng = np.random.default_rng(0)
+    n = 4000
+    big = t.iloc[rng.integers(0, len(t), n)].reset_index(drop=True)
+    big["case"] = np.arange(n)
+    big["obstacle.beta_deg"] = rng.uniform(10, 90, n)
+    big["T_c_minus"] = rng.uniform(0.1, 2.0, n)
+    big.to_parquet(path)
+    s = analyse_folder(out, n_boot=0)
+    assert s.agreement is None and len(s.table) == n
+    svg = " ".join((out / "figure.svg").read_text().split())  # texts kept as comments
+    assert f"all {n:,} cases in" in svg
+    assert f"{PLOT_SAMPLE:,} random cases" in svg

@@ -236,12 +236,20 @@ def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> 
         subtitle += "; " + "; ".join(
             f"{e.label}: Spearman {_fmt(e.agreement.spearman.value)} (n={e.agreement.n})"
             for e in engines[1:] if e.agreement is not None)
-    fig = plot_study(table, x, title=name, subtitle=subtitle,
-                     group_by=[p for p in params if p != x] or None,
-                     flagged=whole if n_ww else None,
-                     flag_label="contact not ended in the window (excluded)",
-                     forces=[(e.force, e.label) for e in engines] if len(engines) > 1
-                     else None)
+    if len(table) > PLOT_ALL_MAX and pd.api.types.is_numeric_dtype(table[x]):
+        # every case drawn was a wall of markers (1e5 cases: one red and blue block)
+        cols = ["T_c_minus", *([fcol] if fcol else [])]
+        summ = summarize(folder / RESULTS, x, cols, binned=cols, seed=seed)
+        dots = table.sample(n=PLOT_SAMPLE, random_state=seed).sort_index()
+        fig = plot_study_summary(summ.bins, x, title=name, subtitle=subtitle, force=fcol,
+                                 sample=dots)
+    else:
+        fig = plot_study(table, x, title=name, subtitle=subtitle,
+                         group_by=[p for p in params if p != x] or None,
+                         flagged=whole if n_ww else None,
+                         flag_label="contact not ended in the window (excluded)",
+                         forces=[(e.force, e.label) for e in engines] if len(engines) > 1
+                         else None)
     figures = save_figure(fig, folder / "figure")
     if agr is not None:
         _write_stats(folder, agr, n_ww, engines)
@@ -362,6 +370,10 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
 
 #: Dots drawn in the summary figure of a large study (a random subset of the sample).
 PLOT_SAMPLE = 3000
+#: A study of more cases (and a numeric x) is drawn as the summary figure of a large one
+#: (per-bin median, 5-95 % band, range, and PLOT_SAMPLE random dots), its statistics
+#: still computed on every case.
+PLOT_ALL_MAX = 3000
 
 
 def _constant_note(table: pd.DataFrame, force: str) -> str:
