@@ -350,9 +350,9 @@ def test_statements_do_not_credit_a_t_c_that_does_not_rank():
         assert c.result("v_n").constant
         text = " ".join(c.statements)
         assert "earns its keep against v_n" not in text
-        assert c.statements[0].startswith("T_c^- does not rank F_max here")
-        assert c.statements[-1] == ("In short: T_c^- does not rank F_max in this study, "
-                                    "so it earns its keep against no baseline.")
+        assert c.statements[0].startswith("This study does not show that T_c^- ranks F_max")
+        assert c.statements[-1] == ("In short: this study does not show that T_c^- ranks "
+                                    "F_max, so it earns its keep against no baseline.")
     # and when it ranks (rho = 1), the constant baselines are beaten as before
     t = pd.DataFrame({"F_max": F, "T_c_minus": F / 500.0, "v_n": np.full(n, 0.3),
                       "m_total": 24.0, "m_eff_free": 10.0})

@@ -204,8 +204,9 @@ def statements(comp: IndicatorComparison, force_label: str = "F_max") -> list[st
     constant (it cannot rank the cases) or if the paired bootstrap interval of
     Spearman(T_c^-) - Spearman(baseline) lies above 0; *ahead* if it lies below 0;
     *equal* if both coefficients are the same; otherwise the study does not tell them
-    apart (interval across 0, or no interval without bootstrap). Where T_c^- does not
-    rank the force (random or reversed order), the statements say so and no baseline
+    apart (interval across 0, or no interval without bootstrap). Where the study does not
+    show that T_c^- ranks the force (random or reversed order, or too few cases), the
+    statements say so and no baseline
     counts as beaten (a constant baseline once did, whatever T_c^-'s rho: "earns its
     keep" at rho = -1).
     """
@@ -220,8 +221,9 @@ def statements(comp: IndicatorComparison, force_label: str = "F_max") -> list[st
     if not ranks:
         ci = (f"{pct}% CI [{_f(low)}, {_f(high)}]" if math.isfinite(low)
               else "no bootstrap interval")
-        out.append(f"T_c^- does not rank {force_label} here: Spearman {_f(rho)} ({ci}"
-                   + (", not above 0" if math.isfinite(low) else "") + ").")
+        out.append(f"This study does not show that T_c^- ranks {force_label}: Spearman "
+                   f"{_f(rho)} ({ci}" + (", not above 0" if math.isfinite(low) else "")
+                   + ").")
     for r in comp.results:
         if r.spearman_gain is None:
             continue
@@ -260,8 +262,8 @@ def statements(comp: IndicatorComparison, force_label: str = "F_max") -> list[st
             out.append(f"T_c^- vs {r.label}: Spearman {_f(rho)} vs {_f(rb)}, difference "
                        f"{_g(g.value)} ({ci}): this study (n = {comp.n}) does not tell "
                        "them apart.")
-    summary = [] if ranks else [f"T_c^- does not rank {force_label} in this study, so it "
-                                "earns its keep against no baseline"]
+    summary = [] if ranks else [f"this study does not show that T_c^- ranks {force_label}, "
+                                "so it earns its keep against no baseline"]
     if beaten:
         summary.append(f"T_c^- earns its keep against {', '.join(beaten)}")
     if not_beaten and ranks:
