@@ -169,6 +169,18 @@ def test_single_link_lever_rule():
     got = safety.point_effective_mass(model, q, "link", [u_perp, u_along], point=[r, 0, 0])
     assert got[0] == pytest.approx(m * l**2 / r**2, rel=1e-12)
     assert got[1] == np.inf
+    # `safety point`'s table: the lever's mass, the standard's m_R = m/2 and their speeds
+    # (the ISO speed itself: test_hand_worked_example); directions of any length
+    df = safety.point_speed_limits(model, q, "link", [[3 * x for x in u_perp], u_along],
+                                   point=[r, 0, 0], region="hands_fingers")
+    np.testing.assert_allclose(df[["ux", "uy", "uz"]].to_numpy(), [u_perp, u_along],
+                               atol=1e-15)
+    assert df["m_u"].iloc[0] == pytest.approx(m * l**2 / r**2, rel=1e-12)
+    assert df["m_u"].iloc[1] == np.inf and df.attrs["M_total"] == pytest.approx(m)
+    np.testing.assert_allclose(df["m_R_iso"], m / 2, rtol=1e-12)
+    v = safety.max_transient_speed("hands_fingers", np.array([m * l**2 / r**2, np.inf, m / 2]))
+    np.testing.assert_allclose(df["v_max"], v[:2], rtol=1e-12)
+    np.testing.assert_allclose(df["v_iso"], v[2], rtol=1e-12)
 
 
 def test_arm_table_min_max_bracket_sampled_directions():

@@ -202,13 +202,7 @@ def point_cmd(
 ) -> None:
     """Exact effective mass of one point of an arm along directions, and v_max (vs ISO)."""
     one_format(as_json, as_csv)
-    from ..safety import (
-        body_region,
-        iso_robot_mass,
-        load_arm,
-        max_transient_speed,
-        point_effective_mass,
-    )
+    from ..safety import body_region, load_arm, point_speed_limits
 
     _check_mass(payload, "--payload", "payload m_L", allow_zero=True)
     reg = body_region(region)
@@ -217,18 +211,13 @@ def point_cmd(
     mbm = load_arm(robot)
     qv = _configuration(robot, mbm, q, deg)
     p_L = None if payload_point is None else _numbers(payload_point, "--payload-point", 3)
-    m_u = np.atleast_1d(point_effective_mass(mbm, qv, frame, U, point=p, payload=payload,
-                                             payload_frame=payload_frame,
-                                             payload_point=p_L))
-    U = U / np.max(np.abs(U), axis=1)[:, None]  # checked non-zero; scaled: no overflow
-    U = U / np.linalg.norm(U, axis=1)[:, None]
-    M_total = float(sum(i.mass for i in mbm.model.inertias[1:]))
-    m_iso = float(iso_robot_mass(M_total, payload))
-    ok = reg.F_transient is not None
-    v_iso = float(max_transient_speed(reg, m_iso)) if ok else None
-    v = max_transient_speed(reg, m_u) if ok else np.full(len(m_u), np.nan)
-    recs = [{"direction": u.tolist(), "m_u": float(m), "v_max": float(vi), "m_R_iso": m_iso,
-             "v_iso": v_iso} for u, m, vi in zip(U, m_u, np.atleast_1d(v), strict=True)]
+    df = point_speed_limits(mbm, qv, frame, U, point=p, payload=payload,
+                            payload_frame=payload_frame, payload_point=p_L, region=reg)
+    M_total, ok = df.attrs["M_total"], reg.F_transient is not None
+    m_iso = float(df["m_R_iso"].iloc[0])
+    v_iso = float(df["v_iso"].iloc[0]) if ok else None
+    recs = [{"direction": [r.ux, r.uy, r.uz], "m_u": r.m_u, "v_max": r.v_max,
+             "m_R_iso": m_iso, "v_iso": v_iso} for r in df.itertuples()]
     if as_json:
         print_json({"robot": robot, "frame": frame, "point": p, "region": reg.name,
                     "payload": payload, "payload_frame": payload_frame or frame,

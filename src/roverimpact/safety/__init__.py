@@ -9,7 +9,13 @@ r"""Robot arms near people: ISO/TS 15066 transient-contact speed limits and exac
   imported lazily).
 """
 
-from .arm import READY_POSES, arm_effective_masses, load_arm, point_effective_mass
+from .arm import (
+    READY_POSES,
+    arm_effective_masses,
+    load_arm,
+    point_effective_mass,
+    point_speed_limits,
+)
 from .iso_ts_15066 import (
     BODY_AREAS,
     BODY_REGIONS,
@@ -36,6 +42,7 @@ __all__ = [
     "load_arm",
     "max_transient_speed",
     "point_effective_mass",
+    "point_speed_limits",
     "reduced_mass",
     "transfer_energy",
 ]

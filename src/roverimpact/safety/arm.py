@@ -38,7 +38,8 @@ from ..energy import projector, row_masses
 from ..exceptions import InputError, ModelError
 from .iso_ts_15066 import BodyRegion, body_region, iso_robot_mass, max_transient_speed
 
-__all__ = ["READY_POSES", "arm_effective_masses", "load_arm", "point_effective_mass"]
+__all__ = ["READY_POSES", "arm_effective_masses", "load_arm", "point_effective_mass",
+           "point_speed_limits"]
 
 
 def load_arm(source: str | Path):
@@ -469,4 +470,50 @@ def arm_effective_masses(model, q, *, payload: float = 0.0, points: str = "com",
         df["v_exact_best"] = max_transient_speed(reg, df["m_min"].to_numpy())
     df.attrs.update({"M_total": M_total, "payload": float(payload), "region": reg.name,
                      "q": q.tolist(), "points": points})
+    return df
+
+
+def point_speed_limits(model, q, link: str, direction, *, point=None, payload: float = 0.0,
+                       payload_frame: str | None = None, payload_point=None,
+                       region: str | BodyRegion = "chest"):
+    r"""The exact effective mass of one point of an arm along each direction, with its
+    ISO/TS 15066 transient-contact speed limit beside the standard's own (``roverimpact
+    safety point``).
+
+    Parameters
+    ----------
+    model, q, link, direction, point, payload, payload_frame, payload_point
+        As in :func:`point_effective_mass` (``q`` one configuration; ``direction`` (k, 3)
+        or (3,), world axes, normalised here).
+    region : str or BodyRegion
+        Body region of the speed limits.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per direction: ``ux``, ``uy``, ``uz`` (unit), ``m_u`` [kg] (exact, with the
+        payload as a point mass; ``inf`` where the point cannot move along u), ``v_max``
+        [m/s] (for ``m_u``), ``m_R_iso`` = M/2 + m_L [kg] and ``v_iso`` [m/s] (the
+        standard's); the speeds are NaN for a region where the standard permits no
+        transient contact. ``attrs``: ``M_total`` (moving mass [kg]), ``q``, ``region``.
+    """
+    import pandas as pd
+
+    cs, q = _arm(model, q)
+    reg = body_region(region)
+    U = np.atleast_2d(as_array(direction, "direction"))
+    m_u = np.atleast_1d(point_effective_mass(cs.mbm, q, link, U, point=point, payload=payload,
+                                             payload_frame=payload_frame,
+                                             payload_point=payload_point))
+    U = U / np.max(np.abs(U), axis=1)[:, None]  # non-zero (checked above); no overflow
+    U = U / np.linalg.norm(U, axis=1)[:, None]
+    mdl = cs.mbm.model
+    M_total = float(sum(mdl.inertias[j].mass for j in range(1, mdl.njoints)))
+    m_iso = float(iso_robot_mass(M_total, payload))
+    ok = reg.F_transient is not None
+    df = pd.DataFrame({"ux": U[:, 0], "uy": U[:, 1], "uz": U[:, 2], "m_u": m_u,
+                       "v_max": max_transient_speed(reg, m_u) if ok else np.nan,
+                       "m_R_iso": m_iso,
+                       "v_iso": float(max_transient_speed(reg, m_iso)) if ok else np.nan})
+    df.attrs.update(M_total=M_total, q=q, region=reg.name)
     return df
