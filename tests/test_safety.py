@@ -797,3 +797,54 @@ def test_payload_is_a_point_mass_in_the_exact_model(ur5_mujoco, capsys):
             safety.point_effective_mass(model, [0.3], "link", u, payload=bad)
     with pytest.raises(ModelError, match="no frame 'nope'"):
         safety.point_effective_mass(model, [0.3], "link", u, payload=1.0, payload_frame="nope")
+
+
+def test_two_link_near_stretched_stays_finite_closed_form():
+    """Planar 2-link arm, tip pushed along link 2 (u = (c12, s12)): u^T J = (l1 s2, 0), so
+    m_u = det M / (l1^2 s2^2 M22) = m1 / sin^2 q2 + m2 (closed form): finite however close
+    to stretched, inf only at q2 = 0 (the singular rule |u^T J_p| <= 1e-10 |J_p|)."""
+    model = planar_two_link(m1=2.0, m2=1.5)
+    for q2 in (1e-3, 1e-5, 1e-7):
+        u = [np.cos(0.3 + q2), np.sin(0.3 + q2), 0.0]
+        got = safety.point_effective_mass(model, [0.3, q2], "tip", u)
+        assert got == pytest.approx(2.0 / np.sin(q2) ** 2 + 1.5, rel=1e-7)
+    assert safety.point_effective_mass(model, [0.3, 0.0], "tip",
+                                       [np.cos(0.3), np.sin(0.3), 0]) == np.inf
+
+
+def test_table_m_max_is_the_point_mass_along_the_weakest_direction(ur5_mujoco):
+    """UR5 1e-5 rad from a stretched elbow: the table's m_max of the forearm and wrist links
+    is the effective mass along the eigenvector of lambda_min(G), finite (~6e10 kg), the
+    same as point_effective_mass along it and as MuJoCo (mj_fullM, mj_jac at the body's
+    centre of mass, the row a = v^T J_p: m = 1 / (a M^-1 a^T)). The table said inf where
+    the point function gave a finite mass (lambda_min <= 1e-10 lambda_max was inf there).
+    Exactly stretched, both are inf."""
+    import mujoco
+
+    mbm, m = ur5_mujoco
+    for elbow, finite in ((1e-5, True), (0.0, False)):
+        q = np.array([0.3, -0.5, elbow, 0.2, 0.4, 0.1])
+        df = safety.arm_effective_masses(mbm, q).set_index("link")
+        d = mujoco.MjData(m)
+        d.qpos[:] = q
+        mujoco.mj_forward(m, d)
+        M = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, M)
+        for link in ("forearm_link", "wrist_1_link"):
+            b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, link)
+            J = np.zeros((3, m.nv))
+            mujoco.mj_jac(m, d, J, None, d.xipos[b], b)
+            v = np.linalg.eigh(J @ np.linalg.solve(M, J.T))[1][:, 0]
+            a = v @ J
+            com = mbm.model.inertias[mbm.model.getJointId(df.at[link, "joint"])].lever
+            fid = mbm.model.getFrameId(link)
+            p = mbm.model.frames[fid].placement.actInv(np.array(com))
+            point = safety.point_effective_mass(mbm, q, link, v, point=p)
+            assert point == df.at[link, "m_max"] or point == pytest.approx(
+                df.at[link, "m_max"], rel=1e-6)
+            if finite:
+                assert 1e10 < df.at[link, "m_max"] < 1e11
+                assert df.at[link, "m_max"] == pytest.approx(
+                    1.0 / (a @ np.linalg.solve(M, a)), rel=1e-6)
+            else:
+                assert df.at[link, "m_max"] == np.inf

@@ -132,6 +132,13 @@ def _arm(model, q, *, batch: bool = False):
 #: Pinocchio's "no limit" (the largest double, a joint added without limits); inf too.
 _NO_LIMIT = 1e300
 
+#: The singular rule of :func:`point_effective_mass` and :func:`arm_effective_masses`:
+#: a point cannot move along u (``m_u = inf``) when |u^T J_p| <= SINGULAR_RTOL |J_p|.
+#: Rounding of J_p is ~1e-16 |J_p|, so only a singular configuration itself (to rounding)
+#: is inf; near one m_u ~ 1/|u^T J_p|^2 stays finite and exact (the planar 2-link arm at
+#: q2 = 1e-7 rad from stretched: m1/sin^2 q2 + m2 = 2e14 kg, tests/test_safety.py).
+SINGULAR_RTOL = 1e-10
+
 
 def check_joint_limits(mbm, q, what: str = "q", hint: str | None = None) -> None:
     """Refuse ``q`` (..., nq) outside the position limits of a revolute or prismatic joint
@@ -264,7 +271,7 @@ def _body_type():
 
 def point_effective_mass(model, q, link: str, direction, *, point=None, payload: float = 0.0,
                          payload_frame: str | None = None, payload_point=None,
-                         rtol: float = 1e-10):
+                         rtol: float = SINGULAR_RTOL):
     r"""Exact effective mass of a point of a link along one or many unit directions.
 
     .. math::  m_u = \frac{1}{u^T J_p(q) N(q) J_p(q)^T u}
@@ -304,8 +311,9 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, payload:
         Payload's centre of mass in ``payload_frame`` coordinates [m]; default ``point``
         when ``payload_frame`` is not given, else that frame's origin.
     rtol : float, optional
-        A row with :math:`|u^T J_p| \le` ``rtol`` :math:`|J_p|` means the point cannot move
-        along ``u``; its effective mass is ``inf``.
+        A row with :math:`|u^T J_p| \le` ``rtol`` :math:`|J_p|` (Frobenius norm) means the
+        point cannot move along ``u``; its effective mass is ``inf``. The default
+        :data:`SINGULAR_RTOL` is the rule of :func:`arm_effective_masses`' ``m_max``.
 
     Returns
     -------
@@ -337,28 +345,36 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, payload:
     else:
         fid_L, p_L = _resolve_point(model, payload_frame, payload_point)
     batch = q.shape[:-1]
-    Ms, As, Bs, moving = [], [], [], []
+    Ms, As, Bs, Jps = [], [], [], []
     for qi in q.reshape(-1, model.nq):
         data, M, B = _kinematics(cs, qi)
         if payload:
             J_L = _jacobian(model, data, fid_L, p_L)
             M = M + payload * (J_L.T @ J_L)
         Jp = _jacobian(model, data, fid, p)
-        A = u @ Jp  # (k, nv)
         Ms.append(M)
-        As.append(A)
+        As.append(u @ Jp)  # (k, nv)
         Bs.append(B)
-        moving.append(np.linalg.norm(A, axis=1) > rtol * max(np.linalg.norm(Jp), 1e-300))
-    moving = np.array(moving)  # (b, k)
-    out = np.full(moving.shape, np.inf)
-    if moving.any():
-        bi, ki = np.nonzero(moving)
-        M, A, B = np.array(Ms), np.array(As), np.array(Bs)
-        out[bi, ki] = row_masses(M[bi], A[bi, ki], B[bi] if B.shape[1] else None)[0]
+        Jps.append(Jp)
+    out = _masses_along(np.array(Ms), np.array(As), np.array(Bs), np.array(Jps), rtol)
     out = out.reshape((*batch, len(u)))
     if single:
         out = out[..., 0]
     return float(out) if out.ndim == 0 else out
+
+
+def _masses_along(M, A, B, Jp, rtol: float = SINGULAR_RTOL) -> np.ndarray:
+    """m_u (b, k) [kg] of the rows A (b, k, nv) = u^T J_p, held rows B (b, p, nv): the one
+    place of the singular rule, ``inf`` where :math:`|u^T J_p| \\le` ``rtol``
+    :math:`|J_p|` (Frobenius norm of J_p (b, 3, nv)), else
+    :func:`~roverimpact.energy.row_masses`."""
+    scale = np.maximum(np.linalg.norm(Jp, axis=(-2, -1)), 1e-300)
+    moving = np.linalg.norm(A, axis=-1) > rtol * scale[:, None]
+    out = np.full(moving.shape, np.inf)
+    if moving.any():
+        bi, ki = np.nonzero(moving)
+        out[bi, ki] = row_masses(M[bi], A[bi, ki], B[bi] if B.shape[1] else None)[0]
+    return out
 
 
 def _check_payload(payload) -> float:
@@ -401,7 +417,11 @@ def arm_effective_masses(model, q, *, payload: float = 0.0, points: str = "com",
         G = J_p N J_p^T \;(3\times3)
 
     (:math:`N` as in :func:`point_effective_mass`: :math:`M^{-1}` with the model's coupling
-    rows held; ``inf`` where the point cannot move along some direction). The table also
+    rows held). ``m_max`` is :func:`point_effective_mass` along the eigenvector of
+    :math:`\lambda_{min}(G)`, by its rule: ``inf`` where :math:`|u^T J_p| \le`
+    :data:`SINGULAR_RTOL` :math:`|J_p|` (the point cannot move along u; a singular
+    configuration), else finite and computed from the row :math:`u^T J_p` (not
+    :math:`1/\lambda_{min}`, which loses digits as G is formed near a singularity). The table also
     gives the ISO speed limit for ``region`` with the standard's crude mass and with the
     exact lightest / heaviest direction.
 
@@ -446,13 +466,16 @@ def arm_effective_masses(model, q, *, payload: float = 0.0, points: str = "com",
     for body, jid, fid, p in _link_points(model, points):
         Jp = _jacobian(model, data, fid, p)
         G = Jp @ N @ Jp.T
-        lam = np.linalg.eigvalsh(0.5 * (G + G.T))
+        lam, V = np.linalg.eigh(0.5 * (G + G.T))
         lmax = lam[-1]
         if lmax <= 0:
             m_min = m_max = np.inf
         else:
             m_min = 1.0 / lmax
-            m_max = np.inf if lam[0] <= 1e-10 * lmax else 1.0 / lam[0]
+            # the row of the weakest direction, by point_effective_mass's rule and method
+            # (1 / lam[0] of G formed near a singularity keeps ~|u^T J_p|^2 / eps digits)
+            m_max = float(_masses_along(M[None], (V[:, 0] @ Jp)[None, None], B[None],
+                                        Jp[None])[0, 0])
         rows.append({
             "link": body,
             "joint": model.names[jid],
