@@ -385,3 +385,29 @@ def test_a_terrain_is_refused():
     spec = {"variables": {"chassis_com_above_pivot": [0.0, 0.2]}, "n_beta": 2}
     with pytest.raises(ConfigError, match=r"scenario.terrain: optimize measures"):
         load_optimization({"scenario": scn, "optimize": spec})
+
+
+def test_a_preset_that_lifts_a_wheel_is_named_as_the_cause():
+    """2-D rover with suspension = "rocker" and [configuration] rocker = 0.2 rad: the rear
+    wheel is off z = 0 at every setting (GroundGapWarning: 'rear' 0.062 m above at the
+    nominal), so the margin counts the front wheel only and no setting is feasible. The
+    error blamed the bounds ("widen the bounds or relax the constraints"); it names the
+    preset and the wheel. The same problem with rocker = 0 has a feasible nominal (the
+    control: the bounds and limits are not the cause). A behaviour test, no physics."""
+    import copy
+
+    from roverimpact.exceptions import GroundGapWarning, SolverError
+    from roverimpact.studies.optimize import evaluate_setting, load_optimization, optimize_setting
+
+    prob = copy.deepcopy(PROBLEM)
+    prob["scenario"]["model"]["params"] = {"suspension": "rocker"}
+    prob["optimize"].update(n_beta=2, n_starts=1, maxiter=3)
+    prob["scenario"]["configuration"] = {"joints": {"rocker": 0.2}}
+    with pytest.warns(GroundGapWarning, match="'rear'"), \
+            pytest.raises(SolverError, match=r"\[configuration\] lifts a ground wheel") as ex:
+        optimize_setting(prob, simulate=False)
+    assert "'rear' 0.062 m above" in str(ex.value) and "widen the bounds" not in str(ex.value)
+    prob["scenario"]["configuration"] = {"joints": {"rocker": 0.0}}
+    problem = load_optimization(prob)
+    nominal = evaluate_setting(problem, problem.nominal)
+    assert nominal.margin >= 0.25 and nominal.clearance >= 0.05 and nominal.ground_gap == ""

@@ -65,7 +65,7 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from .._schema import StrictModel, validate
-from ..exceptions import ConfigError, RoverImpactError, SolverError
+from ..exceptions import ConfigError, GroundGapWarning, RoverImpactError, SolverError
 from ..models.geometry import clearance, stability_margin
 
 __all__ = [
@@ -281,6 +281,10 @@ class SettingReport:
         Static stability margin and ground clearance [m].
     F_pred : float
         Peak force predicted from the worst T_c^- by the obstacle contact law [N].
+    ground_gap : str
+        The scenario's :class:`~roverimpact.exceptions.GroundGapWarning` at this setting
+        (a ground wheel off z = 0 in ``[configuration]``: the stability margin counts only
+        the wheels on the ground), or ``""``.
     """
 
     values: dict
@@ -291,6 +295,7 @@ class SettingReport:
     margin: float
     clearance: float
     F_pred: float
+    ground_gap: str = ""
 
 
 def _scenario_with(problem: OptimizeProblem, values: Mapping[str, float]) -> dict:
@@ -322,13 +327,21 @@ def _setting_text(values: Mapping[str, float]) -> str:
 def evaluate_setting(problem: OptimizeProblem, values: Mapping[str, float],
                      law=None) -> SettingReport:
     """T_c^- over the beta range, objective, margin, clearance and F_pred of a setting."""
+    import warnings
+
     from ..contact import peak_force
     from ..scenario import ImpactSetup, scenario_from_dict, sweep_energy
 
     try:
-        setup = ImpactSetup.from_scenario(scenario_from_dict(_scenario_with(problem, values)))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            setup = ImpactSetup.from_scenario(scenario_from_dict(_scenario_with(problem,
+                                                                               values)))
     except (RoverImpactError, ValueError) as exc:
         raise ConfigError(f"setting {_setting_text(values)} does not build: {exc}") from None
+    for w in caught:  # shown as before; a ground gap is kept for optimize_setting's error
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    gaps = [str(w.message) for w in caught if issubclass(w.category, GroundGapWarning)]
     betas = problem.betas_deg
     en = sweep_energy(setup, np.deg2rad(betas))
     T = np.asarray(en.T_c_minus, float)
@@ -340,7 +353,8 @@ def evaluate_setting(problem: OptimizeProblem, values: Mapping[str, float],
     return SettingReport(values={k: float(v) for k, v in values.items()}, T_c=T, v_n=v_n,
                          objective=obj, beta_worst_deg=float(betas[i]),
                          margin=stability_margin(setup.model, setup.q),
-                         clearance=clearance(setup.model, setup.q), F_pred=F)
+                         clearance=clearance(setup.model, setup.q), F_pred=F,
+                         ground_gap=gaps[0] if gaps else "")
 
 
 @dataclass
@@ -484,10 +498,25 @@ def optimize_setting(problem: OptimizeProblem | str | Path | Mapping[str, Any], 
                                                 or nominal.objective < best.objective):
         best = nominal
     if best is None:
+        tried = [nominal, *cache.values()]
+        gapped = [r for r in tried if r.ground_gap]
+        limits = (f"stability margin >= {spec.stability_margin} m and clearance >= "
+                  f"{spec.min_clearance} m")
+        if len(gapped) == len(tried):
+            gap = nominal.ground_gap.split(";")[0].replace(
+                "ground wheels off the ground z = 0 in [configuration]: ", "")
+            raise SolverError(
+                f"no setting satisfies {limits}: at every setting tried ({len(tried)}) the "
+                f"scenario's [configuration] lifts a ground wheel off the ground z = 0 "
+                f"(nominal: {gap}), and the stability margin counts only the wheels on the "
+                f"ground: the preset, not the bounds or limits, is the cause. Set "
+                f"[scenario.configuration] (its joint values, base z and pitch) so that the "
+                f"wheels touch, or leave it out")
+        note = (f" ({len(gapped)} of the {len(tried)} settings tried had a ground wheel off "
+                f"the ground in [configuration]: see the warnings)" if gapped else "")
         raise SolverError(
-            f"no setting within the bounds satisfies stability margin >= "
-            f"{spec.stability_margin} m and clearance >= {spec.min_clearance} m from "
-            f"{spec.n_starts} starts: widen the bounds or relax the constraints")
+            f"no setting within the bounds satisfies {limits} from {spec.n_starts} "
+            f"starts{note}: widen the bounds or relax the constraints")
     out = OptimizeResult(problem=problem, nominal=nominal, best=best,
                          betas_deg=problem.betas_deg,
                          reduction=1.0 - best.objective / scale, starts=log,
