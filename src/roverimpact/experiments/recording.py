@@ -135,7 +135,8 @@ def _printed_uniform(t: np.ndarray) -> np.ndarray | None:
     return line if b > 0 and np.max(np.abs(t - line)) <= 0.55 * r else None
 
 
-def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int = 3):
+def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int = 3,
+                   with_filled: bool = False):
     """Read one CSV recording and check it.
 
     Returns
@@ -150,6 +151,9 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
         Sampling rate [Hz]: samples over the span, (N - 1) / (t[-1] - t[0]).
     n_filled : int
         Number of samples that were NaN and got interpolated.
+    filled : (N,) bool ndarray
+        Only with ``with_filled=True`` (a fifth item): the samples of which some channel
+        was NaN and got interpolated (an interpolated peak reads low).
 
     Raises
     ------
@@ -262,10 +266,12 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
     for j, col in enumerate(cols):
         _check_not_clipped(path.name, t, raw[:, j], col, sensors.full_scale_list[j])
     n_filled = 0
+    filled = np.zeros(len(t), bool)
     for j, col in enumerate(cols):
         bad = ~np.isfinite(raw[:, j])
         if not bad.any():
             continue
+        filled |= bad
         runs = true_runs(bad)
         start, length = max(runs, key=lambda r: r[1])
         if length > max_nan_run or bad.all():
@@ -276,4 +282,6 @@ def read_recording(path: str | Path, sensors: SensorsConfig, *, max_nan_run: int
         good = ~bad
         raw[bad, j] = np.interp(t[bad], t[good], raw[good, j])
         n_filled += int(bad.sum())
+    if with_filled:
+        return t, raw, fs, n_filled, filled
     return t, raw, fs, n_filled
