@@ -814,16 +814,16 @@ def test_two_link_near_stretched_stays_finite_closed_form():
 
 def test_table_m_max_is_the_point_mass_along_the_weakest_direction(ur5_mujoco):
     """UR5 1e-5 rad from a stretched elbow: the table's m_max of the forearm and wrist links
-    is the effective mass along the eigenvector of lambda_min(G), finite (~6e10 kg), the
+    is the effective mass along the eigenvector of lambda_min(G), finite (9e10, 6e10 kg), the
     same as point_effective_mass along it and as MuJoCo (mj_fullM, mj_jac at the body's
     centre of mass, the row a = v^T J_p: m = 1 / (a M^-1 a^T)). The table said inf where
     the point function gave a finite mass (lambda_min <= 1e-10 lambda_max was inf there).
-    Exactly stretched, both are inf."""
+    (main: inf for both links at this pose). Exactly stretched, both are inf."""
     import mujoco
 
     mbm, m = ur5_mujoco
     for elbow, finite in ((1e-5, True), (0.0, False)):
-        q = np.array([0.3, -0.5, elbow, 0.2, 0.4, 0.1])
+        q = np.array([0.0, -np.pi / 2, elbow, 0.0, 0.0, 0.0])  # upright, elbow ~ 0
         df = safety.arm_effective_masses(mbm, q).set_index("link")
         d = mujoco.MjData(m)
         d.qpos[:] = q
