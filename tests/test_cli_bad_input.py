@@ -724,3 +724,36 @@ def test_messages_show_no_internals(inputs, tmp_path, capfd):
         for internal in ("np.float64", "function-after", "[Errno", "Value error,",
                          "T_c_minus [J]", "m_eff [kg] must", "choices: Field required"):
             assert internal not in err, (argv, err)
+
+
+
+#: Bad options or output folders of sweep and reproduce, each found by a check before the
+#: study's own (which evaluates its base scenario, and so needs kernels)
+CHECKED_BEFORE_COMPILE = ("sweep-resume-and-overwrite", "sweep-workers",
+                          "reproduce-n-boot-one", "reproduce-quick-over-full",
+                          "reproduce-foreign-folder", "reproduce-unwritable",
+                          "reproduce-workers-and-scheduler")
+
+
+@pytest.mark.parametrize("name", CHECKED_BEFORE_COMPILE)
+def test_sweep_and_reproduce_refuse_bad_options_before_any_compile(name, inputs, tmp_path,
+                                                                   unwritable, capfd,
+                                                                   compile_plan):
+    """``sweep`` and ``reproduce`` compiled the partition kernel (reproduce also the
+    Runge-Kutta kernel) before checking their options and output folder: on a fresh
+    install ``reproduce --quick --n-boot 1`` or an unwritable ``-o`` got its one-line error
+    after the compile. The options and folders are checked first; the kernels are compiled
+    once they pass (``run_study(prepare=...)``), still before the study's check."""
+    case = next(c for c in CASES if c[0] == name)
+    test_bad_input_one_line_exit_2_nothing_written(*case, inputs, tmp_path, unwritable, capfd)
+    assert compile_plan.got == []
+
+
+def test_a_good_sweep_still_compiles_before_the_study_check(tmp_path, compile_plan):
+    """The compile stays where it overlaps other work: the partition kernel is compiled in
+    this process before the study's check waits for Lemke's kernel (sent to a second
+    process), not after it."""
+    assert main(["sweep", str(EX / "study_rigid_body.toml"), "-o", str(tmp_path / "r"),
+                 "--no-report"]) == 0
+    assert compile_plan.got[0] == "partition_kernel"
+    assert "impact_kernel" in compile_plan.got

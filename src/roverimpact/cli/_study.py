@@ -122,7 +122,8 @@ def _compile_plan(study: Path, workers, scheduler) -> tuple:
     simulates) are compiled here before the work (``compile_ahead``): a first
     ``roverimpact sweep examples/study_rover2d_beta_h.toml`` took 13.7 s in one process,
     8.8 s so (benchmarks/bench_startup.py --full). The file is read first, so a bad one
-    fails before any compile."""
+    fails before any compile; the kernels returned are compiled once the options are
+    checked (``run_study(prepare=...)``)."""
     from .._kernels.lemke import impact_kernel
     from .._kernels.partition import partition_kernel
     from .._kernels.reduced import rk4_peaks
@@ -160,11 +161,11 @@ def sweep_cmd(
 
     now = _compile_plan(study, workers, scheduler)
     with progress_bar(study.stem, to_stderr=as_json) as update:
-        compile_ahead(now=now)
         res = run_study(study, out, resume=resume, overwrite=overwrite, csv=csv,
                         workers=workers, scheduler=scheduler, chunk_size=chunk_size,
                         progress=update,
-                        note=lambda text: err_console.print(f"note: {text}"))
+                        note=lambda text: err_console.print(f"note: {text}"),
+                        prepare=lambda: compile_ahead(now=now))
     path, sections = None, []
     if report:
         from ..exceptions import StudyInterrupted
@@ -260,12 +261,12 @@ def reproduce_cmd(
 
         compile_ahead(impact_kernel)
     with progress_bar("reproduce", to_stderr=as_json) as update:
-        if here:
-            compile_ahead(now=(partition_kernel, rk4_peaks))
         res = reproduce(out, quick=quick, overwrite=overwrite, workers=workers,
                         scheduler=scheduler, n_boot=n_boot,
                         progress=lambda name, d, t: update(d, t),
-                        note=lambda text: err_console.print(f"note: {text}"))
+                        note=lambda text: err_console.print(f"note: {text}"),
+                        prepare=(lambda: compile_ahead(now=(partition_kernel, rk4_peaks)))
+                        if here else None)
     import pandas as pd
 
     from ..studies.sweep import failed_simulations

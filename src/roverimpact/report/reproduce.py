@@ -58,6 +58,7 @@ def reproduce(
     progress: Callable[[str, int, int], None] | None = None,
     note: Callable[[str], None] | None = None,
     overwrite: bool = False,
+    prepare: Callable[[], None] | None = None,
 ) -> ReproduceResult:
     """Run the built-in paper studies and write figures, tables and one HTML report.
 
@@ -78,6 +79,9 @@ def reproduce(
     overwrite : bool
         Let a ``quick`` run replace a full reproduction in ``out_dir`` (refused otherwise,
         before any work).
+    prepare : callable, optional
+        ``prepare()``: called once the options and the folder are checked, before the
+        first study's check (the command line compiles its kernels there).
 
     Returns
     -------
@@ -86,7 +90,8 @@ def reproduce(
     check_n_boot(n_boot)  # before the studies run, not after
     out_dir = Path(out_dir)
     run_builtin_studies(out_dir, quick=quick, workers=workers, scheduler=scheduler,
-                        progress=progress, overwrite=overwrite, note=note)
+                        progress=progress, overwrite=overwrite, note=note,
+                        prepare=prepare)
     intro = INTRO + (" <b>Quick smoke run</b> (5 points per study)." if quick else "")
     report, sections = build_report(out_dir, title="roverimpact: reproduction of "
                                     "DETC2014-35554 and DETC2015-47747", intro=intro,

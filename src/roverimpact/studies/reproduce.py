@@ -26,7 +26,7 @@ from .._io import read_toml, some_names, visible_entries
 from ..exceptions import ConfigError, StudyInterrupted
 from .config import study_from_dict
 from .executors import LazyCluster
-from .store import is_study_manifest, read_manifest
+from .store import check_out_dir, is_study_manifest, read_manifest
 from .sweep import run_study
 
 __all__ = ["BUILTIN_STUDIES", "QUICK_POINTS", "builtin_study_path", "run_builtin_studies"]
@@ -101,6 +101,7 @@ def run_builtin_studies(
     progress: Callable[[str, int, int], None] | None = None,
     overwrite: bool = False,
     note: Callable[[str], None] | None = None,
+    prepare: Callable[[], None] | None = None,
 ) -> None:
     """Run the built-in paper studies into ``out_dir/<study>`` (tables, study, manifest).
 
@@ -123,6 +124,9 @@ def run_builtin_studies(
         Let a ``quick`` run replace a full reproduction found in ``out_dir`` (refused
         otherwise, before any work). A run of the same kind replaces its predecessor. A
         folder of other files (no built-in study's results) is refused whatever the flags.
+    prepare : callable, optional
+        ``prepare()``: called once the options and the folder are checked, before the
+        first study's check (see :func:`~roverimpact.studies.sweep.run_study`).
 
     Returns
     -------
@@ -142,6 +146,7 @@ def run_builtin_studies(
             _refuse_replacing(out_dir, stem, full)
         studies.append((stem, study_from_dict(_quick(data), where=f"built-in study {stem}")
                         if quick else full))
+    check_out_dir(out_dir)  # each study's run checks its own folder, after the compile
     with ExitStack() as stack:
         cluster = None
         if workers is not None and scheduler is None:  # one local cluster for all studies,
@@ -150,7 +155,7 @@ def run_builtin_studies(
             cb = (lambda d, t, s=stem: progress(s, d, t)) if progress else None
             try:
                 run_study(study, out_dir / stem, overwrite=True, scheduler=scheduler,
-                          progress=cb, cluster=cluster, note=note)
+                          progress=cb, cluster=cluster, note=note, prepare=prepare)
             except StudyInterrupted:  # its "--resume" advice is the sweep command's
                 raise StudyInterrupted(
                     f"interrupted in study {stem}; {out_dir} is incomplete: run the same "

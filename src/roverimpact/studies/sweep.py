@@ -245,6 +245,7 @@ def run_study(
     retries: int = 3,
     cluster: LazyCluster | None = None,
     note: Callable[[str], None] | None = None,
+    prepare: Callable[[], None] | None = None,
 ) -> StudyResult:
     """Run a study and write its results table next to a copy of the study file.
 
@@ -284,6 +285,12 @@ def run_study(
     note : callable, optional
         ``note(text)`` receives what the user should know about how the study ran (e.g.
         serial because the work was too small for the cluster).
+    prepare : callable, optional
+        ``prepare()``: called once the options are checked, before the study's check
+        (which evaluates its base scenario) and any case. The command line compiles its
+        kernels there, while a second process compiles the one that check needs first:
+        a bad option is refused without waiting for a compile, and a bad study or folder
+        waits no longer than the check itself.
 
     Returns
     -------
@@ -303,6 +310,8 @@ def run_study(
         raise ConfigError("give either --workers or --scheduler, not both")
     if workers is not None and workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
+    if prepare is not None:  # the study's check below evaluates it: compile meanwhile
+        prepare()
     prep = prepare_study(study, evaluator=evaluator, chunk_size=chunk_size)
     if scheduler is not None:
         need_dask()
