@@ -14,6 +14,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 SRC = str(ROOT / "src")
 EXAMPLE = ROOT / "examples" / "rover2d_beta45.toml"
@@ -37,6 +39,8 @@ def test_run_keeps_exit_code_output_and_exit_handlers(tmp_path):
     code = f"""
 import atexit, ctypes, sys
 from pathlib import Path
+
+import pytest
 atexit.register(lambda: Path({str(marker)!r}).write_text("ran"))
 print("python line")
 ctypes.CDLL(None).printf(b"C line\\n")        # C stdio, buffered when stdout is a file
@@ -61,6 +65,8 @@ def test_run_waits_for_a_running_thread(tmp_path):
     code = f"""
 import sys, threading, time
 from pathlib import Path
+
+import pytest
 def work():
     time.sleep(0.5)
     Path({str(marker)!r}).write_text("done")
@@ -109,6 +115,27 @@ def test_energy_compiles_the_partition_here_and_the_rows_in_the_background(compi
     assert "partition_kernel" not in compile_plan.got
 
 
+@pytest.mark.parametrize("text, word", [
+    ('[model]\nname = "rover2d"\nparams = { h = "0.35 m" }\n[obstacle]\nwheel = "front"\n'
+     'beta_deg = 45\n', "plain number"),
+    ('[model]\nfile = "missing.urdf"\n[obstacle]\nframe = "a"\nnormal = [0, 0, 1]\n', "no such"),
+])
+def test_energy_refuses_a_model_that_does_not_build_before_compiling(compile_plan, tmp_path,
+                                                                      capfd, text, word):
+    """``energy`` compiled the partition kernel (2-6 s on a fresh install) before building
+    the model: a parameter with a unit or a missing URDF got its one-line error after that
+    compile. The model is built first (milliseconds); only the background compile of the
+    row assembly, which overlaps the loading, has started."""
+    from roverimpact.cli import main
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text)
+    capfd.readouterr()
+    assert main(["energy", str(bad)]) == 2
+    assert word in capfd.readouterr().err
+    assert compile_plan.got == []
+
+
 def test_console_script_entry_is_run():
     """pyproject's script is ``roverimpact.cli:run`` (the fast end), not ``main``."""
     import tomllib
@@ -126,6 +153,28 @@ def test_simulate_sends_lemke_to_the_background_and_compiles_the_partition_here(
     assert main(["simulate", str(example), "-o", str(tmp_path / "o"), "--no-plot"]) == 0
     assert compile_plan.sent == ["impact_kernel"]
     assert compile_plan.got[0] == "partition_kernel" and "impact_kernel" in compile_plan.got
+
+
+@pytest.mark.parametrize("old, new, word", [
+    ("u = 0.3 ", "u = 0.0 ", "velocity.u > 0"),
+    ("h = 0.4 }", 'h = "0.4 m" }', "plain number"),
+])
+def test_simulate_refuses_a_scenario_it_cannot_run_before_any_compile(compile_plan, tmp_path,
+                                                                       capfd, old, new, word):
+    """``simulate`` sent Lemke's kernel to a second process and compiled the partition
+    kernel (2-6 s on a fresh install) before building the model and reading the
+    [simulation] settings: a scenario with no driving speed or a parameter with a unit got
+    its one-line error after that compile. Both are checked first (9 ms for the example)."""
+    from roverimpact.cli import main
+
+    text = (ROOT / "examples" / "simulate_rover2d.toml").read_text()
+    assert old in text
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace(old, new, 1))
+    capfd.readouterr()
+    assert main(["simulate", str(bad), "-o", str(tmp_path / "o"), "--no-plot"]) == 2
+    assert word in capfd.readouterr().err
+    assert (compile_plan.sent, compile_plan.got) == ([], [])
 
 
 def test_ctrl_c_swallowed_by_the_compiler_is_an_interruption(monkeypatch, capsys):

@@ -34,10 +34,12 @@ def energy_cmd(
 
     compile_ahead(_evaluate_one)  # needed first: in the background on a fresh install
     from ..scenario import ImpactSetup, load_scenario
+    from ..scenario.build import scenario_model
 
     sc = load_scenario(file)
-    compile_ahead(now=(partition_kernel,))  # meanwhile (a bad file stops before this)
-    setup = ImpactSetup.from_scenario(sc)
+    model = scenario_model(sc)  # a bad file or model stops before the compile (ms)
+    compile_ahead(now=(partition_kernel,))  # meanwhile
+    setup = ImpactSetup.from_scenario(sc, model=model)
     e = setup.partition()
     f_max = _peak_force(sc, e)
     out = e.as_dict() | {
