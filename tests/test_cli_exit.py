@@ -158,13 +158,15 @@ def test_simulate_sends_lemke_to_the_background_and_compiles_the_partition_here(
 @pytest.mark.parametrize("old, new, word", [
     ("u = 0.3 ", "u = 0.0 ", "velocity.u > 0"),
     ("h = 0.4 }", 'h = "0.4 m" }', "plain number"),
+    ('wheel = "front"', 'wheel = "nose"', "unknown or empty wheel list ['nose']"),
 ])
 def test_simulate_refuses_a_scenario_it_cannot_run_before_any_compile(compile_plan, tmp_path,
                                                                        capfd, old, new, word):
     """``simulate`` sent Lemke's kernel to a second process and compiled the partition
     kernel (2-6 s on a fresh install) before building the model and reading the
-    [simulation] settings: a scenario with no driving speed or a parameter with a unit got
-    its one-line error after that compile. Both are checked first (9 ms for the example)."""
+    [simulation] settings: a scenario with no driving speed, a parameter with a unit or an
+    unknown wheel got its one-line error after that compile. They are checked first (20 ms
+    for the example)."""
     from roverimpact.cli import main
 
     text = (ROOT / "examples" / "simulate_rover2d.toml").read_text()

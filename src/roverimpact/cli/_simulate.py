@@ -67,6 +67,8 @@ def simulate_cmd(
                        "simulate") as work:
         cfg = SimulationConfig.from_scenario(sc, where=str(file))
         model = scenario_model(sc)  # both checks (9 ms for the example): before the compile
+        if not in_mujoco:
+            build_system(model, cfg)  # the wheels named (10 ms, no kernel)
         _compile_ahead()
         result = simulate_scenario(sc, model=model, where=str(file), engine=engine)
         table = outdir / result.write(work / f"history.{fmt}").name
