@@ -757,3 +757,15 @@ def test_a_good_sweep_still_compiles_before_the_study_check(tmp_path, compile_pl
                  "--no-report"]) == 0
     assert compile_plan.got[0] == "partition_kernel"
     assert "impact_kernel" in compile_plan.got
+
+
+@pytest.mark.parametrize("name", ["trust-unwritable", "sweep-unwritable", "sweep-out-is-a-file"])
+def test_an_unwritable_folder_is_refused_before_the_study_check_compiles(
+        name, inputs, tmp_path, unwritable, capfd, compile_plan):
+    """A study's check evaluates its base scenario, which compiles the row assembly and
+    Lemke's kernel (14.7 s for the latter on an empty cache here): ``trust --quick -o`` an
+    unwritable folder (or sweep's, or a file as the folder) got its one-line error after
+    that check. The folder is checked first, without creating it."""
+    case = next(c for c in CASES if c[0] == name)
+    test_bad_input_one_line_exit_2_nothing_written(*case, inputs, tmp_path, unwritable, capfd)
+    assert compile_plan.got == []

@@ -118,8 +118,9 @@ def test_unwritable_output_folder_nonroot(tmp_path, capsys):
 def test_unwritable_output_folder(tmp_path, capsys):
     blocker = tmp_path / "file"
     blocker.write_text("a file, not a folder")
+    # checked before the study (nothing created): the message names the file in the way
     _fails(capsys, ["sweep", str(_write(tmp_path, GOOD)), "-o", str(blocker / "out")],
-           "output folder", "not writable")
+           "output folder", f"{blocker} is a file, not a folder")
 
 
 def test_unreachable_or_malformed_scheduler(tmp_path, capsys):

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .._io import atomic_write, writing
+from .._io import atomic_write, check_writable, writing
 from ..exceptions import ConfigError, RoverImpactError
 from .config import Case, Study, load_study
 
@@ -70,10 +70,15 @@ DERIVED = (RESULTS, "results.csv", "stats.json", "report.html", "figure.png", "f
            "trust.parquet", "trust_map.png", "trust_map.svg")
 
 
-def check_out_dir(out_dir: Path) -> None:
+def check_out_dir(out_dir: Path, *, create: bool = True) -> None:
+    """Refuse an output folder that is a file or cannot be written; create it, unless
+    ``create`` is false (then nothing is created: :func:`roverimpact._io.check_writable`)."""
     if out_dir.exists() and not out_dir.is_dir():
         raise ConfigError(f"output folder {out_dir} is a file, not a folder; choose another "
                           "folder with -o")
+    if not create:
+        check_writable(out_dir, folder=True)
+        return
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         probe = out_dir / f".write-test-{uuid.uuid4().hex}"

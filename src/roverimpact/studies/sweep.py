@@ -310,6 +310,7 @@ def run_study(
         raise ConfigError("give either --workers or --scheduler, not both")
     if workers is not None and workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
+    check_out_dir(Path(out_dir), create=False)  # before the study's check, which compiles
     if prepare is not None:  # the study's check below evaluates it: compile meanwhile
         prepare()
     prep = prepare_study(study, evaluator=evaluator, chunk_size=chunk_size)
