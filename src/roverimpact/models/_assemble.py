@@ -27,7 +27,7 @@ from numba import njit
 from .._kernels._jit import NJIT_OPTIONS, b1, f8, i8, kernel, ro, rw
 from .._kernels.partition import factor, partition_factored, readonly
 from ._build import LinearLoopClosure
-from .constraints import GroundContact, LockedJoint, LoopClosure, PointContact
+from .constraints import RIM_AXIS_TOL, GroundContact, LockedJoint, LoopClosure, PointContact
 
 # row kinds
 _NORMAL, _LONG, _LAT, _CONST = 0, 1, 2, 3
@@ -59,7 +59,7 @@ def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact
             na = n0 * a0 + n1 * a1 + n2 * a2
             d0, d1, d2 = n0 - na * a0, n1 - na * a1, n2 - na * a2
             nd = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            if nd < 1e-9:
+            if nd < RIM_AXIS_TOL:
                 d0, d1, d2 = n0, n1, n2
             else:
                 d0, d1, d2 = d0 / nd, d1 / nd, d2 / nd

@@ -30,6 +30,7 @@ from ..exceptions import ModelError
 from .base import Wheel
 
 __all__ = [
+    "RIM_AXIS_TOL",
     "GroundContact",
     "LockedJoint",
     "LoopClosure",
@@ -41,6 +42,11 @@ __all__ = [
 ]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+#: A unit normal whose part across a wheel's axis is shorter than this is along the axis
+#: (a face hit: no rim point faces it). Every rim-point rule uses it: the row assembly,
+#: the scenario's batch over beta, the traverse's impact models.
+RIM_AXIS_TOL = 1e-9
 
 
 def mass_matrix(model, data, q) -> np.ndarray:
@@ -112,7 +118,7 @@ def wheel_contact_point(data, frame_id: int, wheel: Wheel, n) -> np.ndarray:
     n = np.asarray(n, dtype=float)
     d = n - (n @ a) * a
     nd = np.sqrt(d @ d)
-    d = n if nd < 1e-9 else d / nd
+    d = n if nd < RIM_AXIS_TOL else d / nd
     return oMf.translation - wheel.radius * d
 
 

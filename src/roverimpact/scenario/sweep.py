@@ -6,6 +6,7 @@ import numpy as np
 
 from ..energy import partition, row_masses
 from ..exceptions import InputError
+from ..models.constraints import RIM_AXIS_TOL
 from .build import (
     ImpactEnergy,
     ImpactSetup,
@@ -91,7 +92,7 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
         d = N - (N @ a)[:, None] * a
         nd = np.linalg.norm(d, axis=1, keepdims=True)
         # a normal along the wheel axis (a face hit): d = n, as the row assembly does
-        d = np.where(nd < 1e-9, N, d / np.maximum(nd, 1e-300))
+        d = np.where(nd < RIM_AXIS_TOL, N, d / np.maximum(nd, 1e-300))
         r = -wheel.radius * d
         rows = N @ J[:3] + np.cross(r, N) @ J[3:]
     # the active rows may depend on beta ("auto"): decided per beta among all candidates

@@ -44,6 +44,7 @@ import numpy as np
 
 from ..contact.reduced import held_inverse, law_form, reduced_impact, reduced_impact_batch
 from ..exceptions import InputError, SolverError
+from ..models.constraints import RIM_AXIS_TOL
 from ..models.joints import lock_row
 from ..scenario.schema import GRAVITY
 
@@ -104,9 +105,9 @@ def _rim_rows(J, axis, radius, n):
     n = n / np.linalg.norm(n, axis=-1)[..., None]
     d = n - np.einsum("...j,...j->...", n, axis)[..., None] * axis
     nd = np.linalg.norm(d, axis=-1)[..., None]
-    # along the axis to rounding (|d| below 1e-9, the row assembly's threshold): a bare
-    # d /= |d| turned a residual of 1e-16 into an arbitrary rim point and a finite model
-    d = np.where(nd < 1e-9, np.nan, d / np.maximum(nd, 1e-300))
+    # along the axis to rounding (the row assembly's RIM_AXIS_TOL): a bare d /= |d|
+    # turned a residual of 1e-16 into an arbitrary rim point and a finite model
+    d = np.where(nd < RIM_AXIS_TOL, np.nan, d / np.maximum(nd, 1e-300))
     return point_rows(J, -radius[..., None] * d, n[..., None, :])[..., 0, :]
 
 
