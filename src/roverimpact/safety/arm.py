@@ -269,6 +269,23 @@ def _body_type():
     return pin.FrameType.BODY
 
 
+def _unit_directions(direction) -> tuple[np.ndarray, bool]:
+    """Unit directions (k, 3) of ``direction`` (3,) or (k, 3), and whether it was one;
+    one InputError for another shape, NaN, inf or a zero row."""
+    u = as_array(direction, "direction", min_ndim=1)
+    single = u.ndim == 1
+    u = np.atleast_2d(u)
+    if u.shape[-1] != 3 or u.ndim != 2:
+        raise InputError(f"direction must have shape (3,) or (k, 3), got {u.shape}")
+    if not np.all(np.isfinite(u)):
+        raise InputError("direction must be finite and non-zero")
+    big = np.max(np.abs(u), axis=1, initial=0.0)  # scaled first: |(0, 0, 1e300)| overflows
+    if np.any(big == 0):
+        raise InputError("direction must be finite and non-zero")
+    u = u / big[:, None]
+    return u / np.linalg.norm(u, axis=1)[:, None], single
+
+
 def point_effective_mass(model, q, link: str, direction, *, point=None, payload: float = 0.0,
                          payload_frame: str | None = None, payload_point=None,
                          rtol: float = SINGULAR_RTOL):
@@ -325,18 +342,7 @@ def point_effective_mass(model, q, link: str, direction, *, point=None, payload:
     rtol = check_rtol(rtol)
     cs, q = _arm(model, q, batch=True)
     model = cs.mbm.model
-    u = as_array(direction, "direction", min_ndim=1)
-    single = u.ndim == 1
-    u = np.atleast_2d(u)
-    if u.shape[-1] != 3 or u.ndim != 2:
-        raise InputError(f"direction must have shape (3,) or (k, 3), got {u.shape}")
-    if not np.all(np.isfinite(u)):
-        raise InputError("direction must be finite and non-zero")
-    big = np.max(np.abs(u), axis=1, initial=0.0)  # scaled first: |(0, 0, 1e300)| overflows
-    if np.any(big == 0):
-        raise InputError("direction must be finite and non-zero")
-    u = u / big[:, None]
-    u = u / np.linalg.norm(u, axis=1)[:, None]
+    u, single = _unit_directions(direction)
     fid, p = _resolve_point(model, link, point)
     payload = _check_payload(payload)
     if payload_frame is None:
@@ -524,12 +530,10 @@ def point_speed_limits(model, q, link: str, direction, *, point=None, payload: f
 
     cs, q = _arm(model, q)
     reg = body_region(region)
-    U = np.atleast_2d(as_array(direction, "direction"))
-    m_u = np.atleast_1d(point_effective_mass(cs.mbm, q, link, U, point=point, payload=payload,
-                                             payload_frame=payload_frame,
+    U = _unit_directions(direction)[0]
+    m_u = np.atleast_1d(point_effective_mass(cs.mbm, q, link, direction, point=point,
+                                             payload=payload, payload_frame=payload_frame,
                                              payload_point=payload_point))
-    U = U / np.max(np.abs(U), axis=1)[:, None]  # non-zero (checked above); no overflow
-    U = U / np.linalg.norm(U, axis=1)[:, None]
     mdl = cs.mbm.model
     M_total = float(sum(mdl.inertias[j].mass for j in range(1, mdl.njoints)))
     m_iso = float(iso_robot_mass(M_total, payload))

@@ -1216,13 +1216,14 @@ def pulling_applies(constraints, contacts) -> bool:
 def warn_if_pulling(M, A, v, labels, obstacle_row: int, keep=None,
                     stacklevel: int = 4) -> None:
     """:class:`~roverimpact.exceptions.PullingContactWarning` when a held contact of
-    ``contacts.ground = "noslip"`` needs a pulling normal impulse (:func:`pulling_contact`;
-    with ``keep``, :func:`pulling_contact_of` a stack)."""
+    ``contacts.ground = "noslip"`` needs a pulling normal impulse (:func:`pulling_contact`
+    of one system ``A`` (m, n); :func:`pulling_contact_of` of a stack (k, m, n), ``M`` and
+    ``v`` one system or one per item, ``keep`` its held rows, default all)."""
     import warnings
 
     from ..exceptions import PullingContactWarning
 
-    hit = (pulling_contact(M, A, v, labels, obstacle_row) if keep is None
+    hit = (pulling_contact(M, A, v, labels, obstacle_row) if np.ndim(A) == 2
            else pulling_contact_of(M, A, v, labels, obstacle_row, keep))
     if hit is not None:
         contact, p_n, p_obs = hit

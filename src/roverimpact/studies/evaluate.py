@@ -514,7 +514,7 @@ class _OwnCases:
                     warn_jammed(float(m_eff[s + j]), float(total[j]), labels, obstacle_row)
             if pull:  # as ImpactSetup.partition and sweep_energy warn
                 warn_if_pulling(M[s:s + n], A[s:s + n], v[s:s + n], labels, obstacle_row,
-                                np.ones(A.shape[:2], dtype=bool)[s:s + n], stacklevel=2)
+                                stacklevel=2)
             s += n
 
 
