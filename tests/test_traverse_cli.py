@@ -964,3 +964,37 @@ def test_impacts_that_allow_no_speed_are_said(tmp_path):
     cfg["limits"]["F_allow"] = 150.0
     notes.clear()
     assert (run_traverse(cfg, note=notes.append).wheels["v_lim"] > 0).all() and not notes
+
+
+@pytest.mark.parametrize("h, impact", [(4e-10, False), (0.01, True)])
+def test_touching_is_no_impact_in_the_tables_and_the_limit(tmp_path, capfd, h, impact):
+    """A wheel that meets ground a fraction of a nanometre above its rolling line
+    (docs/traverse.md: below the pose solver's tolerance, touching) counted as an impact
+    of ~1e-11 J in every table: n_impacts, T_c_max, the segment's worst wheel, a finite
+    v_lim. The 2-D rover on a step of h in a height field (5 mm cells): for h below the
+    tolerance the wheels table keeps v_n > 0 and T_c^- = 0, the stations and segments count
+    no impact and the limit is the top speed; a step of 1 cm is still an impact, with its
+    T_allow limit u sqrt(T_allow / T_c^-)."""
+    dx = 0.005
+    x = -1.0 + dx * np.arange(801)
+    np.save(tmp_path / "step.npy", np.tile(np.where(x >= 1.0, h, 0.0), (9, 1)))
+    f = tmp_path / "t.toml"
+    f.write_text(f'[terrain]\nkind = "file"\nfile = "step.npy"\nspacing = {dx}\n'
+                 f'origin = [-1.0, {-4 * dx}]\n[path]\nname = "p"\n'
+                 'waypoints = [[0.62, 0.0], [0.63, 0.0]]\nspacing = 0.02\n'
+                 '[model]\nname = "rover2d"\n[drive]\nspeed = 0.1\nv_max = 0.3\n'
+                 'look_ahead = 0.1\n[limits]\nT_allow = 0.01\n')
+    capfd.readouterr()
+    assert main(["traverse", str(f), "-o", str(tmp_path / "out"), "--json",
+                 "--no-report"]) == 0, capfd.readouterr().err
+    out = tmp_path / "out"
+    P, W, S = (pd.read_parquet(out / f"{t}.parquet") for t in ("poses", "wheels", "segments"))
+    met = W[W["found"] & (W["v_n"] > 0)]
+    assert len(met) == 1                                   # the front wheel, at one station
+    T = float(met["T_c_minus"].iloc[0])
+    assert (T > 0) == impact
+    assert P["n_impacts"].sum() == S["n_impacts"].sum() == int(impact)
+    assert (P["T_c_max"].max() > 0) == impact and (S["worst_wheel"] != "").sum() == impact
+    lim = 0.1 * np.sqrt(0.01 / T) if impact else np.inf
+    assert float(met["v_lim"].iloc[0]) == pytest.approx(lim, rel=1e-12)
+    assert P["v_lim"].min() == pytest.approx(min(lim, 0.3), rel=1e-12)

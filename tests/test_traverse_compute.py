@@ -425,3 +425,34 @@ def test_robot_files_steering_locked_as_in_a_scenario():
     assert res.impact.m_eff[0, w] == pytest.approx(float(en.m_eff), rel=1e-8)
     assert res.impact.v_n[0, w] == pytest.approx(float(en.v_n), rel=1e-8)
     assert all(f"lock:{j}" in res.impact.held[0, w] for j in contacts.locked)
+
+
+@pytest.mark.parametrize("h, impact", [(5e-10, False), (2e-9, True)])
+def test_a_bump_lower_than_the_pose_tolerance_is_touching_not_an_impact(h, impact):
+    """A plain URDF rover posed on a height field of a plane with rounding-level noise got
+    "impacts" of about 1e-11 J: terrain points a fraction of a nanometre above the wheel's
+    rolling line, met at a rim angle of 1e-4 rad. A wheel of radius r rolling at u onto a
+    bump of height h meets it at v_n = u sin(theta), r (1 - cos(theta)) = h (closed form);
+    below the pose solver's own tolerance (POSE_TOL = 1e-9 m on every gap) the bump cannot
+    be told from the support: v_n at or below touch_speeds = u sqrt(2 POSE_TOL / r) is
+    touching, no impact (T_c^- = 0, no m_eff, v_n kept). The 2-D rover's front wheel
+    before a step of h; above the tolerance the impact is kept, T_c^- = m_eff v_n^2 / 2."""
+    from roverimpact.traverse.compute import POSE_TOL, touch_speeds
+
+    rv = rover2d(suspension="rocker")
+    r_w, u = rv.wheels[0].radius, 0.3
+    q0 = np.array(rv.params["q_nominal"])
+    data = rv.model.createData()
+    pin.framesForwardKinematics(rv.model, data, q0)
+    xf = data.oMf[rv.model.getFrameId(rv.wheels[0].frame)].translation[0]
+    x_e = xf + np.sqrt(2 * r_w * h - h * h) + 0.01
+    res = evaluate_stations(rv, _step(h, x_e), [0.0], [0.0], [0.0], u=u, max_travel=0.05)
+    assert res.hit["found"][0].tolist() == [True, False]
+    v_n = u * np.sin(np.arccos((r_w - h) / r_w))
+    assert res.impact.v_n[0, 0] == pytest.approx(v_n, rel=1e-6)
+    assert (v_n > touch_speeds(r_w, u)) == impact == (h > POSE_TOL)
+    T = res.impact.T_c_minus[0, 0]
+    if impact:
+        assert T == pytest.approx(0.5 * res.impact.m_eff[0, 0] * v_n ** 2, rel=1e-6)
+    else:
+        assert T == 0.0 and np.isnan(res.impact.m_eff[0, 0]) and res.impact.held[0, 0] == ""

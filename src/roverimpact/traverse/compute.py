@@ -26,8 +26,14 @@ For a batch of stations (base x, y and yaw on the path) :func:`evaluate_stations
    active rows held (:func:`roverimpact.effective_mass`).
 
 With the driving velocity every support row and loop row has zero rate, so
-:math:`T_c^- = \tfrac12 m_{eff} v_n^2` exactly; an impact needs :math:`v_n > 0` (a contact
-found ahead that the wheel does not approach is no impact: T_c^- = 0).
+:math:`T_c^- = \tfrac12 m_{eff} v_n^2` exactly; an impact needs :math:`v_n` above the
+touching speed :math:`u\sqrt{2\,\delta/r}` (:func:`touch_speeds`; a contact found ahead
+that the wheel does not approach faster is no impact: T_c^- = 0). A wheel of radius ``r``
+rolling at ``u`` onto a bump of height ``h`` meets it at the rim angle
+:math:`\theta`, :math:`r(1 - \cos\theta) = h`, with :math:`v_n = u \sin\theta \approx
+u\sqrt{2h/r}`; :math:`\delta` = :data:`POSE_TOL`, the pose solver's tolerance on every
+wheel's gap, below which a terrain point ahead cannot be told from the wheel's own
+support (a height field of a plane with rounding-level noise gave such "impacts").
 :func:`roverimpact.scenario.ImpactSetup.from_state` computes the same numbers one impact at
 a time (the tests compare them).
 """
@@ -48,16 +54,29 @@ from ..scenario.build import active_mask, friction_of, velocity
 from ..scenario.schema import ContactsSpec, VelocitySpec
 from .lookahead import first_contact_ahead
 
-__all__ = ["ImpactBatch", "RoverStates", "StationResult", "drive_velocity", "driving_velocity",
-           "evaluate_stations", "impact_energies", "place_on_path", "point_rows",
-           "rover_states"]
+__all__ = ["POSE_TOL", "ImpactBatch", "RoverStates", "StationResult", "drive_velocity",
+           "driving_velocity", "evaluate_stations", "impact_energies", "place_on_path",
+           "point_rows", "rover_states", "touch_speeds"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+#: Tolerance [m] of the pose solver on every wheel's gap (:func:`place_on_path`); a new
+#: contact lower than this above the wheel's rolling line is touching (:func:`touch_speeds`).
+POSE_TOL = 1e-9
+
+
+def touch_speeds(radius, u: float, tol: float = POSE_TOL) -> np.ndarray:
+    r"""Normal approach speed [m/s] at or below which a wheel of ``radius`` [m] driven at
+    ``u`` only touches what it meets: :math:`u\sqrt{2\,tol/r}`, the approach of a wheel
+    rolling at ``u`` onto a bump ``tol`` high (:math:`v_n = u\sin\theta`,
+    :math:`r(1 - \cos\theta) = tol`). Proportional to ``u``, as every ``v_n`` of a pose is,
+    so whether an event is an impact does not depend on the speed."""
+    return float(u) * np.sqrt(2.0 * tol / np.asarray(radius, dtype=float))
 
 
 # ------------------------------------------------------------------------------ poses
 def place_on_path(mbm, terrain, x, y, yaw, *, wheels=None, fixed=(), stride: int = 4,
-                  tol: float = 1e-9, max_iter: int = 20, q0=None) -> TerrainPose:
+                  tol: float = POSE_TOL, max_iter: int = 20, q0=None) -> TerrainPose:
     """The rover posed at every station ``(x, y, yaw)`` (arrays (k,)), batched.
 
     Every ``stride``-th station (and the last) is solved from the nominal pose lifted to
@@ -350,7 +369,7 @@ def _labels(mbm, obstacle: str, ground: list, contacts: ContactsSpec, planar: bo
 
 def impact_energies(mbm, states: RoverStates, v, support, normal, hit, *, chosen,
                     contacts: ContactsSpec = ContactsSpec(), constraints="auto",
-                    planar: bool = False) -> ImpactBatch:
+                    planar: bool = False, touch=0.0) -> ImpactBatch:
     """T_c^-, v_n, m_eff of every wheel's impact (module docstring, steps 4 and 5).
 
     Parameters
@@ -371,8 +390,12 @@ def impact_energies(mbm, states: RoverStates, v, support, normal, hit, *, chosen
         :func:`roverimpact.scenario.build.active_mask`.
     planar : bool
         A planar model (no lateral no-slip row).
+    touch : float or (n_wheels,) array_like
+        Normal approach speed [m/s] of each wheel at or below which a contact is touching,
+        no impact (T_c^- = 0, ``v_n`` kept): :func:`touch_speeds` at the reference speed.
     """
     k, nw = states.centre.shape[:2]
+    touch = np.broadcast_to(np.asarray(touch, dtype=float), (nw,))
     nv = states.M.shape[-1]
     T_c = np.zeros((k, nw))
     v_n = np.full((k, nw), np.nan)
@@ -412,7 +435,7 @@ def impact_energies(mbm, states: RoverStates, v, support, normal, hit, *, chosen
         M, vv = states.M[items], v[items]
         vn = -np.einsum("bv,bv->b", a[:, 0], vv)
         v_n[items, w] = vn
-        app = vn > 0.0
+        app = vn > max(touch[w], 0.0)
         if not app.any():
             continue
         it, A, M, vv = items[app], A[app], M[app], vv[app]
@@ -516,7 +539,8 @@ def evaluate_stations(mbm, terrain, x, y, yaw, *, u: float, max_travel: float,
         for key in hit_all:
             hit_all[key][idx] = getattr(hit, key)
         ib = impact_energies(mbm, st, vi, sup, nrm, hit, chosen=chosen, contacts=contacts,
-                             constraints=constraints, planar=planar)
+                             constraints=constraints, planar=planar,
+                             touch=touch_speeds([w.radius for w in mbm.wheels], u))
         for key in ("T_c_minus", "v_n", "m_eff", "rank", "held"):
             getattr(imp, key)[idx] = getattr(ib, key)
     x_, y_, yaw_ = (np.atleast_1d(np.asarray(a, float)) for a in (x, y, yaw))
