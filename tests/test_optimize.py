@@ -411,3 +411,39 @@ def test_a_preset_that_lifts_a_wheel_is_named_as_the_cause():
     problem = load_optimization(prob)
     nominal = evaluate_setting(problem, problem.nominal)
     assert nominal.margin >= 0.25 and nominal.clearance >= 0.05 and nominal.ground_gap == ""
+
+
+def test_a_ground_gap_is_said_once_for_all_settings_tried(tmp_path):
+    """`roverimpact optimize` on a preset that lifts the 2-D rover's rear wheel ([configuration]
+    rocker = 0.2 rad): every setting the search tried, the nominal and the corners of the
+    bounds that load_optimization builds printed their own GroundGapWarning (a line per
+    setting, the same but for the gap's digits). Now one line says at how many of the
+    settings tried which wheel was off the ground and its largest gap, and the error that
+    names the preset and the wheel is kept. Through the CLI (typer's CliRunner: stdout and
+    stderr together); a behaviour test, no physics."""
+    import copy
+    import re
+
+    import tomli_w
+    from typer.testing import CliRunner
+
+    from roverimpact.cli import app
+    from roverimpact.exceptions import SolverError
+
+    prob = copy.deepcopy(PROBLEM)
+    prob["scenario"]["model"]["params"] = {"suspension": "rocker"}
+    prob["scenario"]["configuration"] = {"joints": {"rocker": 0.2}}
+    prob["optimize"].update(n_beta=2, n_starts=1, maxiter=3)
+    f = tmp_path / "gap.toml"
+    f.write_bytes(tomli_w.dumps(prob).encode())
+    res = CliRunner().invoke(app, ["optimize", str(f), "--no-simulate"])
+    lines = [ln for ln in res.output.splitlines() if "off the ground z = 0" in ln]
+    assert len(lines) == 1, res.output
+    m = re.fullmatch(r"warning: ground wheels off the ground z = 0 in \[configuration\] at "
+                     r"(\d+) of the (\d+) settings tried: 'rear' at (\d+) of them \(largest "
+                     r"([0-9.]+) m above\); their ground rows hold them .*", lines[0])
+    assert m and m[1] == m[2] == m[3] and int(m[1]) > 3, lines[0]
+    assert float(m[4]) >= 0.062                          # the nominal's gap, or more
+    assert isinstance(res.exception, SolverError)
+    assert "[configuration] lifts a ground wheel" in str(res.exception)
+    assert "'rear' 0.062 m above" in str(res.exception)

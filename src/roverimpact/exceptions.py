@@ -56,7 +56,13 @@ class EnergyGainWarning(UserWarning):
 
 class GroundGapWarning(UserWarning):
     """A ground wheel of a scenario on flat ground (no ``[terrain]``) is off the plane
-    z = 0 in its configuration: its ground rows treat it as touching all the same."""
+    z = 0 in its configuration: its ground rows treat it as touching all the same.
+    ``gaps``: wheel name -> height of its lowest rim point above z = 0 [m] (< 0: below),
+    the wheels the message names."""
+
+    def __init__(self, message, gaps=None):
+        super().__init__(message)
+        self.gaps = dict(gaps or {})
 
 
 class StudyInterrupted(KeyboardInterrupt):

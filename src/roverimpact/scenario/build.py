@@ -41,6 +41,7 @@ from .schema import (
 )
 
 __all__ = [
+    "GROUND_GAP_ADVICE",
     "ImpactEnergy",
     "ImpactSetup",
     "active_mask",
@@ -50,6 +51,7 @@ __all__ = [
     "choose_active_rows",
     "configuration",
     "energy_of",
+    "gap_text",
     "holding_rows",
     "make_model",
     "normal_from_beta",
@@ -446,22 +448,33 @@ def _warn_ground_gaps(mbm, q, scenario: Scenario, data) -> None:
         return
     model = mbm.model  # ``data``: a Data of this model to use (the setup's, no new one)
     pin.framesForwardKinematics(model, data, np.asarray(q, float))
-    off = []
+    gaps = {}
     for w in wheels:
         oMf = data.oMf[model.getFrameId(w.frame)]
         a = oMf.rotation @ np.asarray(w.axis, float)
         a_z = a[2] / np.linalg.norm(a)
         gap = oMf.translation[2] - w.radius * np.sqrt(max(0.0, 1.0 - a_z * a_z))
         if abs(gap) > GROUND_GAP_TOL * w.radius:
-            off.append(f"{w.name!r} {abs(gap):.3g} m {'above' if gap > 0 else 'below'}")
-    if off:
-        warnings.warn(
-            f"ground wheels off the ground z = 0 in [configuration]: {', '.join(off)}; their "
-            "ground rows hold them as if they touched. Set configuration.base (z, roll, "
-            "pitch) and the joints so that they touch, leave them out of "
-            "contacts.ground_wheels, or add [terrain] (plane = {point = [0, 0, 0], normal = "
-            "[0, 0, 1]}): terrain.pose places the rover on it",
-            GroundGapWarning, stacklevel=3)
+            gaps[w.name] = float(gap)
+    if gaps:
+        off = ", ".join(f"{name!r} {gap_text(g)}" for name, g in gaps.items())
+        warnings.warn(GroundGapWarning(
+            f"ground wheels off the ground z = 0 in [configuration]: {off}; "
+            f"{GROUND_GAP_ADVICE}", gaps=gaps), stacklevel=3)
+
+
+#: what a :class:`~roverimpact.exceptions.GroundGapWarning` advises
+GROUND_GAP_ADVICE = (
+    "their ground rows hold them as if they touched. Set configuration.base (z, roll, "
+    "pitch) and the joints so that they touch, leave them out of contacts.ground_wheels, or "
+    "add [terrain] (plane = {point = [0, 0, 0], normal = [0, 0, 1]}): terrain.pose places "
+    "the rover on it")
+
+
+def gap_text(gap: float) -> str:
+    """A ground wheel's gap [m] as a :class:`~roverimpact.exceptions.GroundGapWarning` says
+    it: ``"0.062 m above"`` (``"below"`` for a negative gap)."""
+    return f"{abs(gap):.3g} m {'above' if gap > 0 else 'below'}"
 
 
 def _check_loops(mbm, q, v, *, positions: bool) -> None:

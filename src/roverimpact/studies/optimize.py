@@ -55,6 +55,7 @@ Optimisation file (TOML, every table validated, unknown keys rejected)::
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -205,7 +206,9 @@ def load_optimization(source: str | Path | Mapping[str, Any]) -> OptimizeProblem
             raise ConfigError(f"{where}: optimize.variables: {var!r} is not a numeric parameter "
                               f"of {name}; choose from {', '.join(numeric)}")
     try:
-        setup = ImpactSetup.from_scenario(scenario_from_dict(scn, where=f"{where}: scenario"))
+        with _ground_gaps_unsaid():
+            setup = ImpactSetup.from_scenario(scenario_from_dict(scn,
+                                                                 where=f"{where}: scenario"))
     except (ValueError, TypeError) as exc:
         raise ConfigError(f"{where}: scenario: {exc}") from None
     if setup.scenario.obstacle.wheel is None:
@@ -227,6 +230,19 @@ def load_optimization(source: str | Path | Mapping[str, Any]) -> OptimizeProblem
     problem = OptimizeProblem(scenario=scn, spec=f.optimize, nominal=nominal)
     _check_bounds(problem, where)
     return problem
+
+
+@contextlib.contextmanager
+def _ground_gaps_unsaid():
+    """A context in which a scenario's :class:`~roverimpact.exceptions.GroundGapWarning`
+    is not shown: the checks of :func:`load_optimization` build the nominal setting and
+    the corners of the bounds, and :func:`optimize_setting` says once what the settings it
+    tries lift (each build's own warning made dozens of lines)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=GroundGapWarning)
+        yield
 
 
 def param_unit(name: str) -> str:
@@ -252,7 +268,8 @@ def _check_bounds(problem: OptimizeProblem, where: str) -> None:
         settings = [problem.nominal | {n: b} for n in names for b in bounds[n]]
     for values in settings:
         try:
-            ImpactSetup.from_scenario(scenario_from_dict(_scenario_with(problem, values)))
+            with _ground_gaps_unsaid():
+                ImpactSetup.from_scenario(scenario_from_dict(_scenario_with(problem, values)))
         except (RoverImpactError, ValueError) as exc:
             raise ConfigError(f"{where}: optimize.variables: the rover does not build at the "
                               f"bounds {_setting_text(values)}: {exc}") from None
@@ -285,6 +302,8 @@ class SettingReport:
         The scenario's :class:`~roverimpact.exceptions.GroundGapWarning` at this setting
         (a ground wheel off z = 0 in ``[configuration]``: the stability margin counts only
         the wheels on the ground), or ``""``.
+    ground_gaps : dict
+        Its wheels: name -> height above z = 0 [m] (< 0: below).
     """
 
     values: dict
@@ -296,6 +315,7 @@ class SettingReport:
     clearance: float
     F_pred: float
     ground_gap: str = ""
+    ground_gaps: dict = field(default_factory=dict)
 
 
 def _scenario_with(problem: OptimizeProblem, values: Mapping[str, float]) -> dict:
@@ -325,8 +345,13 @@ def _setting_text(values: Mapping[str, float]) -> str:
 
 
 def evaluate_setting(problem: OptimizeProblem, values: Mapping[str, float],
-                     law=None) -> SettingReport:
-    """T_c^- over the beta range, objective, margin, clearance and F_pred of a setting."""
+                     law=None, *, warn_gaps: bool = True) -> SettingReport:
+    """T_c^- over the beta range, objective, margin, clearance and F_pred of a setting.
+
+    The scenario's warnings are shown; with ``warn_gaps=False`` not its
+    :class:`~roverimpact.exceptions.GroundGapWarning`, which the report keeps
+    (``ground_gap``, ``ground_gaps``) for :func:`optimize_setting` to say once for all the
+    settings it tries."""
     import warnings
 
     from ..contact import peak_force
@@ -339,9 +364,11 @@ def evaluate_setting(problem: OptimizeProblem, values: Mapping[str, float],
                                                                                values)))
     except (RoverImpactError, ValueError) as exc:
         raise ConfigError(f"setting {_setting_text(values)} does not build: {exc}") from None
-    for w in caught:  # shown as before; a ground gap is kept for optimize_setting's error
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    gaps = [str(w.message) for w in caught if issubclass(w.category, GroundGapWarning)]
+    gapped = [w for w in caught if issubclass(w.category, GroundGapWarning)]
+    for w in caught:  # shown as before; a ground gap is kept for optimize_setting
+        if warn_gaps or w not in gapped:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    gaps = [str(w.message) for w in gapped]
     betas = problem.betas_deg
     en = sweep_energy(setup, np.deg2rad(betas))
     T = np.asarray(en.T_c_minus, float)
@@ -354,7 +381,36 @@ def evaluate_setting(problem: OptimizeProblem, values: Mapping[str, float],
                          objective=obj, beta_worst_deg=float(betas[i]),
                          margin=stability_margin(setup.model, setup.q),
                          clearance=clearance(setup.model, setup.q), F_pred=F,
-                         ground_gap=gaps[0] if gaps else "")
+                         ground_gap=gaps[0] if gaps else "",
+                         ground_gaps=dict(getattr(gapped[0].message, "gaps", {}))
+                         if gapped else {})
+
+
+def _warn_ground_gaps_once(tried: list[SettingReport]) -> None:
+    """One :class:`~roverimpact.exceptions.GroundGapWarning` for the settings ``tried``
+    that lift (or sink) a ground wheel: how many, which wheels at how many settings, and
+    each wheel's largest gap (each setting's own warning, repeated, said the same dozens of
+    times with other digits)."""
+    import warnings
+
+    from ..scenario.build import GROUND_GAP_ADVICE, gap_text
+
+    gapped = [r for r in tried if r.ground_gaps]
+    if not gapped:
+        return
+    count: dict[str, int] = {}
+    worst: dict[str, float] = {}
+    for r in gapped:
+        for name, g in r.ground_gaps.items():
+            count[name] = count.get(name, 0) + 1
+            if abs(g) > abs(worst.get(name, 0.0)):
+                worst[name] = g
+    wheels = ", ".join(f"{name!r} at {count[name]} of them (largest {gap_text(worst[name])})"
+                       for name in count)
+    warnings.warn(GroundGapWarning(
+        f"ground wheels off the ground z = 0 in [configuration] at {len(gapped)} of the "
+        f"{len(tried)} settings tried: {wheels}; {GROUND_GAP_ADVICE}", gaps=worst),
+        stacklevel=3)
 
 
 @dataclass
@@ -466,10 +522,11 @@ def optimize_setting(problem: OptimizeProblem | str | Path | Mapping[str, Any], 
         key = tuple(np.round(u, 12))
         if key not in cache:
             cache[key] = evaluate_setting(problem, dict(zip(names, lo + u * (hi - lo),
-                                                            strict=True)), law)
+                                                            strict=True)), law,
+                                          warn_gaps=False)
         return cache[key]
 
-    nominal = evaluate_setting(problem, problem.nominal, law)
+    nominal = evaluate_setting(problem, problem.nominal, law, warn_gaps=False)
     scale = max(nominal.objective, 1e-12)
     cons = [{"type": "ineq", "fun": lambda u: report(u).margin - spec.stability_margin},
             {"type": "ineq", "fun": lambda u: report(u).clearance - spec.min_clearance}]
@@ -497,8 +554,9 @@ def optimize_setting(problem: OptimizeProblem | str | Path | Mapping[str, Any], 
     if inside and _feasible(nominal, spec) and (best is None
                                                 or nominal.objective < best.objective):
         best = nominal
+    tried = [nominal, *cache.values()]
+    _warn_ground_gaps_once(tried)
     if best is None:
-        tried = [nominal, *cache.values()]
         gapped = [r for r in tried if r.ground_gap]
         limits = (f"stability margin >= {spec.stability_margin} m and clearance >= "
                   f"{spec.min_clearance} m")
@@ -513,7 +571,7 @@ def optimize_setting(problem: OptimizeProblem | str | Path | Mapping[str, Any], 
                 f"[scenario.configuration] (its joint values, base z and pitch) so that the "
                 f"wheels touch, or leave it out")
         note = (f" ({len(gapped)} of the {len(tried)} settings tried had a ground wheel off "
-                f"the ground in [configuration]: see the warnings)" if gapped else "")
+                f"the ground in [configuration]: see the warning)" if gapped else "")
         raise SolverError(
             f"no setting within the bounds satisfies {limits} from {spec.n_starts} "
             f"starts{note}: widen the bounds or relax the constraints")
