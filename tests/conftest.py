@@ -6,6 +6,10 @@ from hypothesis import settings
 
 matplotlib.use("Agg")
 os.environ.setdefault("MPLBACKEND", "Agg")
+# kernels always compiled (or loaded from numba's cache), never their Python code for small
+# work while the cache lacks them: results that do not depend on the cache's state
+# (tests/test_kernel_python.py runs the Python code on purpose)
+os.environ.setdefault("ROVERIMPACT_KERNELS", "compiled")
 
 # the same examples on every run (a red CI names a defect, not a lucky draw);
 # HYPOTHESIS_PROFILE=explore draws fresh examples to hunt for new failures
@@ -38,8 +42,8 @@ def compile_plan(monkeypatch):
     monkeypatch.setattr(_jit, "compile_in_background",
                         lambda *ks: plan.sent.extend(map(name, ks)) or [])
     real_get = _jit.Kernel.get
-    monkeypatch.setattr(_jit.Kernel, "get",
-                        lambda self: plan.got.append(name(self)) or real_get(self))
+    monkeypatch.setattr(_jit.Kernel, "get", lambda self, items=None:
+                        plan.got.append(name(self)) or real_get(self, items))
     return plan
 
 

@@ -190,12 +190,13 @@ def test_sweep_compile_plan(tmp_path, monkeypatch, compile_plan, simulate, worke
     study = tmp_path / "s.toml"
     study.write_text(text)
     sent = compile_plan.sent
-    now = _study._compile_plan(study, workers, None)
+    now, small = _study._compile_plan(study, workers, None)
     if here is None:
-        assert now == () and sent == []
+        assert now == () and sent == [] and not small
     else:
         assert sent == ["impact_kernel"]
         assert [k.home.split(":")[1] for k in now] == here
+        assert small  # 2 cases: their Python code while the kernels compile elsewhere
     bad = tmp_path / "bad.toml"
     bad.write_text(text.replace('name = "plan"', 'name = "plan"\nspeedy = 1'))
     sent.clear()

@@ -330,7 +330,7 @@ def _partition_batch(M, A, v, batch, n, m, rtol, want_velocities) -> Partition:
     rank = np.empty(nb, dtype=np.int64)
     status = np.zeros(nb, dtype=np.int64)
     vc = np.empty((nb, n)) if want_velocities else np.empty((0, n))
-    lanes_kernel()(Mf, Af, vf, iM, iA, iv, rtol, want_velocities, T, Tc, Ta, vc, rank, status)
+    lanes_kernel(nb)(Mf, Af, vf, iM, iA, iv, rtol, want_velocities, T, Tc, Ta, vc, rank, status)
     _check_items(status, T, Tc, M, A, v, iM, iA, iv, batch)
     if want_velocities:
         v_c = vc.reshape(*batch, n)
@@ -368,8 +368,8 @@ def _partition_items(M, A, v, Mf, Af, vf, iM, iA, iv, batch, rtol, want_velociti
     index[0], index[1], index[2] = iM, iA, iv
     V = _one.OUT_V
     out = np.empty((nb, V + 2 * n if want_velocities else V))
-    _one.partition_kernel.get()(Mf.reshape(-1, n), Af.reshape(-1, n), vf.reshape(-1), index,
-                                m, rtol, want_velocities, out)
+    _one.partition_kernel.get(nb)(Mf.reshape(-1, n), Af.reshape(-1, n), vf.reshape(-1),
+                                  index, m, rtol, want_velocities, out)
     T = out[:, _one.OUT_T]
     _check_items(out[:, _one.OUT_STATUS], T, out[:, _one.OUT_TC], M, A, v, iM, iA, iv, batch)
     if want_velocities:
@@ -399,11 +399,11 @@ def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
     if want_velocities:
         n = len(M)  # other shapes: the kernel says so
         out = np.empty((1, 2 * n))
-        status, T, Tc, Ta, r = _one.partition_kernel.get()(M, A, v, _ZERO_INDEX3, -1, rtol,
-                                                           True, out)
+        status, T, Tc, Ta, r = _one.partition_kernel.get(1)(M, A, v, _ZERO_INDEX3, -1, rtol,
+                                                            True, out)
     else:
-        status, T, Tc, Ta, r = _one.partition_kernel.get()(M, A, v, _ZERO_INDEX3, -1, rtol,
-                                                           False, _NO_OUT)
+        status, T, Tc, Ta, r = _one.partition_kernel.get(1)(M, A, v, _ZERO_INDEX3, -1, rtol,
+                                                            False, _NO_OUT)
     if status:
         if status == _one.STATUS_SHAPE:
             return None
@@ -644,7 +644,7 @@ def _row_grams_kernel(M, a, B, batch, n, rtol):
     index[1] = flat_index(a.shape[:-1], batch)
     index[2] = flat_index(B.shape[:-2], batch)
     out = np.empty((index.shape[1], 4))
-    _masses.masses_kernel.get()(
+    _masses.masses_kernel.get(index.shape[1])(
         np.ascontiguousarray(M.reshape(-1, n)), np.ascontiguousarray(a.reshape(-1, n)),
         np.ascontiguousarray(B.reshape(-1, n)), index, p, float(rtol), out)
     status = out[:, _masses.OUT_STATUS]

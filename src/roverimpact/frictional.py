@@ -402,8 +402,8 @@ def _solve(M, v, normal, tangent, mu, restitution, bilateral, facets, tol, rtol,
         "meth": np.full(nb, -1, dtype=np.int8),
         "iters": np.zeros(nb, dtype=np.int64),
     }
-    friction_kernel.get()(*flat, *idx, ntan, nd, coef, math.cos(math.pi / int(facets)),
-                          float(rtol), float(tol), bool(want_vplus), *out.values())
+    friction_kernel.get(nb)(*flat, *idx, ntan, nd, coef, math.cos(math.pi / int(facets)),
+                            float(rtol), float(tol), bool(want_vplus), *out.values())
     out["P"] /= s
     out["Pt"] /= s[..., None]
     out["slack"] *= s

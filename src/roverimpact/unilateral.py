@@ -210,8 +210,8 @@ def _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol, rtol, w
         "approaching": np.zeros((nb, k), dtype=np.bool_),
         "resid": np.zeros(nb), "status": np.zeros(nb, dtype=np.int64),
     }
-    impact_kernel.get()(Mf, Nf, Bf, vf, Ef, iM, iN, iB, iv, iE, law == "poisson",
-                        float(rtol), float(tol), bool(want_vplus), *out.values())
+    impact_kernel.get(nb)(Mf, Nf, Bf, vf, Ef, iM, iN, iB, iv, iE, law == "poisson",
+                          float(rtol), float(tol), bool(want_vplus), *out.values())
     out["P"] /= sN[iN]
     out["slack"] *= sN[iN]
     status = out["status"]

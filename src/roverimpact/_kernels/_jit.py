@@ -21,6 +21,20 @@ need a kernel later can have it compiled meanwhile on another core:
 into numba's on-disk cache (only those whose cache entry is missing), and :meth:`Kernel.get`
 waits for that process and loads the result instead of compiling it a second time.
 
+Until then, small work runs the kernel's own Python code instead (:meth:`Kernel.get` with
+``items``): on a fresh install a kernel's compile costs seconds (1.4-34 s each on a
+2-core machine, ``benchmarks/bench_startup.py --kernels``) where its Python code takes a
+few milliseconds an item, so a command that evaluates one scenario, or a few hundred,
+does not wait for the compiler. The kernel compiles meanwhile in the background process
+and is loaded from numba's cache once that process has finished; a kernel whose Python
+code has run :data:`PYTHON_ITEMS` items in a process compiles (or waits for the
+background process) for the rest. The Python code is the kernel's own source with every
+compiled function it calls replaced by its Python source (:func:`python_version`); its
+results equal the compiled kernel's to rounding, not to the bit (LLVM contracts and
+reorders floating-point operations). ``ROVERIMPACT_KERNELS=compiled`` always compiles
+(the test suite's setting, so that its results do not depend on the cache's state),
+``=python`` always runs the Python code (slow; to debug a kernel).
+
 Every compiled function of the package takes :data:`NJIT_OPTIONS`. numba caches a function
 beside its source, else in ``NUMBA_CACHE_DIR``, else in the user's cache folder, and with
 ``cache=True`` refuses to compile one when none of them can be written (a read-only install
@@ -38,15 +52,19 @@ import subprocess
 import sys
 import tempfile
 import threading
+import types as pytypes
 import warnings
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
+import numpy as np
 from numba import njit, types
 from numba.core import config as numba_config
 from numba.core.compiler_lock import global_compiler_lock
+from numba.core.dispatcher import Dispatcher
 
 from .. import _kernels
+from ..exceptions import ConfigError
 
 f8, i8, b1, boolean = types.float64, types.int64, types.bool_, types.boolean
 
@@ -150,7 +168,7 @@ class Kernel:
     """
 
     def __init__(self, py_func, signature, *, slp: bool = False, loop_vectorize: bool = True,
-                 home: str | None = None, **options):
+                 home: str | None = None, python_budget: int | None = None, **options):
         self.py_func = py_func
         #: ``module:attribute`` where this object lives (for :func:`compile_in_background`)
         self.home = home or f"{py_func.__module__}:{py_func.__name__}"
@@ -161,16 +179,32 @@ class Kernel:
         self._dispatcher = None
         self._background = None  # a process compiling this kernel into the cache
         self._lock = threading.Lock()
+        self._python = None  # the Python stand-in (python_version), made on first use
+        self._cold = None  # whether numba's cache lacked this kernel when first asked
+        #: items this process has run through the Python code (:meth:`get`), and at most
+        #: how many (:data:`PYTHON_ITEMS` unless the kernel's items cost more in Python)
+        self.python_items = 0
+        self.python_budget = python_budget
         self.__doc__ = py_func.__doc__
         self.__name__ = py_func.__name__
 
-    def get(self):
+    def get(self, items: int | None = None):
         """The compiled dispatcher (compiled or loaded from the cache on the first call).
+
+        ``items``: how many items the call about to be made computes. Given, and while
+        numba's cache lacks the kernel, the kernel's Python code is returned instead (the
+        same arguments and results, to rounding) until :data:`PYTHON_ITEMS` items have run
+        through it in this process; the compile is sent to a background process
+        (:func:`compile_in_background`) if none is under way, and the compiled kernel is
+        loaded once that process has finished. Not given: compiled (hot paths of large
+        batches, and callers that need numba's argument checks).
 
         A compile that numba's cache cannot serve runs inside
         ``roverimpact._kernels.compile_notice(self)`` when one is set (the command line's
         says what is compiling)."""
         d = self._dispatcher
+        if d is None and items is not None and self._python_for(items):
+            return self.python()
         if d is None:
             with self._lock:
                 if self._dispatcher is None:
@@ -186,6 +220,46 @@ class Kernel:
     def compiled(self) -> bool:
         """Whether :meth:`get` has built the dispatcher in this process."""
         return self._dispatcher is not None
+
+    def python(self):
+        """The kernel as plain Python (:func:`python_version`), run with numpy's
+        floating-point warnings off (the compiled kernel raises none)."""
+        f = self._python
+        if f is None:
+            code = python_version(self.py_func)
+
+            def f(*args):
+                with np.errstate(all="ignore"):
+                    return code(*args)
+
+            f.__name__ = f.__qualname__ = self.__name__
+            f.__doc__ = self.__doc__
+            self._python = f
+        return f
+
+    def _python_for(self, items: int) -> bool:
+        """Whether a call of ``items`` items runs the Python code (:meth:`get`)."""
+        mode = kernel_mode()
+        if mode != "auto":
+            return mode == "python"
+        with self._lock:
+            budget = PYTHON_ITEMS if self.python_budget is None else self.python_budget
+            if self._dispatcher is not None or self.python_items + items > budget:
+                return False
+            proc = self._background
+            if proc is not None:
+                if proc.poll() is not None:  # finished: load (or compile) it
+                    return False
+            else:
+                if self._cold is None:
+                    self._cold = not self.cached()
+                if not self._cold:
+                    return False  # in the cache: loads in milliseconds
+                if os.environ.get("ROVERIMPACT_BACKGROUND_COMPILE") == "0":
+                    return False  # compiled here, as asked
+                compile_in_background(self)
+            self.python_items += items
+            return True
 
     def _wait_background(self) -> None:
         proc, self._background = self._background, None
@@ -219,6 +293,96 @@ class Kernel:
     def __repr__(self) -> str:
         state = "compiled" if self.compiled else "not compiled yet"
         return f"<Kernel {self.py_func.__module__}.{self.__name__}{self.signature} ({state})>"
+
+
+#: Items a kernel computes through its Python code in one process while numba's cache
+#: lacks it (:meth:`Kernel.get`): about the compile time of the smaller kernels at a few
+#: milliseconds an item; past it the process compiles the kernel or waits for the
+#: background process (which has then had that long).
+PYTHON_ITEMS = 1000
+
+#: ``ROVERIMPACT_KERNELS`` values: ``auto`` (default; Python code for small work while a
+#: kernel is not in numba's cache), ``compiled``, ``python``.
+KERNEL_MODES = ("auto", "compiled", "python")
+
+
+def kernel_mode() -> str:
+    """``ROVERIMPACT_KERNELS`` (:data:`KERNEL_MODES`; unset: ``auto``).
+
+    Raises
+    ------
+    ConfigError
+        Another value."""
+    mode = os.environ.get("ROVERIMPACT_KERNELS", "auto").strip().lower() or "auto"
+    if mode not in KERNEL_MODES:
+        raise ConfigError(f"ROVERIMPACT_KERNELS={os.environ['ROVERIMPACT_KERNELS']!r} is not "
+                          f"one of {', '.join(KERNEL_MODES)}")
+    return mode
+
+
+#: Python stand-ins of compiled functions that have no Python source to run (numba
+#: intrinsics): ``{compiled function: Python function}``, filled where they are defined.
+PYTHON_EQUIVALENTS: dict = {}
+
+_PYTHON: dict = {}   # compiled function (or its source) -> its Python stand-in
+_MODULES: dict = {}  # id(a module's globals) -> the copy its stand-ins run in
+
+
+def python_version(func):
+    """``func`` (a :class:`Kernel`, a numba dispatcher or a plain function) as plain
+    Python: its source, run in a copy of its module's globals in which every compiled
+    function (dispatcher, :class:`Kernel`, :data:`PYTHON_EQUIVALENTS` entry) is replaced by
+    its own Python stand-in, recursively. What ``NUMBA_DISABLE_JIT=1`` would run, for
+    this call tree only and without re-importing anything. Cached."""
+    try:
+        hit = _PYTHON.get(func)
+    except TypeError:  # unhashable: not a function
+        return func
+    if hit is not None:
+        return hit
+    try:
+        if func in PYTHON_EQUIVALENTS:
+            return PYTHON_EQUIVALENTS[func]
+    except TypeError:  # pragma: no cover - an object whose __eq__ refuses
+        return func
+    if isinstance(func, (Kernel, Dispatcher)):
+        new = python_version(func.py_func)
+    elif isinstance(func, pytypes.FunctionType):
+        g = _module_copy(func.__globals__)
+        closure = func.__closure__
+        if closure is not None:
+            closure = tuple(pytypes.CellType(_stand_in(c.cell_contents)) for c in closure)
+        new = pytypes.FunctionType(func.__code__, g, func.__name__, func.__defaults__,
+                                   closure)
+        new.__kwdefaults__ = func.__kwdefaults__
+        new.__doc__ = func.__doc__
+    else:
+        return func
+    _PYTHON[func] = new
+    return new
+
+
+def _compiled(obj) -> bool:
+    if isinstance(obj, (Kernel, Dispatcher)):
+        return True
+    try:
+        return obj in PYTHON_EQUIVALENTS
+    except TypeError:
+        return False
+
+
+def _stand_in(obj):
+    return python_version(obj) if _compiled(obj) else obj
+
+
+def _module_copy(g0: dict) -> dict:
+    g = _MODULES.get(id(g0))
+    if g is None:
+        g = _MODULES[id(g0)] = dict(g0)  # registered first: functions that call each other
+        for name, value in g0.items():
+            if _compiled(value):
+                g[name] = python_version(value)
+    return g
 
 
 @contextmanager
@@ -290,6 +454,51 @@ def _spare_core() -> bool:
         return False
 
 
+class _Job:
+    """A background compile of some kernels: a process started at once, or when the
+    previous job (``after``) has finished, so that one compiles at a time (a command that
+    sends kernels twice keeps to two processes on two cores, its own and one compiling).
+    ``poll()`` and ``wait(timeout)`` as a :class:`subprocess.Popen`'s."""
+
+    def __init__(self, args, env, after=None):
+        self._args, self._env = args, env
+        self.proc = None
+        self._failed = False
+        self._started = threading.Event()
+        if after is None:
+            self._start()
+        else:  # a daemon: a command that ends first leaves the rest to its next run
+            threading.Thread(target=self._start, args=(after,), daemon=True).start()
+
+    def _start(self, after=None) -> None:
+        if after is not None:
+            try:
+                after.wait(timeout=BACKGROUND_TIMEOUT)
+            except subprocess.TimeoutExpired:  # pragma: no cover - a stalled machine
+                pass
+        try:
+            self.proc = subprocess.Popen(self._args, stdin=subprocess.DEVNULL,
+                                         stdout=subprocess.DEVNULL,
+                                         stderr=subprocess.DEVNULL, env=self._env)
+        except OSError:  # pragma: no cover - cannot start a process: compiled where needed
+            self._failed = True
+        self._started.set()
+
+    def poll(self):
+        """None while queued or compiling, else the exit code."""
+        if not self._started.is_set():
+            return None
+        return 1 if self._failed else self.proc.poll()
+
+    def wait(self, timeout=None):
+        if not self._started.wait(timeout):
+            raise subprocess.TimeoutExpired(self._args, timeout)
+        return 1 if self._failed else self.proc.wait(timeout)
+
+
+_last_job: _Job | None = None
+
+
 def compile_in_background(*kernels: Kernel) -> list[Kernel]:
     """Compile ``kernels`` into numba's on-disk cache in a separate process.
 
@@ -297,13 +506,17 @@ def compile_in_background(*kernels: Kernel) -> list[Kernel]:
     warm cache starts nothing), and only when the machine has capacity left (1-minute
     load average below the number of cores): on 2 cores at a load of 1.5-1.7 it took
     ``roverimpact energy`` from 3.9-4.1 s to 3.2-3.5 s, at a load of 4-5 it made it
-    slower, the second process only competing with the first. :meth:`Kernel.get` waits
-    for the process, then loads them from the cache. ``ROVERIMPACT_BACKGROUND_COMPILE=0``
-    compiles everything in the calling process, ``=1`` starts the process whatever the
-    load. Returns the kernels sent.
+    slower, the second process only competing with the first. While an earlier call's
+    process compiles, the kernels wait for it and follow in a process of their own (the
+    load it causes does not count). :meth:`Kernel.get` waits for the process, then loads
+    them from the cache. ``ROVERIMPACT_BACKGROUND_COMPILE=0`` compiles everything in the
+    calling process, ``=1`` starts the process whatever the load. Returns the kernels
+    sent.
     """
+    global _last_job
     mode = os.environ.get("ROVERIMPACT_BACKGROUND_COMPILE", "auto")
-    if mode == "0" or (mode != "1" and not _spare_core()):
+    busy = _last_job if _last_job is not None and _last_job.poll() is None else None
+    if mode == "0" or (mode != "1" and busy is None and not _spare_core()):
         return []
     todo = [k for k in kernels
             if k._dispatcher is None and k._background is None and not k.cached()]
@@ -312,13 +525,11 @@ def compile_in_background(*kernels: Kernel) -> list[Kernel]:
     env = dict(os.environ)  # the same numba cache folder; this package first on the path
     here = str(Path(__file__).resolve().parents[2])
     env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
-    try:
-        proc = subprocess.Popen([sys.executable, "-c", _BACKGROUND_CODE,
-                                 *(k.home for k in todo)],
-                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL, env=env)
-    except OSError:  # pragma: no cover - cannot start a process: compile here later
+    job = _Job([sys.executable, "-c", _BACKGROUND_CODE, *(k.home for k in todo)], env,
+               after=busy)
+    if job.poll() is not None and job._failed:  # pragma: no cover - no process: here later
         return []
+    _last_job = job
     for k in todo:
-        k._background = proc
+        k._background = job
     return todo

@@ -23,8 +23,9 @@ LANES = Kernel(lanes.partition_lanes, partition_signature(), slp=True, loop_vect
                fastmath=FASTMATH, error_model="numpy", home=f"{__name__}:LANES")
 
 
-def lanes_kernel():
-    """The compiled lane-parallel partition kernel.
+def lanes_kernel(items: int | None = None):
+    """The compiled lane-parallel partition kernel (``items``: see
+    :meth:`._jit.Kernel.get`).
 
     Arguments: :func:`._jit.partition_signature`.
 
@@ -32,4 +33,4 @@ def lanes_kernel():
     vectorisation enabled and loop vectorisation disabled for this function only; the
     previous settings are restored.
     """
-    return LANES.get()
+    return LANES.get(items)

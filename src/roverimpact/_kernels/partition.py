@@ -41,7 +41,7 @@ from .._validation import (
     STATUS_OK,
     SYM_RTOL,
 )
-from ._jit import NJIT_OPTIONS, boolean, f8, i8, kernel, ro, rw, shared
+from ._jit import NJIT_OPTIONS, PYTHON_EQUIVALENTS, boolean, f8, i8, kernel, ro, rw, shared
 
 _EPS = np.finfo(np.float64).eps
 # Reassociation lets LLVM vectorise the lane kernel's sums (SLP); no 'nnan'/'ninf': the
@@ -385,6 +385,19 @@ def prefetch(typingctx, arr, offset):
         return context.get_dummy_value()
 
     return types.void(arr, offset), codegen
+
+
+def _same_array(arr):
+    return arr
+
+
+def _no_prefetch(arr, offset):
+    return None
+
+
+# what the kernels' Python code runs in their place (roverimpact._kernels._jit.python_version)
+PYTHON_EQUIVALENTS[readonly] = _same_array
+PYTHON_EQUIVALENTS[prefetch] = _no_prefetch
 
 
 # ----------------------------------------------------------------------------------------

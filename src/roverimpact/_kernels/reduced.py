@@ -349,17 +349,20 @@ def _stiff_peaks(G, b, k, n, a, c, f0, delta0, rate0, o, t_max, dt, d_scale, tol
 
 
 _LAW = (ro(f8, 2),) * 5
+#: an integration of thousands of steps costs tens of milliseconds an item in Python
+#: (:meth:`~._jit.Kernel.get`): a few seconds' worth, about their compile times
+PYTHON_BUDGET = 50
 rk4_peaks = Kernel(
     _rk4_peaks,
     types.void(ro(f8, 3), ro(f8, 2), *_LAW, ro(f8, 2), ro(f8, 2), i8, f8, ro(f8, 1),
                rw(f8, 2)),
-    home=f"{__name__}:rk4_peaks",
+    home=f"{__name__}:rk4_peaks", python_budget=PYTHON_BUDGET,
 )
 stiff_peaks = Kernel(
     _stiff_peaks,
     types.void(ro(f8, 3), ro(f8, 2), *_LAW, ro(f8, 2), ro(f8, 2), i8, f8, ro(f8, 1),
                ro(f8, 1), f8, rw(f8, 2)),
-    home=f"{__name__}:stiff_peaks",
+    home=f"{__name__}:stiff_peaks", python_budget=PYTHON_BUDGET,
 )
 
 __all__ = ["rk4_peaks", "stiff_peaks"]

@@ -168,7 +168,7 @@ class _Table(Table):
         yield from super().__rich_console__(console, options)
 
 
-def compile_ahead(*later, now=()) -> None:
+def compile_ahead(*later, now=(), small: bool = False, workers: bool = False) -> None:
     """On a fresh install, have the kernels a command needs compiled on two cores.
 
     ``later`` are compiled in a separate process, when numba's cache lacks them and the
@@ -182,9 +182,25 @@ def compile_ahead(*later, now=()) -> None:
     (6-7 s, the longest) and compile the others here. A cold ``energy`` went from
     3.5-3.7 to 2.8-2.95 s with :func:`roverimpact.cli.run`'s end
     (benchmarks/bench_startup.py). A warm cache starts nothing and ``now`` only loads.
-    """
-    from .._kernels._jit import compile_in_background
 
+    ``small``: the command's work is small enough for the kernels' Python code, which
+    runs while numba's cache lacks a kernel (:meth:`roverimpact._kernels._jit.Kernel.get`):
+    the kernels of ``now`` whose items cost milliseconds in Python then go to the second
+    process too, and the command works meanwhile instead of waiting for the compiler
+    (unless forked Dask workers will do the work, ``workers``: they inherit what this
+    process compiled, or ``ROVERIMPACT_KERNELS`` says otherwise). Those with a smaller
+    ``python_budget`` (the contact-space integrators, tens of milliseconds an item) are
+    still compiled here: a first full ``roverimpact reproduce`` waited for the Runge-Kutta
+    kernel behind Lemke's in the second process and took 39.9 s against 31.0 s. Large
+    work compiles ``now`` here as before: with every kernel in the second process, a
+    first ``roverimpact traverse examples/traverse_rocky.toml`` waited for them in turn
+    and took 72-94 s against 41-44 s.
+    """
+    from .._kernels._jit import compile_in_background, kernel_mode
+
+    if now and small and not workers and kernel_mode() == "auto":
+        later = (*later, *(k for k in now if k.python_budget is None))
+        now = tuple(k for k in now if k.python_budget is not None)
     compile_in_background(*later)
     for k in now:
         k.get()

@@ -38,7 +38,7 @@ def energy_cmd(
 
     sc = load_scenario(file)
     model = scenario_model(sc)  # a bad file or model stops before the compile (ms)
-    compile_ahead(now=(partition_kernel,))  # meanwhile
+    compile_ahead(now=(partition_kernel,), small=True)  # meanwhile
     setup = ImpactSetup.from_scenario(sc, model=model)
     e = setup.partition()
     f_max = _peak_force(sc, e)

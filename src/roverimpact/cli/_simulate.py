@@ -35,7 +35,7 @@ def _compile_ahead() -> None:
     from .._kernels.lemke import impact_kernel
     from .._kernels.partition import partition_kernel
 
-    compile_ahead(impact_kernel, now=(partition_kernel,))
+    compile_ahead(impact_kernel, now=(partition_kernel,), small=True)
 
 
 @app.command("simulate")

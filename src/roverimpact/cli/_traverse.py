@@ -150,7 +150,8 @@ def traverse_cmd(
             res = run_traverse(config, work, workers=workers, scheduler=scheduler, csv=csv,
                                progress=update,
                                note=lambda text: err_console.print(f"note: {text}"),
-                               prepare=lambda: compile_ahead(now=now))
+                               prepare=lambda: compile_ahead(
+                                   now=now, workers=workers is not None))
         path = (traverse_report(work, config=res.config, shown_as=out) if report
                 else None)
     path = out / Path(path).name if path is not None else None

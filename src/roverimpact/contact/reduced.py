@@ -273,7 +273,7 @@ def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
                 dt[idx])
         if kernel is stiff_peaks:
             args += (d_scale[idx], STIFF_TOL)
-        kernel(*args, part)
+        kernel.get(idx.size)(*args, part)
         out[idx] = part
     return ReducedImpact(peak_force=out[:, 0], time_of_peak=out[:, 1], duration=out[:, 2],
                          ended=out[:, 3] > 0.5, loads=loads)

@@ -323,7 +323,7 @@ class RowPlan:
         """
         M, J, X = self._pass(q)
         A = np.empty((self.m, self.nv))
-        _evaluate_one.get()(J, X, *self._args, self.r_const, self.support, M, A)
+        _evaluate_one.get(1)(J, X, *self._args, self.r_const, self.support, M, A)
         return M, A
 
     def partition_at(self, q, rows: np.ndarray, v: np.ndarray, rtol: float,
@@ -333,8 +333,8 @@ class RowPlan:
         one compiled call (:func:`_partition_at`). Returns the partition's status code
         (nonzero: the caller makes the error message, from :meth:`evaluate`)."""
         M, J, X = self._pass(q)
-        return _partition_at.get()(J, X, *self._args, self.r_const, self.support, M, rows, v,
-                                   rtol, res)
+        return _partition_at.get(1)(J, X, *self._args, self.r_const, self.support, M, rows,
+                                    v, rtol, res)
 
     def evaluate_many(self, Q, chunk: int = 64, *, before=None, c_normal=None,
                       c_radius=None) -> tuple[np.ndarray, np.ndarray]:
@@ -387,7 +387,7 @@ class RowPlan:
                     Xs[i - s] = view
                 else:
                     self._placements(Xs[i - s])
-            _evaluate_many.get()(Js[:e - s], Xs[:e - s], *args[:4],
+            _evaluate_many.get(e - s)(Js[:e - s], Xs[:e - s], *args[:4],
                                  cn if cn.shape[0] == 1 else cn[s:e],
                                  cr if cr.shape[0] == 1 else cr[s:e], *args[6:],
                                  rc if rc.shape[0] == 1 else rc[s:e], self.support, Ms[s:e],

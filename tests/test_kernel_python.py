@@ -1,0 +1,292 @@
+"""The kernels' Python code against the compiled kernels, and when it runs.
+
+On a fresh install a kernel's compile costs seconds; until numba's cache holds it, small
+work runs the kernel's own Python source with every compiled function it calls replaced
+by its Python source (``roverimpact._kernels._jit.python_version``). The same public
+functions must then give the compiled kernels' results (to rounding: LLVM contracts and
+reorders floating-point operations) and the same errors. The reference here is the
+compiled kernel; the kernels themselves are checked against closed forms, scipy and
+MuJoCo elsewhere.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from numba import types
+
+import roverimpact as ri
+from roverimpact._kernels import _jit
+from roverimpact.exceptions import ConfigError, InputError
+
+
+def all_kernels():
+    from roverimpact.models import _assemble
+
+    from .prewarm import kernels
+
+    return (*kernels(), _assemble._evaluate_one, _assemble._evaluate_many,
+            _assemble._partition_at)
+
+
+def both(monkeypatch, f):
+    """``f()`` with the kernels' Python code, then compiled. The kernels this session has
+    compiled are set aside for the first run (``=python`` runs the Python code of those
+    not compiled in the process), and none may be compiled by it: every call went through
+    the Python code."""
+    for k in all_kernels():
+        monkeypatch.setattr(k, "_dispatcher", None)
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "python")
+    py = f()
+    assert [k.__name__ for k in all_kernels() if k.compiled] == []
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "compiled")
+    return py, f()
+
+
+def close(a, b, rtol=1e-10):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    scale = max(1.0, float(np.max(np.abs(b), initial=0.0)))
+    np.testing.assert_allclose(a, b, rtol=0, atol=rtol * scale)
+
+
+def spd(rng, B, n):
+    X = rng.standard_normal((B, n, n))
+    return X @ X.transpose(0, 2, 1) + n * np.eye(n)
+
+
+@pytest.mark.parametrize("B", [None, 5, 70])  # one system, the item kernel, the lanes
+def test_partition(monkeypatch, rng, B):
+    n, m = 9, 4
+    M = spd(rng, B or 1, n)
+    A = rng.standard_normal((B or 1, m, n))
+    A[0, 3] = A[0, 0] + A[0, 1]  # a dependent row: the rank decision
+    v = rng.standard_normal((B or 1, n))
+    if B is None:
+        M, A, v = M[0], A[0], v[0]
+    py, co = both(monkeypatch, lambda: ri.partition(M, A, v))
+    for f in ("T", "T_c", "T_a", "v_c", "v_a"):
+        close(getattr(py, f), getattr(co, f))
+    np.testing.assert_array_equal(py.rank, co.rank)
+
+
+@pytest.mark.parametrize("B", [1, 70])
+def test_partition_errors_are_the_compiled_ones(monkeypatch, rng, B):
+    M = spd(rng, B, 5)
+    M[-1, 2, 2] = -1.0  # not positive definite
+    A = rng.standard_normal((2, 5))
+    v = rng.standard_normal(5)
+    msgs = []
+    for kind in ("python", "compiled"):
+        monkeypatch.setenv("ROVERIMPACT_KERNELS", kind)
+        with pytest.raises(InputError) as err:
+            ri.partition(M if B > 1 else M[0], A, v)
+        msgs.append(str(err.value))
+    assert msgs[0] == msgs[1]
+
+
+def test_effective_masses(monkeypatch, rng):
+    n = 7
+    M = spd(rng, 70, n)
+    a = rng.standard_normal((70, n))
+    held = rng.standard_normal((2, n))
+    py, co = both(monkeypatch, lambda: ri.effective_mass(M, a[:, None, :], held=held))
+    close(py, co)
+
+
+@pytest.mark.parametrize("law", ["newton", "poisson"])
+def test_unilateral_impact(monkeypatch, rng, law):
+    n, k = 8, 4
+    M = spd(rng, 12, n)
+    N = rng.standard_normal((12, k, n))
+    v = rng.standard_normal((12, n))
+    e = 0.4  # one e: no energy gain with Newton's law
+    B = rng.standard_normal((1, n))
+    py, co = both(monkeypatch, lambda: ri.unilateral_impact(M, v, N, e, B, law=law))
+    for f in ("impulse", "v_plus", "T_minus", "T_plus", "T_c_minus"):
+        close(getattr(py, f), getattr(co, f))
+    np.testing.assert_array_equal(py.active, co.active)
+
+
+def test_frictional_impact(monkeypatch, rng):
+    n = 6
+    M = spd(rng, 6, n)
+    normal = rng.standard_normal((6, 2, n))
+    tangent = rng.standard_normal((6, 2, 2, n))
+    v = rng.standard_normal((6, n))
+    from roverimpact.frictional import frictional_impact
+
+    py, co = both(monkeypatch,
+                  lambda: frictional_impact(M, v, normal, tangent, [0.3, 0.8], 0.0))
+    for f in ("impulse", "impulse_tangent", "v_plus", "T_minus", "T_plus"):
+        close(getattr(py, f), getattr(co, f), rtol=1e-8)
+    np.testing.assert_array_equal(py.state, co.state)
+
+
+def test_row_assembly_of_a_scenario(monkeypatch):
+    from roverimpact.scenario import ImpactSetup, load_scenario
+    from roverimpact.scenario.sweep import sweep_energy
+
+    sc = load_scenario("examples/rover2d_beta45.toml")
+    setup = ImpactSetup.from_scenario(sc)
+    betas = np.radians(np.linspace(5.0, 85.0, 70))  # the batched row assembly, the lanes
+    (p1, pm), (c1, cm) = both(monkeypatch,
+                              lambda: (setup.partition(), sweep_energy(setup, betas)))
+    for f in ("T", "T_c_minus", "T_a", "m_eff", "m_eff_free"):
+        close(getattr(p1, f), getattr(c1, f))
+        close(getattr(pm, f), getattr(cm, f))
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "rosenbrock"])
+def test_reduced_impact_integrators(monkeypatch, integrator):
+    from roverimpact.contact.reduced import reduced_impact_batch
+
+    G = np.array([[[2.0, 0.5], [0.5, 1.0]]] * 2)
+    b = np.array([[0.0, -9.81], [0.0, -3.0]])
+    L = np.array([[1e6, 1.5, 0.2, 0.0, 0.0], [1e5, 1.0, 0.0, 50.0, 0.0]])
+    L = np.broadcast_to(L, (2, 2, 5))
+    rate0 = np.array([[0.3, 0.0], [0.5, 0.0]])
+    py, co = both(monkeypatch, lambda: reduced_impact_batch(
+        G, b, L, rate0, t_max=0.05, impact=0, integrator=integrator))
+    close(py.peak_force, co.peak_force)
+    close(py.time_of_peak, co.time_of_peak)
+
+
+# --- when the Python code runs -----------------------------------------------------------
+
+
+def _twice(x, out):  # pragma: no cover - the kernel's source
+    out[0] = 2.0 * x
+
+
+@pytest.fixture
+def cold_kernel(monkeypatch):
+    """A kernel missing from numba's cache, a background compile recorded, not run."""
+    k = _jit.Kernel(_twice, types.void(types.float64, _jit.rw(_jit.f8, 1)), cache=False)
+    monkeypatch.setattr(k, "cached", lambda: False)
+    sent = []
+    monkeypatch.setattr(_jit, "compile_in_background", lambda *ks: sent.extend(ks) or [])
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "auto")
+    monkeypatch.delenv("ROVERIMPACT_BACKGROUND_COMPILE", raising=False)
+    return k, sent
+
+
+def test_small_work_runs_python_until_the_budget_then_compiles(cold_kernel, monkeypatch):
+    k, sent = cold_kernel
+    monkeypatch.setattr(_jit, "PYTHON_ITEMS", 10)
+    out = np.zeros(1)
+    f = k.get(4)
+    f(1.5, out)
+    assert out[0] == 3.0 and not k.compiled and k.python_items == 4
+    assert sent == [k]  # its compile sent to the background
+    k.get(6)(2.0, out)
+    assert not k.compiled and k.python_items == 10
+    k.get(1)(2.5, out)  # past the budget: compiled here
+    assert k.compiled and out[0] == 5.0
+    assert k.get(1) is k.get()  # from then on, the compiled kernel
+
+
+def test_a_finished_background_compile_is_loaded(cold_kernel):
+    k, _ = cold_kernel
+
+    class Done:
+        def poll(self):
+            return 0
+
+        def wait(self, timeout=None):
+            return 0
+
+    k._background = Done()
+    k.get(1)
+    assert k.compiled
+
+
+def test_no_python_when_cached_asked_compiled_or_large(cold_kernel, monkeypatch):
+    k, sent = cold_kernel
+    assert k.get(10 ** 6) is not k.python()
+    assert k.compiled and sent == []
+    k2 = _jit.Kernel(_twice, k.signature, cache=False)
+    monkeypatch.setattr(k2, "cached", lambda: True)
+    k2.get(1)
+    assert k2.compiled
+    k3 = _jit.Kernel(_twice, k.signature, cache=False)
+    monkeypatch.setattr(k3, "cached", lambda: False)
+    monkeypatch.setenv("ROVERIMPACT_BACKGROUND_COMPILE", "0")
+    k3.get(1)
+    assert k3.compiled and sent == []
+
+
+def test_an_unknown_kernel_mode_is_refused(monkeypatch):
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "jit")
+    with pytest.raises(ConfigError, match="ROVERIMPACT_KERNELS='jit' is not one of auto"):
+        _jit.kernel_mode()
+
+
+def test_energy_on_a_fresh_install_compiles_nothing_here(monkeypatch):
+    """``roverimpact energy`` with every kernel missing from numba's cache: no compile in
+    the command's process (the Python code runs; the compiles go to the background,
+    recorded here), and the numbers of the compiled kernels."""
+    from typer.testing import CliRunner
+
+    from roverimpact._kernels.partition import partition_kernel
+    from roverimpact.cli import app
+    from roverimpact.models import _assemble
+
+    runner = CliRunner()
+    args = ["energy", "examples/rover2d_beta45.toml", "--json"]
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "compiled")
+    ref = json.loads(runner.invoke(app, args).stdout)
+
+    kernels = [partition_kernel, _assemble._evaluate_one]
+    sent = []
+    monkeypatch.setattr(_jit, "compile_in_background", lambda *ks: sent.extend(ks) or [])
+    monkeypatch.setattr(_jit.Kernel, "cached", lambda self: False)
+
+    def no_compile(self):
+        raise AssertionError(f"{self.__name__} compiled in the command's process")
+
+    monkeypatch.setattr(_jit.Kernel, "_build", no_compile)
+    for k in kernels:
+        monkeypatch.setattr(k, "_dispatcher", None)
+        monkeypatch.setattr(k, "python_items", 0)
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "auto")
+    res = runner.invoke(app, args)
+    assert res.exit_code == 0, res.output
+    got = json.loads(res.stdout)
+    assert set(kernels) <= set(sent)
+    for key in ("T", "T_c_minus", "T_a", "m_eff", "peak_force"):
+        assert got[key] == pytest.approx(ref[key], rel=1e-12)
+
+
+@pytest.mark.parametrize("small, workers, mode, sent, got", [
+    (True, False, "auto", ["impact_kernel", "partition_kernel"], []),
+    (False, False, "auto", ["impact_kernel"], ["partition_kernel"]),  # large work
+    (True, True, "auto", ["impact_kernel"], ["partition_kernel"]),  # forked workers
+    (True, False, "compiled", ["impact_kernel"], ["partition_kernel"]),
+])
+def test_compile_ahead_sends_small_work_s_kernels_away(monkeypatch, compile_plan, small,
+                                                       workers, mode, sent, got):
+    """Small work runs the Python code while every kernel compiles in the second process;
+    large work, forked Dask workers and ``ROVERIMPACT_KERNELS=compiled`` have the kernels
+    of ``now`` compiled here first, as before."""
+    from roverimpact._kernels.lemke import impact_kernel
+    from roverimpact._kernels.partition import partition_kernel
+    from roverimpact.cli._app import compile_ahead
+
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", mode)
+    compile_ahead(impact_kernel, now=(partition_kernel,), small=small, workers=workers)
+    assert compile_plan.sent == sent
+    assert compile_plan.got == got
+
+
+def test_compile_ahead_compiles_kernels_costly_in_python_here(monkeypatch, compile_plan):
+    """The Runge-Kutta kernel (tens of milliseconds an item in Python) is compiled here
+    even for small work; the partition goes to the second process."""
+    from roverimpact._kernels.partition import partition_kernel
+    from roverimpact._kernels.reduced import rk4_peaks
+    from roverimpact.cli._app import compile_ahead
+
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "auto")
+    compile_ahead(now=(partition_kernel, rk4_peaks), small=True)
+    assert (compile_plan.sent, compile_plan.got) == (["partition_kernel"], ["rk4_peaks"])
