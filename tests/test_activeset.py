@@ -621,7 +621,7 @@ def test_infeasible_status_of_a_solvable_problem_says_the_solver_broke_down(monk
     from roverimpact.unilateral import STATUS_INFEASIBLE
 
     class Failing:
-        def get(self):
+        def get(self, items=None):
             def run(*args):
                 args[-1][:] = STATUS_INFEASIBLE  # status
             return run
