@@ -290,3 +290,31 @@ def test_compile_ahead_compiles_kernels_costly_in_python_here(monkeypatch, compi
     monkeypatch.setenv("ROVERIMPACT_KERNELS", "auto")
     compile_ahead(now=(partition_kernel, rk4_peaks), small=True)
     assert (compile_plan.sent, compile_plan.got) == (["partition_kernel"], ["rk4_peaks"])
+
+
+def test_a_forked_process_does_not_wait_for_its_parent_s_queued_compile(monkeypatch):
+    """A background compile queued behind another one (a thread of the parent waits to
+    start it) counts as finished in a forked child, which has neither that thread nor the
+    process: its kernels load or compile there instead of waiting for a start that never
+    comes (5 minutes, BACKGROUND_TIMEOUT)."""
+    import os
+    import threading
+
+    done = threading.Event()
+
+    class Running:  # a previous job, still compiling during the test
+        def wait(self, timeout=None):
+            done.wait(timeout)
+
+        def poll(self):
+            return None
+
+    job = _jit._Job(["true"], dict(os.environ), after=Running())
+    try:
+        assert job.poll() is None  # queued here
+        with monkeypatch.context() as m:
+            m.setattr(_jit.os, "getpid", lambda: -1)  # as seen from a forked child
+            assert job.poll() == 0 and job.wait(timeout=0.1) == 0
+    finally:
+        done.set()  # the queued job starts (and ends: `true`)
+    assert job.wait(timeout=10) == 0

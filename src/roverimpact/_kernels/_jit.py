@@ -458,10 +458,13 @@ class _Job:
     """A background compile of some kernels: a process started at once, or when the
     previous job (``after``) has finished, so that one compiles at a time (a command that
     sends kernels twice keeps to two processes on two cores, its own and one compiling).
-    ``poll()`` and ``wait(timeout)`` as a :class:`subprocess.Popen`'s."""
+    ``poll()`` and ``wait(timeout)`` as a :class:`subprocess.Popen`'s. In a process forked
+    from the one that made it (a forked Dask worker), where its thread and process are not
+    the child's, it counts as finished: the child loads the kernel or compiles it."""
 
     def __init__(self, args, env, after=None):
         self._args, self._env = args, env
+        self._pid = os.getpid()
         self.proc = None
         self._failed = False
         self._started = threading.Event()
@@ -486,11 +489,15 @@ class _Job:
 
     def poll(self):
         """None while queued or compiling, else the exit code."""
+        if os.getpid() != self._pid:
+            return 0
         if not self._started.is_set():
             return None
         return 1 if self._failed else self.proc.poll()
 
     def wait(self, timeout=None):
+        if os.getpid() != self._pid:
+            return 0
         if not self._started.wait(timeout):
             raise subprocess.TimeoutExpired(self._args, timeout)
         return 1 if self._failed else self.proc.wait(timeout)
