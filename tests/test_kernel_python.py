@@ -318,3 +318,37 @@ def test_a_forked_process_does_not_wait_for_its_parent_s_queued_compile(monkeypa
     finally:
         done.set()  # the queued job starts (and ends: `true`)
     assert job.wait(timeout=10) == 0
+
+
+@pytest.mark.parametrize(("integrator", "bad"), [
+    *((i, bad) for i in ("rk4", "rosenbrock") for bad in (
+        {"t_max": 0.0}, {"t_max": np.nan}, {"t_max": np.inf}, {"k": np.nan}, {"k": -1.0},
+        {"k": np.inf}, {"n": 0.0}, {"rate0": np.inf})),
+    ("rk4", {"t_max": 1e300})])  # more fixed steps than an int64 counts
+def test_reduced_integrators_refuse_what_they_cannot_step_alike(monkeypatch, integrator,
+                                                                 bad):
+    """A NaN, infinite or zero step count: the compiled Runge-Kutta kernel raised
+    ZeroDivisionError or returned a wrong result (``int`` of NaN, inf or past 2**63 wraps:
+    no step taken, a zero peak over the whole window), its Python code ValueError or
+    OverflowError, or ran for hours. Both now refuse the inputs with one InputError."""
+    from roverimpact.contact.reduced import reduced_impact_batch
+
+    G = np.array([[[2.0, 0.5], [0.5, 1.0]]])
+    b = np.array([[0.0, -9.81]])
+    L = np.array([[[1e6, 1.5, 0.2, 0.0, 0.0], [1e5, 1.0, 0.0, 50.0, 0.0]]])
+    rate0 = np.array([[0.3, 0.0]])
+    t_max = bad.get("t_max", 0.05)
+    if "k" in bad:
+        L[0, 0, 0] = bad["k"]
+    if "n" in bad:
+        L[0, 1, 1] = bad["n"]
+    if "rate0" in bad:
+        rate0[0, 0] = bad["rate0"]
+    msgs = []
+    for kind in ("python", "compiled"):
+        monkeypatch.setenv("ROVERIMPACT_KERNELS", kind)
+        with pytest.raises(InputError) as err:
+            reduced_impact_batch(G, b, L, rate0, t_max=t_max, impact=0,
+                                 integrator=integrator)
+        msgs.append(str(err.value))
+    assert msgs[0] == msgs[1]

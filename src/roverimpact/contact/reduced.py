@@ -32,6 +32,7 @@ its analytic solution and two coupled rows against the matrix exponential).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -213,6 +214,27 @@ def _steps(G, b, L, loads, v, o, t_max):
             np.ascontiguousarray(stiff), np.ascontiguousarray(d_scale))
 
 
+#: Most steps :func:`reduced_impact_batch` lets the Runge-Kutta integrator take to cover
+#: ``t_max`` (the compiled kernel counts its steps in an int64; past it the count wraps).
+MAX_STEPS = 2.0 ** 53
+
+
+def _check_batch(G, b, L, rate0, t_max) -> None:
+    """:func:`reduced_impact_batch`'s inputs: finite arrays, a finite ``t_max`` > 0, each
+    law's ``k >= 0`` and ``n > 0``. Else the integrators' step count is NaN or infinite,
+    which the compiled kernels and their Python code (a fresh install's small work) do not
+    even report alike (a wrong result, ``ZeroDivisionError``, ``ValueError``)."""
+    if not (isinstance(t_max, (int, float, np.integer, np.floating))
+            and math.isfinite(t_max) and t_max > 0):
+        raise InputError(f"t_max must be a finite time > 0 [s], got {t_max!r}")
+    for name, x in (("G", G), ("b", b), ("L", L), ("rate0", rate0)):
+        if not np.isfinite(x).all():
+            raise InputError(f"{name} contains NaN or inf")
+    if np.any(L[..., 0] < 0.0) or np.any(~(L[..., 1] > 0.0)):
+        raise InputError("each row's law (k, n, a, c, f0) needs a stiffness k >= 0 and an "
+                         "exponent n > 0")
+
+
 def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
                          preload: bool = True, integrator: str = "auto") -> ReducedImpact:
     r""":func:`reduced_impact` of every item of a batch by the compiled integrators
@@ -237,6 +259,14 @@ def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
     -------
     ReducedImpact
         With arrays (B,) (``loads`` (B, m)).
+
+    Raises
+    ------
+    InputError
+        NaN or inf in the arrays, ``t_max`` not a finite time > 0, a law with ``k < 0`` or
+        ``n <= 0``, no approach speed on the impact row, or a step that would need more
+        than :data:`MAX_STEPS` Runge-Kutta steps to cover ``t_max`` (a Rosenbrock item: a
+        first step of zero).
     """
     from .._kernels.reduced import rk4_peaks, stiff_peaks
 
@@ -245,6 +275,7 @@ def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
                 for x in (b, rate0))
     L = np.ascontiguousarray(np.broadcast_to(np.asarray(L, float), (*G.shape[:2], 5)))
     B, m = b.shape
+    _check_batch(G, b, L, rate0, t_max)
     o = impact % m
     if np.any(~(rate0[:, o] > 0.0)):
         raise InputError("the impact row needs an approach speed > 0 in every item")
@@ -262,6 +293,15 @@ def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
     if integrator != "auto":
         stiff = np.full(B, integrator == "rosenbrock")
     dt = np.where(stiff, explicit, dt)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        steps = t_max / dt
+    # the Runge-Kutta's fixed steps, the Rosenbrock pair's first one (which then adapts)
+    bad = np.where(stiff, ~np.isfinite(steps), ~(steps <= MAX_STEPS))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InputError(f"the integrator's step {dt[i]:.3g} s cannot cover t_max = "
+                         f"{t_max:.3g} s in at most {MAX_STEPS:.3g} steps (item {i}): check "
+                         f"the laws' stiffness and damping and the units of G and rate0")
     out = np.empty((B, 4))
     for kernel, sel in ((rk4_peaks, ~stiff), (stiff_peaks, stiff)):
         idx = np.flatnonzero(sel)
