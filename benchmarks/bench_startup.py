@@ -98,8 +98,9 @@ def _env(cache: str | None = None) -> dict:
     return env
 
 
-#: what the background compile process runs (roverimpact._kernels._jit._BACKGROUND_CODE)
-_BACKGROUND_MARK = "getattr(importlib.import_module(module), name).get()"
+#: a pattern (pgrep's extended regular expression: no parentheses) of what the background
+#: compile process runs (roverimpact._kernels._jit._BACKGROUND_CODE)
+_BACKGROUND_MARK = "spec[.]split"
 
 
 def _settle(limit: float = 600.0) -> None:
