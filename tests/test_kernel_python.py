@@ -352,3 +352,15 @@ def test_reduced_integrators_refuse_what_they_cannot_step_alike(monkeypatch, int
                                  integrator=integrator)
         msgs.append(str(err.value))
     assert msgs[0] == msgs[1]
+
+
+def test_a_kernel_without_a_python_budget_always_compiles(cold_kernel):
+    """The contact-space integrators (``python_budget = 0``): an item runs hundreds to
+    thousands of steps, too slow in Python even while the kernel compiles elsewhere."""
+    from roverimpact._kernels.reduced import rk4_peaks, stiff_peaks
+
+    k, sent = cold_kernel
+    k.python_budget = rk4_peaks.python_budget
+    assert stiff_peaks.python_budget == rk4_peaks.python_budget == 0
+    k.get(1)
+    assert k.compiled and k.python_items == 0 and sent == []
