@@ -352,10 +352,6 @@ _LAW = (ro(f8, 2),) * 5
 #: Items of the integrators' Python code while numba's cache lacks them
 #: (:meth:`~._jit.Kernel.get`): none. An item runs hundreds to thousands of steps (tens of
 #: milliseconds or more in Python, where one item can outlast the rest of the compile).
-#: (A first ``roverimpact traverse examples/traverse_rocky.toml``, which ran the stiff pair's
-#: Python code while it compiled, took 44.6 s and 38.7 s with everything compiled in one
-#: pair of runs, 43.1 s and 49.7 s the other way round in the next: within this machine's
-#: noise either way.)
 PYTHON_BUDGET = 0
 rk4_peaks = Kernel(
     _rk4_peaks,
