@@ -130,7 +130,7 @@ def _compile_plan(study: Path, workers, scheduler) -> tuple[tuple, bool]:
     fails before any compile; the kernels returned are compiled once the options are
     checked (``run_study(prepare=...)``), in the second process too for a study of at most
     :data:`SMALL_STUDY` cases (returned: whether it is one), which runs their Python code
-    meanwhile: 9.3 s instead of 20.3 s for that first sweep of 16 cases, 2026-11-29."""
+    meanwhile: 8.3 s instead of 20.3 s for that first sweep of 16 cases, 2026-11-29."""
     from .._kernels.lemke import impact_kernel
     from .._kernels.partition import partition_kernel
     from .._kernels.reduced import rk4_peaks
