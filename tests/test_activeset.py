@@ -680,3 +680,20 @@ def test_the_same_unilateral_impact_in_every_form(n, k, e, law, data):
     assert abs(q.T_c_minus - r.T_c_minus) <= 1e-9 * r.T_minus
     assert (active_set(P @ M @ P.T, P @ v, (s[:, None] * N[rows]) @ P.T, restitution=e,
                        law=law) == q.active).all()
+
+
+def test_an_empty_batch_has_an_empty_active_set_of_k_columns():
+    """``active_set`` of no items: shape (0, k), as ``unilateral_impact(...).active``; its
+    ``reshape(*batch, -1)`` raised numpy's "cannot reshape array of size 0", and with it
+    ``sweep_energy(setup, [])`` of a URDF rover (whose held rows go through the active set),
+    where the built-in rovers gave empty results."""
+    from roverimpact.scenario import ImpactSetup, load_scenario
+    from roverimpact.scenario.sweep import sweep_energy
+
+    M = np.broadcast_to(np.eye(2), (0, 2, 2))
+    A = [[0.0, 1.0], [1.0, 0.0]]
+    assert ri.active_set(M, np.zeros((0, 2)), A).shape == (0, 2)
+    assert ri.unilateral_impact(M, np.zeros((0, 2)), A).active.shape == (0, 2)
+    for f in ("rover2d_beta45", "sawppy_like_beta"):
+        e = sweep_energy(ImpactSetup.from_scenario(load_scenario(f"examples/{f}.toml")), [])
+        assert np.shape(e.T_c_minus) == np.shape(e.m_eff) == (0,)

@@ -391,4 +391,5 @@ def active_set(M, v, unilateral, bilateral=None, *, restitution=0.0, law: str = 
     """
     out, batch, *_ = _solve(M, v, unilateral, restitution, bilateral, law, obstacle, tol,
                             rtol, False)
-    return out["active"].reshape(*batch, -1)
+    active = out["active"]  # (items, k): k given, for an empty batch too
+    return active.reshape(*batch, active.shape[-1])
