@@ -534,7 +534,7 @@ def compile_in_background(*kernels: Kernel) -> list[Kernel]:
     env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
     job = _Job([sys.executable, "-c", _BACKGROUND_CODE, *(k.home for k in todo)], env,
                after=busy)
-    if job.poll() is not None and job._failed:  # pragma: no cover - no process: here later
+    if job._failed:  # pragma: no cover - no process started: compiled where needed later
         return []
     _last_job = job
     for k in todo:

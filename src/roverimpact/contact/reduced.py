@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from .._validation import check_finite
 from ..exceptions import InputError, SolverError
 from .base import ContactLaw, check_law
 
@@ -227,9 +228,8 @@ def _check_batch(G, b, L, rate0, t_max) -> None:
     if not (isinstance(t_max, (int, float, np.integer, np.floating))
             and math.isfinite(t_max) and t_max > 0):
         raise InputError(f"t_max must be a finite time > 0 [s], got {t_max!r}")
-    for name, x in (("G", G), ("b", b), ("L", L), ("rate0", rate0)):
-        if not np.isfinite(x).all():
-            raise InputError(f"{name} contains NaN or inf")
+    for name, x, core in (("G", G, 2), ("b", b, 1), ("L", L, 2), ("rate0", rate0, 1)):
+        check_finite(x, name, core)
     if np.any(L[..., 0] < 0.0) or np.any(~(L[..., 1] > 0.0)):
         raise InputError("each row's law (k, n, a, c, f0) needs a stiffness k >= 0 and an "
                          "exponent n > 0")
