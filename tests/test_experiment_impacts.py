@@ -20,6 +20,15 @@ def _half_sine(t, t0, T, A):
     return np.where((x > 0) & (x < 1), A * np.sin(np.pi * np.clip(x, 0, 1)), 0.0)
 
 
+def _run_one_trial(tmp_path, t, f):
+    """``run_experiment`` of one recording (time ``t`` [s], channel ``ch1`` in N)."""
+    pd.DataFrame({"time_s": t, "ch1_N": f}).to_csv(tmp_path / "a.csv", index=False)
+    (tmp_path / "trials.toml").write_text(
+        '[sensors]\nchannels = ["ch1"]\nunits = "N"\ngains = [1.0]\n\n'
+        '[[trial]]\nfile = "a.csv"\nbeta_deg = 30.0\nspeed = 0.3\n')
+    return ex.run_experiment(tmp_path / "trials.toml")
+
+
 def _filtered(f, cutoff_hz=300.0):
     return ex.lowpass(f, FS, cutoff_hz)
 
@@ -108,11 +117,7 @@ def test_short_impact_warned_in_the_outputs(tmp_path):
     fs = 20000.0
     t = np.arange(int(0.5 * fs)) / fs
     f = _half_sine(t, 0.25, 0.002, 1000.0) + np.random.default_rng(16).normal(0, 0.5, len(t))
-    pd.DataFrame({"time_s": t, "ch1_N": f}).to_csv(tmp_path / "a.csv", index=False)
-    (tmp_path / "trials.toml").write_text(
-        '[sensors]\nchannels = ["ch1"]\nunits = "N"\ngains = [1.0]\n\n'
-        '[[trial]]\nfile = "a.csv"\nbeta_deg = 30.0\nspeed = 0.3\n')
-    res = ex.run_experiment(tmp_path / "trials.toml")
+    res = _run_one_trial(tmp_path, t, f)
     assert bool(res.trials["short"].iloc[0])
     (w,) = res.warnings
     assert "trial 0 (a.csv)" in w and "cutoff_hz" in w and "300 Hz" in w
@@ -128,11 +133,7 @@ def test_short_impact_at_a_low_sample_rate_asks_for_a_higher_rate(tmp_path):
     fs = 1000.0
     t = np.arange(int(fs)) / fs
     f = _half_sine(t, 0.5005, 0.002, 1000.0) + np.random.default_rng(2).normal(0, 0.5, len(t))
-    pd.DataFrame({"time_s": t, "ch1_N": f}).to_csv(tmp_path / "a.csv", index=False)
-    (tmp_path / "trials.toml").write_text(
-        '[sensors]\nchannels = ["ch1"]\nunits = "N"\ngains = [1.0]\n\n'
-        '[[trial]]\nfile = "a.csv"\nbeta_deg = 30.0\nspeed = 0.3\n')
-    res = ex.run_experiment(tmp_path / "trials.toml")
+    res = _run_one_trial(tmp_path, t, f)
     (w,) = res.warnings
     assert "record at a higher sample rate" in w and "raise [filter]" not in w
     assert "Nyquist frequency 500 Hz" in w
