@@ -191,6 +191,9 @@ def test_a_finished_background_compile_is_loaded(cold_kernel):
     k, _ = cold_kernel
 
     class Done:
+        def foreign(self):
+            return False
+
         def poll(self):
             return 0
 
@@ -200,6 +203,49 @@ def test_a_finished_background_compile_is_loaded(cold_kernel):
     k._background = Done()
     k.get(1)
     assert k.compiled
+
+
+def test_a_forked_process_runs_python_until_its_parent_s_compile_is_written(cold_kernel,
+                                                                             monkeypatch):
+    """In a process forked from the one that sent the kernel to the background (a study
+    of ``reproduce`` side by side, a forked Dask worker), the job's process is not its
+    own to poll: it ran the Python code only while it could not tell, and compiled the
+    kernel itself (10-30 s on a core the studies need) as soon as it asked. It now runs
+    the Python code until numba's cache holds the kernel, then loads it."""
+    import os
+
+    k, sent = cold_kernel
+    job = _jit._Job(["true"], dict(os.environ))
+    job.wait(timeout=10)
+    k._background = job
+    cache = {"written": False}
+    monkeypatch.setattr(k, "cached", lambda: cache["written"])
+    monkeypatch.setattr(_jit, "CACHE_POLL_S", 0.0)
+    with monkeypatch.context() as m:
+        m.setattr(_jit.os, "getpid", lambda: -1)  # as seen from a forked child
+        assert job.foreign() and job.poll() == 0  # "finished", for all it can tell
+        assert k.get(3) is k.python() and not k.compiled
+        assert k.get(3) is k.python() and k.python_items == 6
+        cache["written"] = True
+        f = k.get(3)
+        assert k.compiled and f is k.get()
+    assert sent == []  # nothing else sent
+
+
+def test_a_forked_process_reads_the_cache_at_most_every_poll_interval(cold_kernel,
+                                                                      monkeypatch):
+    import os
+
+    k, _ = cold_kernel
+    job = _jit._Job(["true"], dict(os.environ))
+    job.wait(timeout=10)
+    k._background = job
+    reads = []
+    monkeypatch.setattr(k, "cached", lambda: reads.append(1) or False)
+    monkeypatch.setattr(_jit.os, "getpid", lambda: -1)
+    for _ in range(20):
+        assert k.get(1) is k.python()
+    assert len(reads) == 1  # 20 calls within CACHE_POLL_S: the cache read once
 
 
 def test_no_python_when_cached_asked_compiled_or_large(cold_kernel, monkeypatch):

@@ -46,12 +46,14 @@ cache.
 from __future__ import annotations
 
 import atexit
+import math
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
 import threading
+import time
 import types as pytypes
 import warnings
 from contextlib import contextmanager, nullcontext
@@ -181,6 +183,7 @@ class Kernel:
         self._lock = threading.Lock()
         self._python = None  # the Python stand-in (python_version), made on first use
         self._cold = None  # whether numba's cache lacked this kernel when first asked
+        self._polled = -math.inf  # when _cache_written last read the cache
         #: items this process has run through the Python code (:meth:`get`), and at most
         #: how many (:data:`PYTHON_ITEMS` unless the kernel's items cost more in Python)
         self.python_items = 0
@@ -247,7 +250,12 @@ class Kernel:
             if self._dispatcher is not None or self.python_items + items > budget:
                 return False
             proc = self._background
-            if proc is not None:
+            if proc is not None and proc.foreign():
+                # sent by the process this one was forked from (a study side by side, a
+                # forked Dask worker): loaded once that process's compile has written it
+                if self._cache_written():
+                    return False
+            elif proc is not None:
                 if proc.poll() is not None:  # finished: load (or compile) it
                     return False
             else:
@@ -260,6 +268,15 @@ class Kernel:
                 compile_in_background(self)
             self.python_items += items
             return True
+
+    def _cache_written(self) -> bool:
+        """Whether numba's cache holds this kernel now, read at most every
+        :data:`CACHE_POLL_S` (a read costs about a millisecond)."""
+        now = time.monotonic()
+        if now - self._polled < CACHE_POLL_S:
+            return False
+        self._polled = now
+        return self.cached()
 
     def _wait_background(self) -> None:
         proc, self._background = self._background, None
@@ -439,8 +456,18 @@ def kernel(signature, **options):
 #: Longest wait [s] for a background compile before compiling in this process instead.
 BACKGROUND_TIMEOUT = 300.0
 
+#: How often [s] a process forked from the one that sent a kernel to the background
+#: looks in numba's cache for it (:meth:`Kernel.get`).
+CACHE_POLL_S = 0.25
+
+#: The background compile's niceness: on a machine whose cores all compute (``reproduce``'s
+#: studies side by side, one per core) it takes what they leave, and runs at full speed
+#: once they are done or wait for it.
+BACKGROUND_NICE = 10
+
 _BACKGROUND_CODE = (
-    "import importlib, sys\n"
+    "import importlib, os, sys\n"
+    f"try:\n    os.nice({BACKGROUND_NICE})\nexcept (AttributeError, OSError):\n    pass\n"
     "for spec in sys.argv[1:]:\n"
     "    module, name = spec.split(':')\n"
     "    getattr(importlib.import_module(module), name).get()\n"
@@ -487,16 +514,20 @@ class _Job:
             self._failed = True
         self._started.set()
 
+    def foreign(self) -> bool:
+        """Whether this process is not the one that made the job (forked from it)."""
+        return os.getpid() != self._pid
+
     def poll(self):
         """None while queued or compiling, else the exit code."""
-        if os.getpid() != self._pid:
+        if self.foreign():
             return 0
         if not self._started.is_set():
             return None
         return 1 if self._failed else self.proc.poll()
 
     def wait(self, timeout=None):
-        if os.getpid() != self._pid:
+        if self.foreign():
             return 0
         if not self._started.wait(timeout):
             raise subprocess.TimeoutExpired(self._args, timeout)
