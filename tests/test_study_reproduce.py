@@ -21,7 +21,8 @@ QUICK_CASES = {"fixed_vn_configuration": 10}
 
 
 #: The compile plan of the quick run (:func:`quick`): kernels sent to the background
-#: process, and kernels asked for here, in order (``Kernel.home``).
+#: process, and kernels asked for, in order (``Kernel.home``; "got" is read from a file
+#: that the studies' processes, forked from this one, append to as well).
 PLAN: dict[str, list[str]] = {"sent": [], "got": []}
 
 
@@ -30,14 +31,20 @@ def quick(tmp_path_factory):
     from roverimpact._kernels import _jit
 
     out = tmp_path_factory.mktemp("repro") / "roverimpact-results"
+    got = out.parent / "kernels-got.txt"
     real_get = _jit.Kernel.get
+
+    def get(self, items=None):
+        with open(got, "a") as f:
+            f.write(self.home + "\n")
+        return real_get(self, items)
+
     with pytest.MonkeyPatch.context() as mp:   # record the plan; compile nothing elsewhere
         mp.setattr(_jit, "compile_in_background",
                    lambda *ks: PLAN["sent"].extend(k.home for k in ks) or [])
-        mp.setattr(_jit.Kernel, "get",
-                   lambda self, items=None: PLAN["got"].append(self.home)
-                   or real_get(self, items))
+        mp.setattr(_jit.Kernel, "get", get)
         assert main(["reproduce", "--quick", "-o", str(out), "--n-boot", "200"]) == 0
+    PLAN["got"] = got.read_text().split()
     return out
 
 
@@ -233,3 +240,17 @@ def test_full_reproduction_mujoco_spearman(tmp_path):
         mj = next(e for e in s.engines if e.engine == "mujoco")
         if s.folder.name.startswith("detc"):
             assert mj.agreement.spearman.value >= 0.95, s.folder.name
+
+
+def test_studies_side_by_side_give_the_rows_of_a_study_run_here(quick, tmp_path):
+    """``reproduce`` runs its studies side by side in processes forked from the command's
+    (one per core): a study's rows equal those of the same study run in this process."""
+    from roverimpact._io import read_toml
+    from roverimpact.studies.config import study_from_dict
+    from roverimpact.studies.reproduce import _quick
+    from roverimpact.studies.sweep import run_study
+
+    stem = "detc2014_fig3_com_height"
+    run_study(study_from_dict(_quick(read_toml(builtin_study_path(stem)))), tmp_path / stem)
+    pd.testing.assert_frame_equal(pd.read_parquet(quick / stem / "results.parquet"),
+                                  pd.read_parquet(tmp_path / stem / "results.parquet"))

@@ -247,7 +247,9 @@ def reproduce_cmd(
     quick: bool = typer.Option(False, "--quick", help="Smoke run: 5 points per study."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Let --quick replace a full "
                                    "reproduction in the folder."),
-    workers: int = typer.Option(None, "--workers", help="Local Dask cluster of N processes."),
+    workers: int = typer.Option(None, "--workers", help="Local Dask cluster of N processes "
+                                "for each study in turn (default: the studies side by side, "
+                                "a process per core; 1: one after the other here)."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler tcp://HOST:PORT."),
     n_boot: int = typer.Option(1000, "--n-boot", min=0, help="Bootstrap resamples of the "
                                "intervals: 0 for none, else at least 100."),
@@ -269,10 +271,15 @@ def reproduce_cmd(
         from .._kernels.reduced import rk4_peaks
 
         compile_ahead(impact_kernel)
+    counts: dict[str, tuple[int, int]] = {}  # study -> (done, total): one bar for all
+
     with progress_bar("reproduce", to_stderr=as_json) as update:
+        def progress(name: str, done: int, total: int) -> None:
+            counts[name] = (done, total)
+            update(sum(d for d, _ in counts.values()), sum(t for _, t in counts.values()))
+
         res = reproduce(out, quick=quick, overwrite=overwrite, workers=workers,
-                        scheduler=scheduler, n_boot=n_boot,
-                        progress=lambda name, d, t: update(d, t),
+                        scheduler=scheduler, n_boot=n_boot, progress=progress,
                         note=lambda text: err_console.print(f"note: {text}"),
                         prepare=(lambda: compile_ahead(now=(partition_kernel, rk4_peaks),
                                                        small=True, workers=workers is not None))

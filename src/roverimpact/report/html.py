@@ -21,6 +21,7 @@ import pandas as pd
 
 from .._io import atomic_write, check_writable
 from ..exceptions import ConfigError
+from ..studies.forked import map_forked, side_by_side
 from ..studies.indicators import IndicatorComparison, compare_indicators, with_baselines
 from ..studies.stats import Agreement, ForceRatios, agreement, check_n_boot, force_ratios
 from ..studies.store import (
@@ -600,11 +601,16 @@ def missing_studies_note(root: str | Path) -> str:
 
 
 def build_report(root: str | Path, *, title: str | None = None, intro: str = "",
-                 n_boot: int = 1000, seed: int = 0) -> tuple[Path, list[StudySection]]:
+                 n_boot: int = 1000, seed: int = 0,
+                 processes: int | None = None) -> tuple[Path, list[StudySection]]:
     """Regenerate the figures and ``report.html`` of a results folder from saved tables.
 
     A reproduction folder missing some of the built-in studies says so at the top of the
-    report (:func:`missing_studies_note`)."""
+    report (:func:`missing_studies_note`). The studies' statistics and figures
+    (:func:`analyse_folder`) are computed side by side in ``processes`` forked processes
+    (default one per usable core, at most one per study,
+    :func:`~roverimpact.studies.forked.side_by_side`; 1: one after the other here); the
+    results are the same."""
     check_n_boot(n_boot)  # before any work
     root = Path(root)
     folders = find_study_folders(root)
@@ -615,7 +621,9 @@ def build_report(root: str | Path, *, title: str | None = None, intro: str = "",
         load_results(f, read_table=results_rows(f / RESULTS) <= LARGE_TABLE)
         check_writable(f, folder=True, option=None)
     check_writable(root, folder=True, option=None)
-    sections = [analyse_folder(f, n_boot=n_boot, seed=seed) for f in folders]
+    n = side_by_side(len(folders)) if processes is None else processes
+    sections = map_forked(lambda f, _: analyse_folder(f, n_boot=n_boot, seed=seed),
+                          folders, processes=n)
     title = title or ("roverimpact study report: " + (sections[0].name if len(sections) == 1
                                                        else root.name))
     return write_report(root / REPORT, sections, title=title, intro=intro), sections

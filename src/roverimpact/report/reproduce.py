@@ -59,6 +59,7 @@ def reproduce(
     note: Callable[[str], None] | None = None,
     overwrite: bool = False,
     prepare: Callable[[], None] | None = None,
+    processes: int | None = None,
 ) -> ReproduceResult:
     """Run the built-in paper studies and write figures, tables and one HTML report.
 
@@ -82,6 +83,11 @@ def reproduce(
     prepare : callable, optional
         ``prepare()``: called once the options and the folder are checked, before the
         first study's check (the command line compiles its kernels there).
+    processes : int, optional
+        Processes the studies, then their figures and statistics, run in side by side
+        (default one per usable core, at most one per study; 1: one after the other
+        here). Without ``workers`` or ``scheduler``: see
+        :func:`~roverimpact.studies.reproduce.run_builtin_studies`.
 
     Returns
     -------
@@ -91,9 +97,9 @@ def reproduce(
     out_dir = Path(out_dir)
     run_builtin_studies(out_dir, quick=quick, workers=workers, scheduler=scheduler,
                         progress=progress, overwrite=overwrite, note=note,
-                        prepare=prepare)
+                        prepare=prepare, processes=processes)
     intro = INTRO + (" <b>Quick smoke run</b> (5 points per study)." if quick else "")
     report, sections = build_report(out_dir, title="roverimpact: reproduction of "
                                     "DETC2014-35554 and DETC2015-47747", intro=intro,
-                                    n_boot=n_boot, seed=seed)
+                                    n_boot=n_boot, seed=seed, processes=processes)
     return ReproduceResult(out_dir=out_dir, report=report, sections=sections, quick=quick)

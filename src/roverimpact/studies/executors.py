@@ -48,6 +48,7 @@ __all__ = [
     "kernels_to_compile",
     "local_cluster",
     "need_dask",
+    "one_blas_thread",
     "other_code_error",
     "other_code_message",
     "reworded",
@@ -495,7 +496,7 @@ def local_cluster(workers: int):
     with _dask_logs_at_warning():
         with dask.config.set({**WORKER_ENVIRON, **CLUSTER_CONFIG,
                               "distributed.worker.multiprocessing-method": method}), \
-                _one_blas_thread(method), _workers_ignore_ctrl_c(method) as ctrl_c, \
+                one_blas_thread(method), _workers_ignore_ctrl_c(method) as ctrl_c, \
                 warnings.catch_warnings():
             # the scheduler's HTTP server (no dashboard here: health checks) takes another
             # port when 8787 is in use, by any other Dask cluster on the machine: Dask's
@@ -591,8 +592,9 @@ def _workers_ignore_ctrl_c(method: str):
         signal.signal(signal.SIGINT, previous)
 
 
-def _one_blas_thread(method: str):
-    """While forking workers: numpy's BLAS limited to one thread, as a spawned worker's
+def one_blas_thread(method: str):
+    """While forking workers (Dask's, :func:`~roverimpact.studies.forked.map_forked`'s):
+    numpy's BLAS limited to one thread, as a spawned worker's
     ``OMP_NUM_THREADS=1`` does (a forked worker keeps the pool its parent has, and the
     variable is read only when the library loads). The command's own pool is restored
     after. threadpoolctl comes with the ``dask`` extra; without it, nothing is limited."""
