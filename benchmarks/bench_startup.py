@@ -16,12 +16,17 @@ Times whole processes and prints each against bare Python measured in the same r
   examples/study_rover2d_beta_h.toml`` and ``roverimpact traverse
   examples/traverse_rocky.toml`` cold and warm, and that traverse cold with
   ``--workers 2`` (one run each, about a minute);
+- ``--reproduce``: only the full ``roverimpact reproduce``, its studies side by side (one
+  process per core, the default) against one process (``--workers 1``, the behaviour
+  before 2026-11-29 second session), in alternation, cold and warm, ``-n`` pairs each
+  (default 2 here; target: under 20 s cold);
 - ``--kernels``: the compile time of each compiled kernel alone (a fresh process and an
   empty cache per kernel, after a trivial compile that pays numba's one-off set-up) and
   the time to load it from the cache it wrote. A kernel's time includes the functions it
   calls (they are compiled for it).
 
 Run: ``python benchmarks/bench_startup.py [-n 5] [--cold-runs 2] [--full] [--kernels]``
+or ``python benchmarks/bench_startup.py --reproduce [-n 2]``
 
 What makes a fresh install faster (measured with this script; see also
 ``roverimpact._kernels._jit``): every kernel compiled for exactly one signature (the
@@ -143,6 +148,31 @@ def _row(label: str, t: list[float], base: float) -> None:
     print(f"{label:44s} {best:8.3f} {med:9.3f} {med - base:10.3f} {med / base:8.1f}")
 
 
+def _reproduce_pairs(side: list[str], one: list[str], out: str, n: int,
+                     base: float) -> None:
+    """The full reproduce side by side and in one process, in alternation: ``n`` pairs on
+    an empty cache each, then ``n`` pairs on a warm cache; the ratio of the medians."""
+    times: dict[str, list[float]] = {}
+    for kind in ("cold", "warm"):
+        with tempfile.TemporaryDirectory() as cache:
+            if kind == "warm":
+                _run(one, _env(cache))  # fills the cache
+            for _ in range(n):
+                for label, cmd in (("side by side", side), ("one process", one)):
+                    shutil.rmtree(f"{out}/full", ignore_errors=True)
+                    if kind == "cold":
+                        shutil.rmtree(cache)
+                        os.mkdir(cache)
+                    times.setdefault(f"reproduce, full, {label} ({kind})", []).append(
+                        _run(cmd, _env(cache)))
+    for label, t in times.items():
+        _row(label, t, base)
+    for kind in ("cold", "warm"):
+        a = statistics.median(times[f"reproduce, full, side by side ({kind})"])
+        b = statistics.median(times[f"reproduce, full, one process ({kind})"])
+        print(f"{kind}: side by side / one process = {a / b:.2f}")
+
+
 def _kernel_times() -> None:
     print("\ncompile of each kernel alone (fresh process, empty cache) and load from cache:")
     print(f"{'kernel':36s} {'compile [s]':>12s} {'load [s]':>9s}")
@@ -162,6 +192,8 @@ def main() -> None:
     ap.add_argument("--cold-runs", type=int, default=2, help="counted cold runs per command")
     ap.add_argument("--full", action="store_true", help="also the full reproduce, cold/warm")
     ap.add_argument("--kernels", action="store_true", help="compile time of each kernel")
+    ap.add_argument("--reproduce", action="store_true",
+                    help="only the full reproduce: side by side vs one process, cold/warm")
     args = ap.parse_args()
     exe = shutil.which("roverimpact") or str(Path(sys.executable).with_name("roverimpact"))
     out = tempfile.mkdtemp(prefix="bench_startup_")
@@ -179,6 +211,11 @@ def main() -> None:
     print(f"{'command':44s} {'best [s]':>8s} {'median [s]':>9s} {'- python':>10s} "
           f"{'/ python':>8s}")
     _row("python -c pass", [base], base)
+    if args.reproduce:
+        _reproduce_pairs(full, [*full, "--workers", "1"], out, args.n if args.n != 5 else 2,
+                         base)
+        shutil.rmtree(out, ignore_errors=True)
+        return
     with tempfile.TemporaryDirectory() as cache:
         for label, cmd in (("roverimpact --version", [exe, "--version"]),
                            ("roverimpact --help", [exe, "--help"]),
