@@ -14,7 +14,7 @@ from scipy.linalg import expm
 
 from roverimpact._io import read_toml
 from roverimpact.contact import KelvinVoigt, get_law, predict
-from roverimpact.contact.reduced import reduced_impact, static_loads
+from roverimpact.contact.reduced import reduced_impact, reduced_impact_batch, static_loads
 from roverimpact.exceptions import ConfigError, InputError
 from roverimpact.scenario import scenario_from_dict
 from roverimpact.studies.config import apply_overrides
@@ -110,6 +110,88 @@ def test_static_loads_drop_a_pulling_row():
 def test_no_approach_is_refused():
     with pytest.raises(InputError, match="approach"):
         reduced_impact([[1.0]], [0.0], [KelvinVoigt(k=1.0, c=0.0)], [1.0], [0.0], t_max=1)
+
+
+# two items of two rows (test_kernel_python.py's): the second item is made bad below
+_G2 = np.array([[[2.0, 0.5], [0.5, 1.0]]] * 2)
+_B2 = np.array([[0.0, -9.81]] * 2)
+_L2 = np.array([[[1e6, 1.5, 0.2, 0.0, 0.0], [1e5, 1.0, 0.0, 50.0, 0.0]]] * 2)
+_R2 = np.array([[0.3, 0.0]] * 2)
+
+
+@pytest.fixture
+def no_kernel(monkeypatch):
+    """The compiled integrators fail the test if called: a refused input must be refused
+    before them (a G with a negative diagonal ran the Rosenbrock pair forever)."""
+    from roverimpact._kernels import reduced as kr
+
+    def called(*_a, **_k):
+        raise AssertionError("the integrator was called")
+
+    for k in (kr.rk4_peaks, kr.stiff_peaks):
+        monkeypatch.setattr(k, "get", called)
+
+
+@pytest.mark.parametrize(("entry", "value", "match"), [
+    ((0, 0), -2.0, r"G is not positive semi-definite \(batch index 1\): G\[0,0\] = -2 < 0"),
+    ((1, 1), -1e-6, r"G is not positive semi-definite \(batch index 1\): G\[1,1\]"),
+    ((0, 1), 3.0, r"G is not symmetric \(batch index 1\): \|G\[0,1\] - G\[1,0\]\| = 2.5"),
+    (None, 2.0, r"G is not positive semi-definite \(batch index 1\): its smallest "
+                r"eigenvalue is -0.5"),
+    ((1, 0), np.nan, r"G contains NaN or inf \(batch index 1\)")])
+@pytest.mark.parametrize("integrator", ["rk4", "rosenbrock"])
+def test_a_g_not_symmetric_positive_semidefinite_is_refused(no_kernel, entry, value, match,
+                                                           integrator):
+    """G = A N A^T is symmetric positive semi-definite. A negative diagonal made the
+    Rosenbrock pair run forever (the row's gap accelerates into the contact pushing it; the
+    Runge-Kutta returned an infinite peak force), an asymmetric or indefinite G integrates
+    no mechanical system. Refused, naming G and the item, before any integrator runs."""
+    G = _G2.copy()
+    if entry is None:                     # positive diagonal, eigenvalues 2.5 and -0.5
+        G[1] = [[1.0, value - 0.5], [value - 0.5, 1.0]]
+    else:
+        G[1][entry] = value
+    with pytest.raises(InputError, match=match):
+        reduced_impact_batch(G, _B2, _L2, _R2, t_max=0.05, impact=0, integrator=integrator)
+
+
+def test_a_g_semidefinite_or_asymmetric_to_rounding_is_accepted():
+    """The tolerance is G's rounding (1e-8 of its largest diagonal): a singular G (two
+    rows through the same point) and an asymmetry or negative eigenvalue of 1e-12 pass;
+    the result is the exact G's to 1e-9."""
+    G = np.array([[[2.0, 2.0], [2.0, 2.0]], [[2.0, 0.5], [0.5, 1.0]]])
+    ref = reduced_impact_batch(G, _B2, _L2, _R2, t_max=0.05, impact=0, integrator="rk4")
+    G2 = G.copy()
+    G2[0, 1, 1] -= 1e-12                  # smallest eigenvalue about -5e-13
+    G2[1, 0, 1] += 1e-12
+    r = reduced_impact_batch(G2, _B2, _L2, _R2, t_max=0.05, impact=0, integrator="rk4")
+    assert np.all(np.isfinite(ref.peak_force)) and np.all(ref.peak_force > 0)
+    np.testing.assert_allclose(r.peak_force, ref.peak_force, rtol=1e-9)
+
+
+@pytest.mark.parametrize("impact", [2, -3, 7, 1.0, True, "0"])
+def test_an_impact_index_outside_the_rows_is_refused(no_kernel, impact):
+    """impact = 2 of 2 rows was taken modulo 2 (row 0), -3 as row 1: another row's impact,
+    silently. Now an integer in [-m, m - 1] or one InputError naming impact and the range
+    (reduced_impact too)."""
+    match = (r"impact must index one of the 2 rows, an integer in \[-2, 1\], got"
+             if isinstance(impact, int) and not isinstance(impact, bool)
+             else "impact must be an integer row index")
+    with pytest.raises(InputError, match=match):
+        reduced_impact_batch(_G2, _B2, _L2, _R2, t_max=0.05, impact=impact)
+    with pytest.raises(InputError, match=match):
+        reduced_impact(_G2[0], _B2[0], [KelvinVoigt(k=1e5, c=50.0)] * 2, [0.3, 0.1], _R2[0],
+                       t_max=0.05, impact=impact)
+
+
+def test_a_negative_impact_index_counts_from_the_end():
+    """impact -2 of 2 rows is row 0 and -1 row 1 (Python's indexing, the default -1), also
+    with numpy integers: the same results as 0 and 1."""
+    rate = np.array([[0.3, 0.2]] * 2)
+    for neg, pos in ((-2, 0), (np.int64(-1), 1)):
+        a = reduced_impact_batch(_G2, _B2, _L2, rate, t_max=0.05, impact=neg)
+        b = reduced_impact_batch(_G2, _B2, _L2, rate, t_max=0.05, impact=pos)
+        assert np.array_equal(a.peak_force, b.peak_force) and a.peak_force[0] > 0
 
 
 # ------------------------------------------------------------- scenarios and studies

@@ -205,6 +205,46 @@ def check_mass_matrix(M: np.ndarray, name: str = "M") -> None:
         raise mass_matrix_error(M, int(np.argmax(low)), STATUS_NOT_PD, name)
 
 
+def check_psd(G: np.ndarray, name: str, what: str) -> None:
+    """One InputError for the first item of a finite (..., m, m) stack ``G`` that is not
+    symmetric positive semi-definite (``what`` says what it is, for the message): an
+    asymmetry or a negative eigenvalue beyond ``SYM_RTOL * max_i |G_ii|`` of the item
+    (its rounding; a negative diagonal is a negative eigenvalue), naming the batch item."""
+    if G.ndim < 2 or G.shape[-1] != G.shape[-2]:
+        raise InputError(f"{name} must have shape (..., m, m), got {G.shape}")
+    if G.size == 0:
+        return
+    batch = G.shape[:-2]
+    flat = G.reshape(-1, *G.shape[-2:])
+    diag = np.diagonal(flat, axis1=-2, axis2=-1)
+    tol = SYM_RTOL * np.abs(diag).max(axis=-1)
+    asym = np.abs(flat - np.swapaxes(flat, -1, -2)).max(axis=(-1, -2))
+    bad = asym > tol
+    lam = np.zeros(flat.shape[0])
+    sym = ~bad
+    if sym.any():  # one batched call; the symmetric part of items symmetric to rounding
+        lam[sym] = np.linalg.eigvalsh(0.5 * (flat[sym] + np.swapaxes(flat[sym], -1, -2)))[:, 0]
+    bad |= lam < -tol
+    if not bad.any():
+        return
+    b = int(np.argmax(bad))
+    where = fmt_index(tuple(int(i) for i in np.unravel_index(b, batch)) if batch else ())
+    item = flat[b]
+    if asym[b] > tol[b]:
+        i, j = np.unravel_index(int(np.argmax(np.abs(item - item.T))), item.shape)
+        raise InputError(f"{name} is not symmetric ({where}): |{name}[{i},{j}] - "
+                         f"{name}[{j},{i}]| = {abs(item[i, j] - item[j, i]):.3g}; {what} "
+                         "must be symmetric positive semi-definite")
+    if (diag[b] < -tol[b]).any():
+        i = int(np.argmin(diag[b]))
+        raise InputError(f"{name} is not positive semi-definite ({where}): {name}[{i},{i}] = "
+                         f"{diag[b, i]:.3g} < 0; {what} must be symmetric positive "
+                         "semi-definite")
+    raise InputError(f"{name} is not positive semi-definite ({where}): its smallest "
+                     f"eigenvalue is {lam[b]:.3g}; {what} must be symmetric positive "
+                     "semi-definite")
+
+
 def check_rows(x, name, n):
     """Rows ``x`` (..., rows, n), or (n,) for one: an array with ``n`` columns, finite, and
     no row all zeros (a contact normal or constraint row with no direction)."""

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .._validation import check_finite
+from .._validation import check_finite, check_psd
 from ..exceptions import InputError, SolverError
 from .base import ContactLaw, check_law
 
@@ -220,16 +220,33 @@ def _steps(G, b, L, loads, v, o, t_max):
 MAX_STEPS = 2.0 ** 53
 
 
+def _impact_row(impact, m: int) -> int:
+    """The row ``impact`` indexes among ``m`` (a negative index counts from the end, as in
+    Python), or one InputError naming it and the valid range: an index outside
+    ``[-m, m - 1]`` was wrapped modulo ``m`` (another row taken for the impact row)."""
+    if isinstance(impact, (bool, np.bool_)) or not isinstance(impact, (int, np.integer)):
+        raise InputError(f"impact must be an integer row index, got {impact!r}")
+    if not -m <= impact < m:
+        rng = f"in [{-m}, {m - 1}]" if m else "none: there are no rows"
+        raise InputError(f"impact must index one of the {m} rows, an integer {rng}, got "
+                         f"{impact}")
+    return int(impact) % m
+
+
 def _check_batch(G, b, L, rate0, t_max) -> None:
-    """:func:`reduced_impact_batch`'s inputs: finite arrays, a finite ``t_max`` > 0, each
-    law's ``k >= 0`` and ``n > 0``. Else the integrators' step count is NaN or infinite,
-    which the compiled kernels and their Python code (a fresh install's small work) do not
-    even report alike (a wrong result, ``ZeroDivisionError``, ``ValueError``)."""
+    """:func:`reduced_impact_batch`'s inputs: finite arrays, each item's ``G`` symmetric
+    positive semi-definite, a finite ``t_max`` > 0, each law's ``k >= 0`` and ``n > 0``.
+    Else the integrators' step count is NaN or infinite, which the compiled kernels and
+    their Python code (a fresh install's small work) do not even report alike (a wrong
+    result, ``ZeroDivisionError``, ``ValueError``), or (a G with a negative eigenvalue:
+    a row whose gap accelerates into the contact that pushes it) the Runge-Kutta returns
+    an infinite force and the Rosenbrock pair never ends."""
     if not (isinstance(t_max, (int, float, np.integer, np.floating))
             and math.isfinite(t_max) and t_max > 0):
         raise InputError(f"t_max must be a finite time > 0 [s], got {t_max!r}")
     for name, x, core in (("G", G, 2), ("b", b, 1), ("L", L, 2), ("rate0", rate0, 1)):
         check_finite(x, name, core)
+    check_psd(G, "G", "the rows' inverse mass A M^-1 A^T")
     if np.any(L[..., 0] < 0.0) or np.any(~(L[..., 1] > 0.0)):
         raise InputError("each row's law (k, n, a, c, f0) needs a stiffness k >= 0 and an "
                          "exponent n > 0")
@@ -243,12 +260,15 @@ def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
     Parameters
     ----------
     G : (B, m, m) array_like
+        Symmetric positive semi-definite (to 1e-8 of its largest diagonal, the rounding of
+        :math:`A N A^T`).
     b, rate0 : (B, m) array_like
     L : (B, m, 5) array_like
         Each row's law ``(k, n, a, c, f0)``:
         :math:`f = k\delta^n(1 + a\dot\delta) + c\dot\delta - f_0` (:func:`law_form`).
     t_max, impact, preload
-        As :func:`reduced_impact` (``impact`` the same row of every item).
+        As :func:`reduced_impact` (``impact`` the same row of every item, an integer in
+        ``[-m, m - 1]``).
     integrator : "auto", "rk4" or "rosenbrock"
         The fixed-step Runge-Kutta for every item, the Rosenbrock pair for every item, or
         per item (``"auto"``): the Rosenbrock pair where the damping would take the
@@ -263,20 +283,23 @@ def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
     Raises
     ------
     InputError
-        NaN or inf in the arrays, ``t_max`` not a finite time > 0, a law with ``k < 0`` or
-        ``n <= 0``, no approach speed on the impact row, or a step that would need more
-        than :data:`MAX_STEPS` Runge-Kutta steps to cover ``t_max`` (a Rosenbrock item: a
-        first step of zero).
+        NaN or inf in the arrays, a ``G`` not (B, m, m) or not symmetric positive
+        semi-definite, ``impact`` not a row index, ``t_max`` not a finite time > 0, a law
+        with ``k < 0`` or ``n <= 0``, no approach speed on the impact row, or a step that
+        would need more than :data:`MAX_STEPS` Runge-Kutta steps to cover ``t_max`` (a
+        Rosenbrock item: a first step of zero).
     """
     from .._kernels.reduced import rk4_peaks, stiff_peaks
 
     G = np.ascontiguousarray(G, dtype=float)
+    if G.ndim != 3 or G.shape[1] != G.shape[2]:
+        raise InputError(f"G must have shape (B, m, m), got {G.shape}")
     b, rate0 = (np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), G.shape[:2]))
                 for x in (b, rate0))
     L = np.ascontiguousarray(np.broadcast_to(np.asarray(L, float), (*G.shape[:2], 5)))
     B, m = b.shape
+    o = _impact_row(impact, m)
     _check_batch(G, b, L, rate0, t_max)
-    o = impact % m
     if np.any(~(rate0[:, o] > 0.0)):
         raise InputError("the impact row needs an approach speed > 0 in every item")
     others = [i for i in range(m) if i != o]
@@ -343,7 +366,7 @@ def reduced_impact(G, b, laws, v_i, rate0, *, t_max: float, impact: int = -1,
     t_max : float
         Window [s].
     impact : int
-        Index of the impact row.
+        Index of the impact row, in ``[-m, m - 1]`` (a negative one counts from the end).
     preload : bool
         Start the other rows at their static load (:func:`static_loads`); False: all
         gaps start at 0 (the other contacts just touching).
@@ -366,7 +389,7 @@ def reduced_impact(G, b, laws, v_i, rate0, *, t_max: float, impact: int = -1,
             else check_law(law) for law in laws]
     v_i = np.broadcast_to(np.asarray(v_i, float), (m,)).copy()
     d_rate = np.asarray(rate0, float).reshape(m).copy()
-    o = impact % m
+    o = _impact_row(impact, m)
     if not (d_rate[o] > 0.0):
         raise InputError(f"the impact row needs an approach speed > 0, got {d_rate[o]}")
     if method not in ("lsoda", "auto", "rk4", "rosenbrock"):
