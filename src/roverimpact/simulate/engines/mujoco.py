@@ -598,31 +598,39 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
         mujoco.mj_step2(m, d)
         return forces
 
+    # MjData's arrays, bound once: views of its buffer (each attribute access builds one)
+    qpos_d, qvel_d, xpos_d = d.qpos, d.qvel, d.geom_xpos
+    mj_step = mujoco.mj_step
+
     def step_and_record() -> bool:
-        """One step; True if the recorded state has an obstacle contact."""
+        """One step; True if the recorded state has an obstacle contact (one whose rows are
+        in efc_force: a contact at dist = margin exactly is listed without rows). Records
+        the contacts' geoms, efc addresses and the whole efc_force, sorted into pairs
+        after the run, all at once: called once per MuJoCo step, its Python is the
+        engine's overhead, as few numpy calls as possible."""
         T_rec.append(d.time)
-        QP.append(d.qpos.copy())
-        QV.append(d.qvel.copy())
-        forces = advance()
-        XP.append(d.geom_xpos.copy())
-        if laws_mode:                          # touching: inside the face (a damper may
+        QP.append(qpos_d.copy())
+        QV.append(qvel_d.copy())
+        if laws_mode:
+            forces = advance()
+            XP.append(xpos_d.copy())           # touching: inside the face (a damper may
             CON.append(forces[0])              # have brought the force to 0 before)
             return forces[1]
-        nc = d.ncon
-        if not nc:
+        mj_step(m, d)
+        XP.append(xpos_d.copy())
+        if not d.ncon:
             CON.append(None)
             return False
-        adr = d.contact.efc_address[:nc].copy()
-        keep = adr >= 0                      # dist = margin exactly: listed, excluded
-        if not keep.all():
-            if not keep.any():
-                CON.append(None)
-                return False
-            adr = adr[keep]
-        geom = d.contact.geom[:nc][keep]
-        f = d.efc_force
-        CON.append((geom, f[adr], (f[adr + 1], f[adr + 2]) if friction_rows else None))
-        return bool((geom == obst_gid).any())    # box-sphere contacts come as (sphere, box)
+        con = d.contact
+        geom, adr = con.geom.copy(), con.efc_address.copy()
+        CON.append((geom, adr, d.efc_force.copy()))
+        # a few contacts: Python on lists is faster than numpy's calls on them. Either geom
+        # (box-sphere contacts come as (sphere, box)), the contact with rows (adr >= 0)
+        g = geom.ravel().tolist()
+        if obst_gid not in g:
+            return False
+        a = adr.tolist()
+        return any(a[j >> 1] >= 0 for j, x in enumerate(g) if x == obst_gid)
 
     def check(where):
         if d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number or not math.isfinite(
@@ -639,10 +647,11 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
     g_prev = float(np.min(obstacle_gaps(d.geom_xpos)))
     hit = False
     for _ in range(n_max):
-        qpos_n, qvel_n, t_n, g_n = d.qpos.copy(), d.qvel.copy(), d.time, g_prev
-        step_and_record()
+        g_n = g_prev
+        step_and_record()                  # records the state before the step: keep it
+        qpos_n, qvel_n, t_n = QP[-1], QV[-1], T_rec[-1]
         mujoco.mj_kinematics(m, d)
-        g_prev = float(np.min(obstacle_gaps(d.geom_xpos)))
+        g_prev = float(obstacle_gaps(xpos_d).min())
         if g_prev <= 0.0:
             hit = True
             break
@@ -719,18 +728,28 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
     nrec = len(T)
     FNa = np.zeros((nrec, npl * nw))
     FTa = np.zeros((nrec, npl * nw))
-    for i, con in enumerate(CON):
-        if con is None:
-            continue
-        if laws_mode:
-            FNa[i] = con.reshape(-1)
-            continue
-        geom, fn, ft = con
-        idx = pair_of[geom[:, 0], geom[:, 1]]
-        ok = idx >= 0
-        np.add.at(FNa[i], idx[ok], fn[ok])
-        if ft is not None:
-            np.add.at(FTa[i], idx[ok], np.hypot(ft[0], ft[1])[ok])
+    if laws_mode:
+        if nrec:
+            FNa[:] = np.reshape(CON, (nrec, npl * nw))
+    else:
+        # every record's contacts at once: record index, geoms, rows in the records'
+        # efc_force laid end to end; pairs summed in contact order as one record at a time
+        rec = [i for i, con in enumerate(CON) if con is not None]
+        if rec:
+            geom = np.concatenate([CON[i][0] for i in rec])
+            adr = np.concatenate([CON[i][1] for i in rec])
+            efc = [CON[i][2] for i in rec]
+            f = np.concatenate(efc)
+            ncon = np.array([len(CON[i][1]) for i in rec])
+            start = np.cumsum([0] + [len(e) for e in efc[:-1]])
+            rows = np.repeat(np.array(rec), ncon)
+            idx = pair_of[geom[:, 0], geom[:, 1]]
+            ok = (adr >= 0) & (idx >= 0)     # dist = margin exactly: listed, no rows
+            at = (adr + np.repeat(start, ncon))[ok]
+            cell = (rows[ok], idx[ok])
+            np.add.at(FNa, cell, f[at])
+            if friction_rows:
+                np.add.at(FTa, cell, np.hypot(f[at + 1], f[at + 2]))
     FNa = FNa.reshape(nrec, npl, nw)
     FTa = FTa.reshape(nrec, npl, nw)
     XPa = np.asarray(XP)                      # (nrec + 1, ngeom, 3)
