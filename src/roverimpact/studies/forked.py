@@ -79,36 +79,42 @@ def map_forked(func: Callable[[Any, Callable[..., None]], Any], items: Sequence,
     procs = [ctx.Process(target=_work, args=(func, items, following, messages),
                          daemon=True, name=f"roverimpact-{k}") for k in range(n)]
     results: list = [None] * len(items)
-    error: BaseException | None = None
+    errors: list[BaseException] = []
     ended: set[int] = set()
+
+    def begin_no_more() -> None:
+        with following.get_lock():
+            following.value = len(items)
+
+    def handle(msg) -> None:
+        kind = msg[0]
+        if kind == "event":
+            events(*msg[1])
+        elif kind == "result":
+            results[msg[1]] = msg[2]
+        elif kind == "error":
+            errors.append(msg[2])
+            begin_no_more()
+        else:  # "end"
+            ended.add(msg[1])
+
     try:
         with one_blas_thread("fork"):
             for p in procs:
                 p.start()
         while len(ended) < n:
             try:
-                msg = messages.get(timeout=0.2)
+                handle(messages.get(timeout=0.2))
             except queue_module.Empty:
                 for k, p in enumerate(procs):
                     if k not in ended and p.exitcode is not None:
-                        _drain(messages, results, events, ended)
+                        _drain(messages, handle)  # what it sent before it ended
                         if k not in ended:  # it died without a word
                             ended.add(k)
-                            error = error or RuntimeError(
+                            errors.append(RuntimeError(
                                 f"a worker process died (exit code {p.exitcode}) "
-                                "computing the work; it may have run out of memory")
-                continue
-            kind = msg[0]
-            if kind == "event":
-                events(*msg[1])
-            elif kind == "result":
-                results[msg[1]] = msg[2]
-            elif kind == "error":
-                error = error or msg[2]
-                with following.get_lock():  # begin no further item
-                    following.value = len(items)
-            else:  # "end"
-                ended.add(msg[1])
+                                "computing the work; it may have run out of memory"))
+                            begin_no_more()
     except KeyboardInterrupt:
         _stop(procs, messages)
         raise
@@ -119,24 +125,19 @@ def map_forked(func: Callable[[Any, Callable[..., None]], Any], items: Sequence,
                 p.terminate()
                 p.join()
         messages.close()
-    if error is not None:
-        raise error
+    if errors:
+        raise errors[0]
     return results
 
 
-def _drain(messages, results, events, ended) -> None:
-    """The messages a process sent before it ended, read before it counts as dead."""
+def _drain(messages, handle) -> None:
+    """Every message waiting in ``messages``, to ``handle``."""
     while True:
         try:
             msg = messages.get(timeout=0.05)
         except queue_module.Empty:
             return
-        if msg[0] == "result":
-            results[msg[1]] = msg[2]
-        elif msg[0] == "event":
-            events(*msg[1])
-        elif msg[0] == "end":
-            ended.add(msg[1])
+        handle(msg)
 
 
 def _stop(procs, messages) -> None:
