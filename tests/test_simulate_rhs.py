@@ -162,3 +162,84 @@ def test_planes_sharing_a_law_give_the_bits_of_one_call_per_plane():
     assert (cf.f_n[:nw] > 0).sum() >= 4 and cf.f_n[-1, 0] > 0
     assert np.array_equal(cf.f_n, cs.f_n) and np.array_equal(cf.f_t, cs.f_t)
     assert np.array_equal(cf.tau, cs.tau)
+
+
+def _rocker_bogie_on_planes(laws, v_i, mu=0.3):
+    """The rocker-bogie on the ground (``laws[0]``) pressed by faces (``laws[1:]``) into the
+    front wheel, with a disturbed velocity: pairs on every plane."""
+    from roverimpact.models import rocker_bogie
+    from roverimpact.simulate import ContactSystem, Plane
+
+    mbm = rocker_bogie()
+    q = np.asarray(mbm.params["q_nominal"])
+    v = 0.1 * np.random.default_rng(3).standard_normal(mbm.model.nv)
+    normals = [np.array([0.0, 0.0, 1.0]), np.array([-1.0, 0.0, 0.0]),
+               np.array([-0.6, 0.0, 0.8])]
+    planes = [Plane(f"p{k}", normals[k], np.zeros(3), law, v_i[k])
+              for k, law in enumerate(laws)]
+    sys_ = ContactSystem(model=mbm.model, wheel_frames=[w.frame for w in mbm.wheels],
+                         radii=[w.radius for w in mbm.wheels], planes=planes,
+                         gravity=np.array([0.0, 0.0, -9.81]), mu=mu)
+    c, r = sys_.wheel_centres(q), sys_.radii
+    for k, p in enumerate(planes):   # each plane 1 to 2 mm into the wheel(s) it faces most
+        p.p0 = ((c @ p.n - r).min() + 1e-3 * (1 + k / 2)) * p.n
+    sys_._set_planes()
+    return sys_, q, v
+
+
+def _per_pair(sys_, q, v, v_i):
+    """f_n (planes, wheels) by one call of its plane's law per pair, from the indentation and
+    its rate of :meth:`ContactSystem.contacts` (the simulator's own kinematics)."""
+    cs = sys_.contacts(q, v, v_i)
+    f = np.zeros_like(cs.f_n)
+    for k, w in zip(*np.nonzero(cs.delta > 0), strict=True):
+        f[k, w] = max(float(sys_.planes[k].law.force(cs.delta[k, w:w + 1],
+                                                      cs.delta_dot[k, w:w + 1], v_i[k])[0]), 0.0)
+    return f
+
+
+def test_pairs_on_planes_of_hunt_crossley_laws_are_one_evaluation_with_the_bits_per_pair(
+        monkeypatch):
+    """Three planes, three Hunt–Crossley family laws (two classes), three v_i: the pairs of all
+    planes are evaluated in one call of ``family_force`` with the parameters per pair, with
+    the bits of one call of the plane's law per pair; a v_i changed in place (the list the
+    integrator passes) is taken."""
+    from roverimpact.contact import HuntCrossley, LankaraniNikravesh
+    from roverimpact.contact.hunt_crossley import family_force
+    from roverimpact.simulate import system
+
+    laws = [HuntCrossley(k=1e6, e=0.7), LankaraniNikravesh(k=3e6, e=0.4),
+            HuntCrossley(k=1e7, e=0.5)]
+    v_i = [0.1, 0.25, 0.3]
+    sys_, q, v = _rocker_bogie_on_planes(laws, v_i)
+    calls = []
+    monkeypatch.setattr(system, "family_force",
+                        lambda *a: calls.append(a) or family_force(*a))
+    for vi in (v_i, np.array([0.2, 0.05, 0.4])):
+        v_i[:] = vi                                  # in place, as simulate_impact does
+        calls.clear()
+        cf = sys_.applied_force(q, v, v_i)
+        assert len(calls) == 1 and ((cf.f_n > 0).sum(axis=1) > 0).all()
+        assert np.array_equal(cf.f_n, _per_pair(sys_, q, v, v_i))
+        cs = sys_.contacts(q, v, v_i)
+        assert np.array_equal(cf.f_n, cs.f_n) and np.array_equal(cf.tau, cs.tau)
+
+
+def test_other_laws_and_overridden_forces_are_called_per_plane():
+    """Laws outside the family (Hertz, Kelvin–Voigt) and a family law whose ``force`` is its
+    own are called, per plane: the bits of one call per pair."""
+    from roverimpact.contact import Hertz, HuntCrossley, KelvinVoigt
+
+    class Stiffer(HuntCrossley):
+        def force(self, delta, delta_dot, v_i=1.0):
+            return 2.0 * super().force(delta, delta_dot, v_i)
+
+    for laws in ([Hertz(k=1e6), HuntCrossley(k=3e6, e=0.4), KelvinVoigt(k=1e7, c=2e3)],
+                 [HuntCrossley(k=1e6, e=0.7), Stiffer(k=3e6, e=0.4),
+                  HuntCrossley(k=1e7, e=0.5)]):
+        v_i = [0.1, 0.25, 0.3]
+        sys_, q, v = _rocker_bogie_on_planes(laws, v_i)
+        cf = sys_.applied_force(q, v, v_i)
+        assert ((cf.f_n > 0).sum(axis=1) > 0).all()
+        assert np.array_equal(cf.f_n, _per_pair(sys_, q, v, v_i))
+        assert np.array_equal(cf.tau, sys_.contacts(q, v, v_i).tau)

@@ -52,6 +52,7 @@ __all__ = [
     "LankaraniNikravesh",
     "LeeWang",
     "ZhiyingQishao",
+    "family_force",
 ]
 
 
@@ -113,7 +114,7 @@ class HuntCrossleyFamily(ContactLaw):
 
     def force(self, delta, delta_dot, v_i=1.0) -> np.ndarray:
         d = np.maximum(np.asarray(delta, dtype=float), 0.0)
-        return self.k * d**self.n * (1.0 + self.z * np.asarray(delta_dot) / np.asarray(v_i))
+        return family_force(self.k, self.n, self.z, d, np.asarray(delta_dot), np.asarray(v_i))
 
     def _closed_form(self, m, v):
         z, n = float(self.z), self.n
@@ -134,6 +135,16 @@ class HuntCrossleyFamily(ContactLaw):
         """e* = (1 - y)/z, y = -W_0(-(1+z) e^-(1+z)) (exact; depends on z alone, ``m_eff``
         is ignored)."""
         return _restitution_z(float(self.z))
+
+
+def family_force(k, n, z, delta, delta_dot, v_i):
+    r"""The family's force :math:`k\,\delta^n\,(1 + z\,\dot\delta / v_i)`, elementwise.
+
+    ``delta`` >= 0 (not clamped here), ``k``, ``z`` and ``v_i`` numbers or arrays broadcast
+    against it: :meth:`HuntCrossleyFamily.force` of one law, or pairs of several laws of
+    one ``n`` in one evaluation (the simulator's contact pairs), with the same bits.
+    """
+    return k * delta**n * (1.0 + z * delta_dot / v_i)
 
 
 @dataclass(frozen=True)

@@ -17,11 +17,13 @@ The integrator re-anchors when ``|dq|`` grows (see ``_run``).
 
 from __future__ import annotations
 
+from bisect import bisect_left
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
+from ..contact.hunt_crossley import HuntCrossleyFamily, family_force
 from ..exceptions import ModelError
 from ..models.constraints import loop_jdot_v
 
@@ -165,7 +167,6 @@ class ContactSystem:
         self.touch = np.array([np.ones(nw, bool) if p.wheels is None
                                else np.asarray(p.wheels, bool) for p in self.planes])
         self.bounded = bool(np.isfinite(self.z_max).any() or not self.touch.all())
-        self._plane_range = np.arange(len(self.planes) + 1)
         runs = []                         # [k0, k1): consecutive planes of one law object
         for k, p in enumerate(self.planes):
             if runs and self.planes[runs[-1][0]].law is p.law:
@@ -173,6 +174,10 @@ class ContactSystem:
             else:
                 runs.append([k, k + 1])
         self._law_runs = [tuple(r) for r in runs]
+        # pairs by flat index k * nw + w (row-major in (planes, wheels)): their frame and normal
+        self._pair_fid = self.fids * len(self.planes)
+        self._N_pairs = np.repeat(self.N, nw, axis=0)
+        self._family = _Family.of(self.planes)
         self._offsets_col, self._z_max_col = self.offsets[:, None], self.z_max[:, None]
         self._radii_row = self.radii[None, :]
         self._r_nz = self.radii[None, :] * self.N[:, None, 2]   # height of c - r n over c
@@ -297,56 +302,94 @@ class ContactSystem:
             N_all, D, gap = self._geometry(*self._centres_axes())
         else:
             oMf = data.oMf
-            gap = self._gaps(np.array([oMf[f].translation for f in self.fids]).reshape(-1, 3))
+            # (concatenate takes the fresh (3,) arrays faster than np.array)
+            gap = self._gaps(np.concatenate([oMf[f].translation for f in self.fids])
+                             .reshape(-1, 3))
         f_n = np.zeros(gap.shape)
         f_t = np.zeros(gap.shape)
         tau = self.spring_torque(q, v)
-        kk, ww = np.nonzero(gap < 0.0)                       # pairs in contact, by plane
-        if kk.size == 0:
+        flat = np.flatnonzero(gap < 0.0)          # pairs in contact k * nw + w, by plane
+        if flat.size == 0:
             return ContactForces(gap, f_n, f_t, tau)
-        nv = self.nv
-        J = np.array([pin.getFrameJacobian(model, data, self.fids[w], _LWA) for w in ww])
-        J = J.reshape(-1, 6, nv)
+        fid = self._pair_fid
+        J = np.concatenate([pin.getFrameJacobian(model, data, fid[i], _LWA)
+                            for i in flat.tolist()]).reshape(-1, 6, self.nv)
         if self.terrain is not None:
-            N = N_all[kk, ww]
-            Jp = J[:, :3, :] - _skew(D[kk, ww]) @ J[:, 3:, :]   # (K, 3, nv)
+            N = N_all.reshape(-1, 3)[flat]
+            Jp = J[:, :3, :] - _skew(D.reshape(-1, 3)[flat]) @ J[:, 3:, :]   # (K, 3, nv)
         else:
-            N = self.N[kk]
-            Jp = J[:, :3, :] + self.rSn[kk, ww] @ J[:, 3:, :]
+            N = self._N_pairs[flat]
+            Jp = J[:, :3, :] + self.rSn.reshape(-1, 3, 3)[flat] @ J[:, 3:, :]
         vp = Jp @ v                                              # (K, 3)
         vn = (vp * N).sum(axis=-1)
-        fn, ft, F = self._pair_forces(kk, -gap[kk, ww], vp, vn, N, v_i)
-        f_n[kk, ww] = fn
-        f_t[kk, ww] = ft
+        fn, ft, F = self._pair_forces(flat, -gap.take(flat), vp, vn, N, v_i)
+        f_n.put(flat, fn)
+        f_t.put(flat, ft)
         # summed in the order of ContactState.tau (pairs row-major): the same bits
         tau += (Jp * F[:, :, None]).sum(axis=(0, 1))
         return ContactForces(gap, f_n, f_t, tau)
 
-    def _pair_forces(self, kk, delta, vp, vn, N, v_i):
+    def _pair_forces(self, flat, delta, vp, vn, N, v_i):
         """Normal force ``f_n``, friction force ``f_t`` (K,) and contact force ``F`` (K, 3)
-        of K pairs in contact: plane ``kk`` (ascending), indentation ``delta`` > 0,
-        contact-point velocity ``vp`` (K, 3), normal velocity ``vn``, normal ``N`` (K, 3).
-        One law call for consecutive planes that share a law and ``v_i`` (a law is
-        elementwise: the same values as one call per plane)."""
-        fn = np.empty(kk.size)
-        v_i = [p.v_i for p in self.planes] if v_i is None else v_i
-        bounds = np.searchsorted(kk, self._plane_range).tolist()
-        for k0, k1 in self._law_runs:
-            runs = [(k0, k1)] if all(x == v_i[k0] for x in v_i[k0 + 1:k1]) else [
-                (k, k + 1) for k in range(k0, k1)]
-            for a, b in runs:
-                i0, i1 = bounds[a], bounds[b]
-                if i1 > i0:
-                    raw = self.planes[a].law.force(delta[i0:i1], -vn[i0:i1], v_i[a])
-                    fn[i0:i1] = np.maximum(np.asarray(raw, float), 0.0)
+        of K pairs in contact: flat index ``flat`` = plane * wheels + wheel (ascending),
+        indentation ``delta`` > 0, contact-point velocity ``vp`` (K, 3), normal velocity
+        ``vn``, normal ``N`` (K, 3). Pairs on several planes whose laws are all of the
+        Hunt–Crossley family with one exponent: one evaluation of
+        :func:`~roverimpact.contact.hunt_crossley.family_force` with the parameters per pair;
+        else one law call for consecutive planes that share a law and ``v_i``. Laws are
+        elementwise: the same values as one call per plane."""
+        K = flat.size
+        planes = self.planes
+        nw = len(self.fids)
+        v_i = [p.v_i for p in planes] if v_i is None else v_i
+        fl = flat.tolist()
+        fam = self._family
+        if fam is not None:
+            a = fl[0] // nw
+            if a == fl[-1] // nw:                      # all pairs on plane a
+                raw = family_force(fam.k[a], fam.n, fam.z[a], delta, -vn, v_i[a])
+            else:                                      # parameters per pair
+                k, z, vi = fam.per_pair(v_i, nw).take(flat, axis=1)
+                raw = family_force(k, fam.n, z, delta, -vn, vi)
+            fn = np.maximum(raw, 0.0)
+        else:
+            fn = self._law_forces(fl, delta, -vn, v_i)
         F = fn[:, None] * N
-        ft = np.zeros(kk.size)
         if self.mu > 0.0:
             vt = vp - vn[:, None] * N
             s = np.sqrt((vt * vt).sum(axis=-1))
             ft = self.mu * fn * np.tanh(s / self.v_slip)
             F = F - (ft / np.maximum(s, 1e-300))[:, None] * vt
+        else:
+            ft = np.zeros(K)
         return fn, ft, F
+
+    def _law_forces(self, fl, delta, rate, v_i):
+        """Normal forces (K,) of the pairs of flat indices ``fl`` (ascending list): one call
+        of the law for consecutive planes that share a law and ``v_i``, none for planes
+        without pairs."""
+        K, nw, planes = len(fl), len(self.fids), self.planes
+        fn = None
+        for k0, k1 in self._law_runs:
+            i0 = bisect_left(fl, k0 * nw)
+            if i0 == K or fl[i0] >= k1 * nw:       # no pair on these planes
+                continue
+            if k1 - k0 == 1 or all(x == v_i[k0] for x in v_i[k0 + 1:k1]):
+                runs = ((k0, k1),)
+            else:
+                runs = [(k, k + 1) for k in range(k0, k1)]
+            for a, b in runs:
+                i0, i1 = bisect_left(fl, a * nw), bisect_left(fl, b * nw)
+                if i1 == i0:
+                    continue
+                raw = planes[a].law.force(delta[i0:i1], rate[i0:i1], v_i[a])
+                f = np.maximum(np.asarray(raw, float), 0.0)
+                if i0 == 0 and i1 == K and f.shape == (K,):   # one call for all pairs
+                    return f
+                if fn is None:
+                    fn = np.empty(K)
+                fn[i0:i1] = f
+        return fn
 
     def _forces(self, gap, Jp, vp, vn, N, v_i) -> ContactState:
         """Normal and friction forces from the gaps, point Jacobians, contact-point
@@ -358,10 +401,13 @@ class ContactSystem:
         f_n = np.zeros((npl, nw))
         f_t = np.zeros((npl, nw))
         F = np.zeros((npl, nw, 3))
-        kk, ww = np.nonzero(delta > 0.0)                     # pairs in contact, by plane
-        if kk.size:
-            f_n[kk, ww], f_t[kk, ww], F[kk, ww] = self._pair_forces(
-                kk, delta[kk, ww], vp[kk, ww], vn[kk, ww], N[kk, ww], v_i)
+        flat = np.flatnonzero(delta > 0.0)             # pairs in contact, by plane
+        if flat.size:
+            fn, ft, Fk = self._pair_forces(flat, delta.take(flat), vp.reshape(-1, 3)[flat],
+                                           vn.take(flat), N.reshape(-1, 3)[flat], v_i)
+            F.reshape(-1, 3)[flat] = Fk
+            f_n.put(flat, fn)
+            f_t.put(flat, ft)
         tau = (Jp * F[..., None]).sum(axis=(0, 1, 2))
         return ContactState(gap, np.maximum(delta, 0.0), -vn, f_n, f_t, F, Jp, tau, N)
 
@@ -414,3 +460,34 @@ class ContactSystem:
             dk = delta[k][np.isfinite(delta[k])]
             V += float(np.sum(p.law.k * dk ** (p.law.n + 1) / (p.law.n + 1)))
         return V
+
+
+class _Family:
+    """The laws of the planes when all are Hunt–Crossley family laws with the family's force
+    and one exponent ``n`` (:func:`~roverimpact.contact.hunt_crossley.family_force`):
+    stiffness ``k`` and damping number ``z`` per plane."""
+
+    def __init__(self, laws):
+        self.k = [float(law.k) for law in laws]
+        self.z = [float(law.z) for law in laws]
+        self.n = float(laws[0].n)
+        self._v_i, self._table = None, None
+
+    @classmethod
+    def of(cls, planes):
+        """The family of the planes' laws, or None."""
+        laws = [p.law for p in planes]
+        if laws and all(isinstance(law, HuntCrossleyFamily)
+                        and type(law).force is HuntCrossleyFamily.force for law in laws) \
+                and len({law.n for law in laws}) == 1:
+            return cls(laws)
+        return None
+
+    def per_pair(self, v_i, nw):
+        """(3, planes * nw): ``k``, ``z`` and ``v_i`` of every pair (flat index
+        plane * nw + wheel), kept while ``v_i`` (per plane) is unchanged."""
+        v_i = list(v_i)
+        if v_i != self._v_i:
+            self._v_i = [float(x) for x in v_i]
+            self._table = np.repeat(np.array([self.k, self.z, self._v_i]), nw, axis=1)
+        return self._table
