@@ -243,3 +243,31 @@ def test_other_laws_and_overridden_forces_are_called_per_plane():
         assert ((cf.f_n > 0).sum(axis=1) > 0).all()
         assert np.array_equal(cf.f_n, _per_pair(sys_, q, v, v_i))
         assert np.array_equal(cf.tau, sys_.contacts(q, v, v_i).tau)
+
+
+def test_a_copied_or_pickled_system_reads_the_wheel_centres_of_its_own_data():
+    """The wheel centres come from views of ``data.oMf`` kept between calls: a deep copy and
+    a pickle of the system (their own ``Data``) read theirs, not the original's, nor a
+    frozen copy of the views."""
+    import copy
+    import pickle
+
+    from roverimpact.models import rocker_bogie
+
+    mbm = rocker_bogie()
+    sys_ = build_system(mbm, SimulationConfig())
+    q = np.asarray(mbm.params["q_nominal"])
+    q2 = q.copy()
+    q2[:3] += [0.5, -0.2, 0.1]
+
+    def centres(qq):               # independent: a fresh Data, one frame at a time
+        data = sys_.model.createData()
+        pin.framesForwardKinematics(sys_.model, data, qq)
+        return np.array([data.oMf[f].translation for f in sys_.fids])
+
+    assert np.array_equal(sys_.wheel_centres(q), centres(q))       # views bound
+    for other in (copy.deepcopy(sys_), pickle.loads(pickle.dumps(sys_))):
+        assert np.array_equal(other.wheel_centres(q2), centres(q2))
+        assert np.array_equal(other.applied_force(q, np.zeros(sys_.nv)).gap,
+                              sys_.gaps_of_centres(centres(q)))
+        assert np.array_equal(sys_.wheel_centres(q), centres(q))

@@ -155,6 +155,7 @@ class ContactSystem:
             self.axes = np.asarray(self.axes, dtype=float)
             self.axes = self.axes / np.linalg.norm(self.axes, axis=1)[:, None]
         self._lower = np.tril_indices(self.nv, -1)
+        self._centre_views = _FrameTranslations()
         self.euclidean = self.nq == self.nv and all(
             j.shortname() in _EUCLIDEAN_JOINTS for j in list(self.model.joints)[1:])
         self._set_planes()
@@ -209,13 +210,17 @@ class ContactSystem:
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        c = np.array([data.oMf[f].translation for f in self.fids]).reshape(-1, 3)
+        c = self._centres()
         J = np.array([pin.getFrameJacobian(model, data, f, _LWA) for f in self.fids])
         return c, J.reshape(len(self.fids), 6, self.nv)
 
     def wheel_centres(self, q) -> np.ndarray:
         pin.framesForwardKinematics(self.model, self.data, q)
-        return np.array([self.data.oMf[f].translation for f in self.fids]).reshape(-1, 3)
+        return self._centres()
+
+    def _centres(self) -> np.ndarray:
+        """Wheel centres (nw, 3) from the current frame placements."""
+        return self._centre_views.get(self.data, self.fids)
 
     def gaps(self, q) -> np.ndarray:
         """Signed gaps (planes, wheels): n . (c - p0) - r [m] (the terrain's gap on row 0
@@ -301,10 +306,7 @@ class ContactSystem:
         if self.terrain is not None:
             N_all, D, gap = self._geometry(*self._centres_axes())
         else:
-            oMf = data.oMf
-            # (concatenate takes the fresh (3,) arrays faster than np.array)
-            gap = self._gaps(np.concatenate([oMf[f].translation for f in self.fids])
-                             .reshape(-1, 3))
+            gap = self._gaps(self._centres())
         f_n = np.zeros(gap.shape)
         f_t = np.zeros(gap.shape)
         tau = self.spring_torque(q, v)
@@ -491,3 +493,34 @@ class _Family:
             self._v_i = [float(x) for x in v_i]
             self._table = np.repeat(np.array([self.k, self.z, self._v_i]), nw, axis=1)
         return self._table
+
+
+class _FrameTranslations:
+    """The translations of frames of a pinocchio ``Data`` (wheel centres) as one (n, 3) array,
+    from views of ``data.oMf`` kept between calls: the frame placements are updated in place
+    (their storage does not move), and one array per frame and call costs ~1 us each.
+
+    Bound to one ``Data`` (checked on every call). A copy of the system has its own
+    ``Data``: a deep copy or a pickle starts unbound. Where the binding returns copies
+    rather than views of ``oMf`` (owning their data, or at another address on each access),
+    the translations are read on every call."""
+
+    def __init__(self):
+        self.data, self.views = None, None
+
+    def __deepcopy__(self, memo):
+        return type(self)()
+
+    def __reduce__(self):
+        return type(self), ()
+
+    def get(self, data, fids) -> np.ndarray:
+        if self.data is not data:
+            views = [data.oMf[f].translation for f in fids]
+            again = [data.oMf[f].translation for f in fids]
+            live = all(not a.flags.owndata and a.ctypes.data == b.ctypes.data
+                       for a, b in zip(views, again, strict=True))
+            self.data, self.views = data, (views if live else None)
+        if self.views is None:
+            return np.concatenate([data.oMf[f].translation for f in fids]).reshape(-1, 3)
+        return np.array(self.views).reshape(-1, 3)
