@@ -227,17 +227,22 @@ def test_pairs_on_planes_of_hunt_crossley_laws_are_one_evaluation_with_the_bits_
 
 def test_other_laws_and_overridden_forces_are_called_per_plane():
     """Laws outside the family (Hertz, Kelvin–Voigt) and a family law whose ``force`` is its
-    own are called, per plane: the bits of one call per pair."""
+    own are called per plane, or once for consecutive planes of one law object and one
+    v_i: the bits of one call per pair."""
     from roverimpact.contact import Hertz, HuntCrossley, KelvinVoigt
 
     class Stiffer(HuntCrossley):
         def force(self, delta, delta_dot, v_i=1.0):
             return 2.0 * super().force(delta, delta_dot, v_i)
 
-    for laws in ([Hertz(k=1e6), HuntCrossley(k=3e6, e=0.4), KelvinVoigt(k=1e7, c=2e3)],
-                 [HuntCrossley(k=1e6, e=0.7), Stiffer(k=3e6, e=0.4),
-                  HuntCrossley(k=1e7, e=0.5)]):
-        v_i = [0.1, 0.25, 0.3]
+    shared = Stiffer(k=2e6, e=0.6)
+    for laws, v_i in (
+            ([Hertz(k=1e6), HuntCrossley(k=3e6, e=0.4), KelvinVoigt(k=1e7, c=2e3)],
+             [0.1, 0.25, 0.3]),
+            ([HuntCrossley(k=1e6, e=0.7), Stiffer(k=3e6, e=0.4), HuntCrossley(k=1e7, e=0.5)],
+             [0.1, 0.25, 0.3]),
+            ([shared, shared, HuntCrossley(k=1e7, e=0.5)], [0.1, 0.25, 0.3]),
+            ([shared, shared, HuntCrossley(k=1e7, e=0.5)], [0.2, 0.2, 0.3])):
         sys_, q, v = _rocker_bogie_on_planes(laws, v_i)
         cf = sys_.applied_force(q, v, v_i)
         assert ((cf.f_n > 0).sum(axis=1) > 0).all()

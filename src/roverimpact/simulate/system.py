@@ -310,18 +310,21 @@ class ContactSystem:
         f_n = np.zeros(gap.shape)
         f_t = np.zeros(gap.shape)
         tau = self.spring_torque(q, v)
-        flat = np.flatnonzero(gap < 0.0)          # pairs in contact k * nw + w, by plane
+        # pairs in contact k * nw + w, by plane (np.flatnonzero: 2 us more)
+        flat = (gap < 0.0).ravel().nonzero()[0]
         if flat.size == 0:
             return ContactForces(gap, f_n, f_t, tau)
         fid = self._pair_fid
         J = np.concatenate([pin.getFrameJacobian(model, data, fid[i], _LWA)
                             for i in flat.tolist()]).reshape(-1, 6, self.nv)
         if self.terrain is not None:
-            N = N_all.reshape(-1, 3)[flat]
-            Jp = J[:, :3, :] - _skew(D.reshape(-1, 3)[flat]) @ J[:, 3:, :]   # (K, 3, nv)
+            N = N_all.reshape(-1, 3).take(flat, axis=0)
+            Dk = D.reshape(-1, 3).take(flat, axis=0)
+            Jp = J[:, :3, :] - _skew(Dk) @ J[:, 3:, :]             # (K, 3, nv)
         else:
-            N = self._N_pairs[flat]
-            Jp = J[:, :3, :] + self.rSn.reshape(-1, 3, 3)[flat] @ J[:, 3:, :]
+            # (take: ~1 us less than [flat] each)
+            N = self._N_pairs.take(flat, axis=0)
+            Jp = J[:, :3, :] + self.rSn.reshape(-1, 3, 3).take(flat, axis=0) @ J[:, 3:, :]
         vp = Jp @ v                                              # (K, 3)
         vn = (vp * N).sum(axis=-1)
         fn, ft, F = self._pair_forces(flat, -gap.take(flat), vp, vn, N, v_i)
@@ -403,10 +406,11 @@ class ContactSystem:
         f_n = np.zeros((npl, nw))
         f_t = np.zeros((npl, nw))
         F = np.zeros((npl, nw, 3))
-        flat = np.flatnonzero(delta > 0.0)             # pairs in contact, by plane
+        flat = (delta > 0.0).ravel().nonzero()[0]      # pairs in contact, by plane
         if flat.size:
-            fn, ft, Fk = self._pair_forces(flat, delta.take(flat), vp.reshape(-1, 3)[flat],
-                                           vn.take(flat), N.reshape(-1, 3)[flat], v_i)
+            fn, ft, Fk = self._pair_forces(
+                flat, delta.take(flat), vp.reshape(-1, 3).take(flat, axis=0), vn.take(flat),
+                N.reshape(-1, 3).take(flat, axis=0), v_i)
             F.reshape(-1, 3)[flat] = Fk
             f_n.put(flat, fn)
             f_t.put(flat, ft)
