@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 import time
 
@@ -172,3 +173,64 @@ def test_reproduce_with_one_process_runs_the_studies_here(fake_studies):
     repro.run_builtin_studies(fake_studies, quick=True, processes=1)
     assert {(fake_studies / s / "pid").read_text()
             for s in repro.BUILTIN_STUDIES} == {str(os.getpid())}
+
+
+def test_a_process_killed_names_the_signal_and_its_item():
+    def work(x, emit):
+        if x == 1:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return x
+
+    with pytest.raises(forked.ProcessDied, match=r"died \(killed by SIGKILL\) computing "
+                       r"item 1") as info:
+        map_forked(work, range(2), processes=2)
+    assert info.value.item == 1 and info.value.how == "killed by SIGKILL"
+
+
+def test_what_a_process_prints_and_warns_is_written_here_once(capsys, monkeypatch):
+    """A process's lines went to the terminal itself, into the progress bar's line; each
+    process showed a warning the other had shown (the command shows each once)."""
+    import warnings
+
+    shown = []
+    monkeypatch.setattr(warnings, "showwarning",
+                        lambda message, category, *a, **k: shown.append(
+                            (str(message), category)))
+
+    def work(x, emit):
+        print(f"line of {x}", end="")
+        print(" ends here")
+        sys.stderr.write(f"error text of {x}\n")
+        warnings.warn("the same warning", RuntimeWarning, stacklevel=1)
+        time.sleep(0.1)
+        return x
+
+    assert map_forked(work, range(2), processes=2) == [0, 1]
+    out, err = capsys.readouterr()
+    assert sorted(out.splitlines()) == ["line of 0 ends here", "line of 1 ends here"]
+    assert sorted(err.splitlines()) == ["error text of 0", "error text of 1"]
+    assert shown == [("the same warning", RuntimeWarning)] * 2  # here: the command's
+    # own showwarning (the command line's shows each message once)
+
+
+def test_reproduce_names_a_study_whose_process_was_killed(fake_studies, monkeypatch):
+    """The killed study's manifest said "running" for ever, and the command ended with a
+    traceback of a RuntimeError."""
+    from roverimpact.studies.store import read_manifest, write_manifest
+
+    real = repro.run_study
+
+    def fake(study, out_dir, **kw):
+        if out_dir.name == "detc2015_fig2_beta":
+            out_dir.mkdir(parents=True, exist_ok=True)
+            write_manifest(out_dir, {"status": "running", "n_cases": 5})
+            os.kill(os.getpid(), signal.SIGKILL)
+        return real(study, out_dir, **kw)
+
+    monkeypatch.setattr(repro, "run_study", fake)
+    with pytest.raises(forked.ProcessDied, match=r"the process running study "
+                       r"detc2015_fig2_beta died \(killed by SIGKILL; .* run the same "
+                       r"`roverimpact reproduce` command again"):
+        repro.run_builtin_studies(fake_studies, quick=True)
+    manifest = read_manifest(fake_studies / "detc2015_fig2_beta")
+    assert manifest["status"] == "failed" and "SIGKILL" in manifest["error"]

@@ -21,7 +21,7 @@ import pandas as pd
 
 from .._io import atomic_write, check_writable
 from ..exceptions import ConfigError
-from ..studies.forked import map_forked, side_by_side
+from ..studies.forked import ProcessDied, map_forked, side_by_side
 from ..studies.indicators import IndicatorComparison, compare_indicators, with_baselines
 from ..studies.stats import Agreement, ForceRatios, agreement, check_n_boot, force_ratios
 from ..studies.store import (
@@ -622,8 +622,15 @@ def build_report(root: str | Path, *, title: str | None = None, intro: str = "",
         check_writable(f, folder=True, option=None)
     check_writable(root, folder=True, option=None)
     n = side_by_side(len(folders)) if processes is None else processes
-    sections = map_forked(lambda f, _: analyse_folder(f, n_boot=n_boot, seed=seed),
-                          folders, processes=n)
+    try:
+        sections = map_forked(lambda f, _: analyse_folder(f, n_boot=n_boot, seed=seed),
+                              folders, processes=n)
+    except ProcessDied as exc:
+        if exc.item is None:  # pragma: no cover - died before it said which folder
+            raise
+        raise ProcessDied(f"the process drawing the figures of {folders[exc.item]} died "
+                          f"({exc.how}; it may have run out of memory); the results are "
+                          "kept: run `roverimpact report` again", exc.item, exc.how) from None
     title = title or ("roverimpact study report: " + (sections[0].name if len(sections) == 1
                                                        else root.name))
     return write_report(root / REPORT, sections, title=title, intro=intro), sections

@@ -26,8 +26,8 @@ from .._io import read_toml, some_names, visible_entries
 from ..exceptions import ConfigError, StudyInterrupted
 from .config import study_from_dict
 from .executors import LazyCluster
-from .forked import map_forked, side_by_side
-from .store import check_out_dir, is_study_manifest, read_manifest
+from .forked import ProcessDied, map_forked, side_by_side
+from .store import check_out_dir, is_study_manifest, read_manifest, write_manifest
 from .sweep import run_study
 
 __all__ = ["BUILTIN_STUDIES", "QUICK_POINTS", "builtin_study_path", "run_builtin_studies"]
@@ -218,6 +218,25 @@ def _side_by_side(out_dir: Path, studies, processes: int, *, progress, note,
         raise
     except KeyboardInterrupt:  # here: every process has ended its study as a Ctrl-C does
         raise StudyInterrupted(_interrupted(out_dir)) from None
+    except ProcessDied as exc:  # killed: its manifest said "running" for ever
+        if exc.item is None:  # pragma: no cover - died before it said which study
+            raise
+        stem = order[exc.item][0]
+        _mark_failed(out_dir / stem, f"its process died ({exc.how})")
+        raise ProcessDied(
+            f"the process running study {stem} died ({exc.how}; it may have run out of "
+            f"memory); {out_dir} is incomplete: run the same `roverimpact reproduce` "
+            "command again to recompute it", exc.item, exc.how) from None
+
+
+def _mark_failed(folder: Path, error: str) -> None:
+    """A study's manifest that still says ``running`` says ``failed`` (``error``)."""
+    manifest = read_manifest(folder)
+    if manifest is not None and manifest.get("status") == "running":
+        try:
+            write_manifest(folder, manifest | {"status": "failed", "error": error})
+        except OSError:  # pragma: no cover - the error above is the one to report
+            pass
 
 
 def _interrupted(out_dir: Path, stem: str | None = None) -> str:
