@@ -410,3 +410,33 @@ def test_a_kernel_without_a_python_budget_always_compiles(cold_kernel):
     assert stiff_peaks.python_budget == rk4_peaks.python_budget == 0
     k.get(1)
     assert k.compiled and k.python_items == 0 and sent == []
+
+
+def test_a_forked_process_starts_no_background_compile(monkeypatch):
+    """``reproduce``'s two study processes each started a background compile of the same
+    kernel (the rover's assembly), beside the command's own: three compiles on two
+    cores, left running after the command. A forked process now sends nothing."""
+    k = _jit.Kernel(_twice, types.void(types.float64, _jit.rw(_jit.f8, 1)), cache=False)
+    monkeypatch.setattr(k, "cached", lambda: False)
+    monkeypatch.setenv("ROVERIMPACT_BACKGROUND_COMPILE", "1")
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "auto")
+    started = []
+    monkeypatch.setattr(_jit, "_Job", lambda *a, **kw: started.append(a) or _NoJob())
+    monkeypatch.setattr(_jit, "_last_job", None)
+    with monkeypatch.context() as m:
+        m.setattr(_jit.os, "getpid", lambda: -1)  # as seen from a forked child
+        assert _jit.compile_in_background(k) == [] and started == []
+        out = np.zeros(1)
+        k.get(1)(2.0, out)  # the Python code, as while a compile is under way
+        assert out[0] == 4.0 and not k.compiled and started == []
+    assert _jit.compile_in_background(k) == [k] and len(started) == 1  # here: sent
+
+
+class _NoJob:
+    _failed = False
+
+    def foreign(self):
+        return False
+
+    def poll(self):
+        return None

@@ -536,6 +536,11 @@ class _Job:
 
 _last_job: _Job | None = None
 
+#: The process that imported this module: a process forked from it (a study of
+#: ``reproduce`` side by side, a forked Dask worker) starts no background compile
+#: (:func:`compile_in_background`).
+_IMPORTED_IN = os.getpid()
+
 
 def compile_in_background(*kernels: Kernel) -> list[Kernel]:
     """Compile ``kernels`` into numba's on-disk cache in a separate process.
@@ -550,8 +555,16 @@ def compile_in_background(*kernels: Kernel) -> list[Kernel]:
     them from the cache. ``ROVERIMPACT_BACKGROUND_COMPILE=0`` compiles everything in the
     calling process, ``=1`` starts the process whatever the load. Returns the kernels
     sent.
+
+    A process forked from the one that imported this module sends nothing: its siblings
+    need the same kernels, and each started a compile of its own (``reproduce``'s two
+    study processes each compiled the rover's assembly kernel beside the command's
+    compile of Lemke's: three compiles on two cores, left running after the command).
+    It runs the kernel's Python code, then compiles it, as a process that sends nothing.
     """
     global _last_job
+    if os.getpid() != _IMPORTED_IN:
+        return []
     mode = os.environ.get("ROVERIMPACT_BACKGROUND_COMPILE", "auto")
     busy = _last_job if _last_job is not None and _last_job.poll() is None else None
     if mode == "0" or (mode != "1" and busy is None and not _spare_core()):

@@ -269,8 +269,11 @@ def reproduce_cmd(
         from .._kernels.lemke import impact_kernel
         from .._kernels.partition import partition_kernel
         from .._kernels.reduced import rk4_peaks
+        from ..models._assemble import _evaluate_one
 
-        compile_ahead(impact_kernel)
+        # the 3-D rover's assembly kernel too: the study processes forked from this one
+        # start no compile of their own (each started one of the same kernel)
+        compile_ahead(_evaluate_one, impact_kernel)
     counts: dict[str, tuple[int, int]] = {}  # study -> (done, total): one bar for all
 
     with progress_bar("reproduce", to_stderr=as_json) as update:
