@@ -190,10 +190,11 @@ def compile_ahead(*later, now=(), small: bool = False, workers: bool = False) ->
     (unless forked Dask workers will do the work, ``workers``: they inherit what this
     process compiled, or ``ROVERIMPACT_KERNELS`` says otherwise). Those with a smaller
     ``python_budget`` (the contact-space integrators, tens of milliseconds an item) are
-    still compiled here: a first full ``roverimpact reproduce`` waited for the Runge-Kutta
-    kernel behind Lemke's in the second process and took 39.9 s against 31.0 s. Large
-    work compiles ``now`` here as before: with every kernel in the second process, a
-    first ``roverimpact traverse examples/traverse_rocky.toml`` waited for them in turn
+    still compiled here: a first full ``roverimpact reproduce`` otherwise waited for the
+    Runge-Kutta kernel behind Lemke's in the second process (about 9 s more, in runs of
+    ``benchmarks/bench_startup.py`` that may have overlapped an earlier run's compile).
+    Large work compiles ``now`` here as before: with every kernel in the second process,
+    a first ``roverimpact traverse examples/traverse_rocky.toml`` waited for them in turn
     and took 72-94 s against 41-44 s.
     """
     from .._kernels._jit import compile_in_background, kernel_mode
