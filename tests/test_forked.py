@@ -234,3 +234,20 @@ def test_reproduce_names_a_study_whose_process_was_killed(fake_studies, monkeypa
         repro.run_builtin_studies(fake_studies, quick=True)
     manifest = read_manifest(fake_studies / "detc2015_fig2_beta")
     assert manifest["status"] == "failed" and "SIGKILL" in manifest["error"]
+
+
+def test_reproduce_with_workers_1_draws_the_figures_here_too(monkeypatch, tmp_path):
+    """``--workers 1`` ("the studies one after the other, here") drew the figures and
+    statistics side by side all the same; both now run in this process."""
+    from roverimpact.report import reproduce as report_reproduce
+
+    seen = {}
+    monkeypatch.setattr(report_reproduce, "run_builtin_studies",
+                        lambda out, **kw: seen.setdefault("studies", kw["processes"]))
+    monkeypatch.setattr(report_reproduce, "build_report",
+                        lambda out, **kw: (seen.setdefault("report", kw["processes"]), []))
+    report_reproduce.reproduce(tmp_path, workers=1)
+    assert seen == {"studies": 1, "report": 1}
+    seen.clear()
+    report_reproduce.reproduce(tmp_path)  # default: one per core, decided below
+    assert seen == {"studies": None, "report": None}

@@ -85,8 +85,8 @@ def reproduce(
         first study's check (the command line compiles its kernels there).
     processes : int, optional
         Processes the studies, then their figures and statistics, run in side by side
-        (default one per usable core, at most one per study; 1: one after the other
-        here). Without ``workers`` or ``scheduler``: see
+        (default one per usable core, at most one per study; 1, or ``workers=1``: one
+        after the other here). Without ``workers`` or ``scheduler``: see
         :func:`~roverimpact.studies.reproduce.run_builtin_studies`.
 
     Returns
@@ -95,6 +95,8 @@ def reproduce(
     """
     check_n_boot(n_boot)  # before the studies run, not after
     out_dir = Path(out_dir)
+    if processes is None and workers == 1 and scheduler is None:
+        processes = 1  # "one after the other, here": the figures too
     run_builtin_studies(out_dir, quick=quick, workers=workers, scheduler=scheduler,
                         progress=progress, overwrite=overwrite, note=note,
                         prepare=prepare, processes=processes)
