@@ -412,3 +412,33 @@ def test_cli_prints_a_repeated_warning_once():
     res = CliRunner().invoke(app, ["twice"])
     assert res.exit_code == 0, res.output
     assert res.output.count("equality constraints") == 1, res.output  # stdout + stderr
+
+
+def test_a_warning_during_the_progress_bar_is_written_above_it(monkeypatch):
+    """On a terminal a warning printed while the progress bar runs landed at the end of
+    the bar's line ("... ETA 0:00:01warning: ..."): the bar was drawn by the stdout
+    console, the warning by the stderr one. Both are the stderr console's now, which
+    writes the warning on a line of its own above the bar; stdout gets neither."""
+    import io
+    import re
+    import warnings
+
+    from rich.console import Console
+
+    from roverimpact.cli import _app
+
+    err, out = io.StringIO(), io.StringIO()
+    monkeypatch.setattr(_app, "err_console", Console(file=err, force_terminal=True,
+                                                     width=100, markup=False))
+    monkeypatch.setattr(_app, "console", Console(file=out, force_terminal=True, width=100))
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = _app._show_once()
+        with _app.progress_bar("demo") as update:
+            update(1, 3)
+            warnings.warn("a warning mid-run", stacklevel=1)
+            update(3, 3)
+    text = err.getvalue()
+    assert "warning: a warning mid-run" in text and "demo" in text
+    assert not re.search(r"ETA[^\r\n]*warning", text)  # not appended to the bar's line
+    assert out.getvalue() == ""

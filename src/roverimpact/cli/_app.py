@@ -339,15 +339,19 @@ def compile_notice(kernel, console=None, *, pid=None):
 
 
 @contextmanager
-def progress_bar(label: str, unit: str = "cases", *, to_stderr: bool = False):
+def progress_bar(label: str, unit: str = "cases"):
     """A rich progress bar with ETA, shown from the first report on (so that a study
     rejected before any work prints only its error); yields ``progress(done, total)``.
-    ``to_stderr``: draw it on stderr (when stdout carries JSON)."""
+
+    Drawn on stderr, by the console that prints the command's warnings and notes
+    (:func:`_show_warning`), which rich then writes above the bar: printed by another
+    console, a warning landed at the end of the bar's line on a terminal. stdout keeps
+    the results (tables, JSON)."""
     bar = Progress(
         TextColumn("{task.description}", style="bold", markup=False), BarColumn(),
         MofNCompleteColumn(), TextColumn(unit, markup=False), TimeElapsedColumn(),
         TextColumn("ETA"), TimeRemainingColumn(),
-        console=err_console if to_stderr else console, transient=False,
+        console=err_console, transient=False,
     )
     task = bar.add_task(label, total=None)
     started = False

@@ -36,7 +36,7 @@ def optimize_cmd(
 
     for path in figure_files(plot) if plot is not None else ():
         check_output(path, folder=False, option="--plot")
-    with progress_bar("optimize", unit="starts + simulations", to_stderr=as_json) as update:
+    with progress_bar("optimize", unit="starts + simulations") as update:
         res = optimize_setting(file, simulate=simulate, progress=update)
     spec = res.problem.spec
     figures = plot_reconfiguration(res, plot) if plot is not None else {}

@@ -168,7 +168,7 @@ def sweep_cmd(
     from ..studies.sweep import run_study
 
     now, small = _compile_plan(study, workers, scheduler)
-    with progress_bar(study.stem, to_stderr=as_json) as update:
+    with progress_bar(study.stem) as update:
         res = run_study(study, out, resume=resume, overwrite=overwrite, csv=csv,
                         workers=workers, scheduler=scheduler, chunk_size=chunk_size,
                         progress=update,
@@ -276,7 +276,7 @@ def reproduce_cmd(
         compile_ahead(_evaluate_one, impact_kernel)
     counts: dict[str, tuple[int, int]] = {}  # study -> (done, total): one bar for all
 
-    with progress_bar("reproduce", to_stderr=as_json) as update:
+    with progress_bar("reproduce") as update:
         def progress(name: str, done: int, total: int) -> None:
             counts[name] = (done, total)
             update(sum(d for d, _ in counts.values()), sum(t for _, t in counts.values()))

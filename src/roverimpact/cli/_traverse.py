@@ -145,7 +145,7 @@ def traverse_cmd(
     check_output(out, folder=True)
     with staged_folder(out, TRAVERSE_FILES, ("manifest.json", "traverse.toml"),
                        "traverse") as work:
-        with progress_bar(config.stem, unit="stations", to_stderr=as_json) as update:
+        with progress_bar(config.stem, unit="stations") as update:
             # compiled once the inputs are checked: a bad path is refused at once
             res = run_traverse(config, work, workers=workers, scheduler=scheduler, csv=csv,
                                progress=update,

@@ -68,7 +68,7 @@ def trust_cmd(
     grid = grid_from_options(laws.split(",") if laws else None, _floats(k, "k"),
                              _floats(e, "e"), quick=quick)
     try:
-        with progress_bar("trust map", unit="runs", to_stderr=as_json or as_csv) as update:
+        with progress_bar("trust map", unit="runs") as update:
             res = trust_map(study, out, grid=grid, quick=quick, workers=workers,
                             resume=resume, overwrite=overwrite, progress=update,
                             engines=engines)
