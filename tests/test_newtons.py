@@ -155,6 +155,33 @@ def test_a_g_not_symmetric_positive_semidefinite_is_refused(no_kernel, entry, va
         reduced_impact_batch(G, _B2, _L2, _R2, t_max=0.05, impact=0, integrator=integrator)
 
 
+@pytest.mark.parametrize(("change", "match"), [
+    ({"G": [[-2.0, 0.5], [0.5, 1.0]]}, r"G is not positive semi-definite"),
+    ({"G": [[2.0, 3.0], [0.5, 1.0]]}, r"G is not symmetric"),
+    ({"G": [[np.nan, 0.5], [0.5, 1.0]]}, r"G contains NaN or inf"),
+    ({"b": [np.inf, 0.0]}, r"b contains NaN or inf"),
+    ({"t_max": np.nan}, r"t_max must be a finite time > 0")])
+def test_reduced_impact_lsoda_refuses_what_the_compiled_methods_refuse(change, match):
+    """reduced_impact's LSODA path (its default) took a G with a negative diagonal, an
+    asymmetric G or NaN in G or b unchecked, where the compiled methods refuse them (the
+    LSODA run then integrated no mechanical system, or failed inside scipy)."""
+    args = {"G": _G2[0], "b": _B2[0], "t_max": 0.05, **change}
+    with pytest.raises(InputError, match=match):
+        reduced_impact(np.array(args["G"]), np.array(args["b"]),
+                       [KelvinVoigt(k=1e5, c=50.0)] * 2, [0.3, 0.1], _R2[0],
+                       t_max=args["t_max"], impact=0)
+
+
+@pytest.mark.parametrize(("name", "shape"), [("b", (3,)), ("rate0", (2, 3)), ("L", (2, 4))])
+def test_batch_inputs_that_do_not_broadcast_to_g_are_named(no_kernel, name, shape):
+    """A b, rate0 or L that does not broadcast to G's (batch, rows) raised numpy's
+    "operands could not be broadcast together", naming neither the input nor the shape."""
+    args = {"b": _B2, "rate0": _R2, "L": _L2, name: np.ones(shape)}
+    with pytest.raises(InputError, match=rf"{name} must broadcast to \(2, 2"):
+        reduced_impact_batch(_G2, args["b"], args["L"], args["rate0"], t_max=0.05,
+                             impact=0)
+
+
 def test_a_g_semidefinite_or_asymmetric_to_rounding_is_accepted():
     """The tolerance is G's rounding (1e-8 of its largest diagonal): a singular G (two
     rows through the same point) and an asymmetry or negative eigenvalue of 1e-12 pass;

@@ -233,6 +233,28 @@ def _impact_row(impact, m: int) -> int:
     return int(impact) % m
 
 
+def _broadcast(x, name: str, shape: tuple[int, ...]) -> np.ndarray:
+    """``x`` as a C float array of ``shape``, or one InputError naming it (numpy's
+    "operands could not be broadcast together" named neither the input nor the shape)."""
+    x = np.asarray(x, float)
+    try:
+        return np.ascontiguousarray(np.broadcast_to(x, shape))
+    except ValueError:
+        raise InputError(f"{name} must broadcast to {shape} (batch, rows"
+                         f"{', law' if len(shape) == 3 else ''}) to match G, got "
+                         f"{x.shape}") from None
+
+
+def _check_t_max(t_max) -> None:
+    if not (isinstance(t_max, (int, float, np.integer, np.floating))
+            and math.isfinite(t_max) and t_max > 0):
+        raise InputError(f"t_max must be a finite time > 0 [s], got {t_max!r}")
+
+
+#: What G is, for the messages of :func:`~roverimpact._validation.check_psd`
+_G_IS = "the rows' inverse mass A M^-1 A^T"
+
+
 def _check_batch(G, b, L, rate0, t_max) -> None:
     """:func:`reduced_impact_batch`'s inputs: finite arrays, each item's ``G`` symmetric
     positive semi-definite, a finite ``t_max`` > 0, each law's ``k >= 0`` and ``n > 0``.
@@ -241,12 +263,10 @@ def _check_batch(G, b, L, rate0, t_max) -> None:
     result, ``ZeroDivisionError``, ``ValueError``), or (a G with a negative eigenvalue:
     a row whose gap accelerates into the contact that pushes it) the Runge-Kutta returns
     an infinite force and the Rosenbrock pair never ends."""
-    if not (isinstance(t_max, (int, float, np.integer, np.floating))
-            and math.isfinite(t_max) and t_max > 0):
-        raise InputError(f"t_max must be a finite time > 0 [s], got {t_max!r}")
+    _check_t_max(t_max)
     for name, x, core in (("G", G, 2), ("b", b, 1), ("L", L, 2), ("rate0", rate0, 1)):
         check_finite(x, name, core)
-    check_psd(G, "G", "the rows' inverse mass A M^-1 A^T")
+    check_psd(G, "G", _G_IS)
     if np.any(L[..., 0] < 0.0) or np.any(~(L[..., 1] > 0.0)):
         raise InputError("each row's law (k, n, a, c, f0) needs a stiffness k >= 0 and an "
                          "exponent n > 0")
@@ -294,9 +314,8 @@ def reduced_impact_batch(G, b, L, rate0, *, t_max: float, impact: int = -1,
     G = np.ascontiguousarray(G, dtype=float)
     if G.ndim != 3 or G.shape[1] != G.shape[2]:
         raise InputError(f"G must have shape (B, m, m), got {G.shape}")
-    b, rate0 = (np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), G.shape[:2]))
-                for x in (b, rate0))
-    L = np.ascontiguousarray(np.broadcast_to(np.asarray(L, float), (*G.shape[:2], 5)))
+    b, rate0 = (_broadcast(x, name, G.shape[:2]) for x, name in ((b, "b"), (rate0, "rate0")))
+    L = _broadcast(L, "L", (*G.shape[:2], 5))
     B, m = b.shape
     o = _impact_row(impact, m)
     _check_batch(G, b, L, rate0, t_max)
@@ -385,6 +404,10 @@ def reduced_impact(G, b, laws, v_i, rate0, *, t_max: float, impact: int = -1,
     m = b.shape[0]
     if G.shape != (m, m):
         raise InputError(f"G must be ({m}, {m}) to match b, got {G.shape}")
+    _check_t_max(t_max)  # (the compiled methods check it again, with the laws)
+    check_finite(G, "G", 2)
+    check_finite(b, "b", 1)
+    check_psd(G, "G", _G_IS)
     laws = [law if not isinstance(law, ContactLaw) and callable(getattr(law, "force", None))
             else check_law(law) for law in laws]
     v_i = np.broadcast_to(np.asarray(v_i, float), (m,)).copy()
