@@ -182,8 +182,9 @@ def run_builtin_studies(
 
 def _cost(study) -> float:
     """A study's relative cost for the order of :func:`_side_by_side` (longest first): its
-    cases, a case of the 3-D rover counted twice (0.46 s a case against 0.20-0.25 s for
-    the 2-D rover's, in a full reproduction on the 2-core machine)."""
+    cases, a case of the 3-D rover counted twice (its study's ``elapsed_s`` in the
+    manifests of a full reproduction, 2026-11-29: 0.46 s a case, against 0.20-0.25 s for
+    the 2-D rover's)."""
     model = study.base.get("model", {})
     name = model.get("name") if isinstance(model, dict) else model
     return study.n_cases() * (1.0 if name == "rover2d" else 2.0)
