@@ -108,7 +108,8 @@ import numpy as np
 import pandas as pd
 from scipy import linalg, optimize
 
-from ...contact import KelvinVoigt, achieved_restitution, predict
+from ...contact import HuntCrossleyFamily, KelvinVoigt, achieved_restitution, predict
+from ...contact.hunt_crossley import family_force
 from ...energy import effective_mass
 from ...exceptions import ConfigError, InputError, SolverError
 from ...models.export_mjcf import (
@@ -245,13 +246,6 @@ def check_frictionless(mu: float) -> None:
         raise ConfigError(f"engine 'mujoco_laws' (contact='laws') applies frictionless "
                           f"contact forces: it needs mu = 0, got mu = {mu} (engine "
                           "'mujoco' approximates friction, 'own' models it)")
-
-
-def _cross(a, b):
-    """a x b over the last axis (numpy's cross costs 30 us a call; this runs per step)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _obstacle_frame(beta: float):
@@ -561,31 +555,123 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
     wheel_body = m.geom_bodyid[gid]
     wheel_root = m.body_rootid[wheel_body]
 
-    def applied_forces() -> tuple[np.ndarray, bool]:
-        """contact="laws": normal forces (planes, wheels) of the laws at MuJoCo's current
-        state (after mj_step1), applied to the wheel bodies at the contact points; and
-        whether a wheel is inside the obstacle face."""
-        c = d.geom_xpos[gid]
+    # contact="laws": what applied_forces needs, bound once (it runs once per MuJoCo step:
+    # Python on lists for the few wheels, numpy only where the bits depend on it)
+    cvel_d, stc_d, xipos_d, xfrc_d = d.cvel, d.subtree_com, d.xipos, d.xfrc_applied
+    N_l = sys.N.tolist()
+    off_l = sys.offsets.tolist()
+    rad_l = radii.tolist()
+    zmax_l = sys.z_max.tolist()
+    bounded = sys.bounded
+    # pairs a plane can touch: (plane, wheel, z_max, height of c - r n over c)
+    pair_geom = [(k_, w, zmax_l[k_], rad_l[w] * N_l[k_][2]) for k_ in range(npl)
+                 for w in range(nw) if sys.touch[k_][w] or not bounded]
+    laws = [p.law for p in sys.planes]
+    # how each plane's law is evaluated: "family" (HuntCrossleyFamily.force, one exponent
+    # for every plane: one family_force call for all pairs, parameters per pair), "kv"
+    # (KelvinVoigt.force in Python floats: k d + c d' elementwise, the same operations),
+    # else the law's own force per plane
+    family = (all(isinstance(law, HuntCrossleyFamily)
+                  and type(law).force is HuntCrossleyFamily.force for law in laws)
+              and len({law.n for law in laws}) == 1)
+    fam_n = float(laws[0].n) if family else None
+    fam_kz = [(float(law.k), float(law.z)) for law in laws] if family else None
+    is_kv = [type(law).force is KelvinVoigt.force for law in laws]
+    # xfrc_applied rows: the wheel bodies (first occurrence order) and their wheels
+    bodies = list(dict.fromkeys(wheel_body.tolist()))
+    body_rows = np.array(bodies)
+    wheels_of = ([[w for w in range(nw) if wheel_body[w] == b] for b in bodies]
+                 if len(bodies) < nw else None)
+    zero6 = [0.0] * 6
+
+    def applied_forces() -> tuple[list, bool]:
+        """contact="laws": normal forces (planes x wheels, flat) of the laws at MuJoCo's
+        current state (after mj_step1), applied to the wheel bodies at the contact points;
+        and whether a wheel is inside the obstacle face."""
+        c = xpos_d[gid]
+        G = (sys.N @ c.T).tolist()                # as sys.gaps_of_centres (same matmul)
+        cl = c.tolist()
+        on = []                                   # (plane, wheel, delta) in contact
+        for k_, w, zm, rnz in pair_geom:
+            cw = cl[w]
+            g = G[k_][w] - off_l[k_] - rad_l[w]
+            if g < 0.0 and (not bounded or cw[2] - rnz <= zm):
+                on.append((k_, w, -g))
+        f_n = [0.0] * (npl * nw)
+        if not on:
+            xfrc_d[body_rows] = 0.0
+            return f_n, False
         # velocity of the sphere centres from MuJoCo's com-based body velocities (as
         # mj_objectVelocity): v = v_o + w x (c - o), o the subtree com of the body's root
-        cvel = d.cvel[wheel_body]
-        vc = cvel[:, 3:] + _cross(cvel[:, :3], c - d.subtree_com[wheel_root])
-        gap = sys.gaps_of_centres(c)
-        delta = np.where(np.isfinite(gap), -gap, -1.0)
-        rate = -(sys.N @ vc.T)           # a sphere's contact point moves along n as its centre
-        f_n = np.zeros((npl, nw))
-        on = delta > 0.0
-        for k_ in np.flatnonzero(on.any(axis=1)):
-            law = sys.planes[k_].law
-            f_n[k_, on[k_]] = np.maximum(np.asarray(
-                law.force(delta[k_][on[k_]], rate[k_][on[k_]], sys.planes[k_].v_i), float), 0.0)
-        # force f n at the contact point c - r n: xfrc_applied takes it at the body's com
-        F = f_n[:, :, None] * sys.N[:, None, :]                       # (planes, wheels, 3)
-        arm = (c - d.xipos[wheel_body])[None] - radii[None, :, None] * sys.N[:, None, :]
-        wrench = np.concatenate([F.sum(axis=0), _cross(arm, F).sum(axis=0)], axis=1)
-        d.xfrc_applied[wheel_body] = 0.0
-        np.add.at(d.xfrc_applied, wheel_body, wrench)
-        return f_n, bool(on[io].any())
+        cv = cvel_d[wheel_body].tolist()
+        so = stc_d[wheel_root].tolist()
+        vc = []
+        for (w0, w1, w2, v0, v1, v2), (c0, c1, c2), (o0, o1, o2) in zip(cv, cl, so, strict=True):
+            r0, r1, r2 = c0 - o0, c1 - o1, c2 - o2
+            vc.append([v0 + (w1 * r2 - w2 * r1), v1 + (w2 * r0 - w0 * r2),
+                       v2 + (w0 * r1 - w1 * r0)])
+        R = (sys.N @ np.array(vc).T).tolist()    # rate = -n . v (same matmul as before)
+        # the laws' forces, clamped at 0
+        if family:
+            v_i = [p.v_i for p in sys.planes]
+            if len({k_ for k_, _w, _d in on}) == 1:
+                k_ = on[0][0]
+                kk, zz = fam_kz[k_]
+                raw = family_force(kk, fam_n, zz, np.array([x for _k, _w, x in on]),
+                                   np.array([-R[k_][w] for _k, w, _d in on]), v_i[k_])
+            else:
+                par = np.array([[fam_kz[k_][0] for k_, _w, _d in on],
+                                [fam_kz[k_][1] for k_, _w, _d in on],
+                                [v_i[k_] for k_, _w, _d in on],
+                                [x for _k, _w, x in on],
+                                [-R[k_][w] for k_, w, _d in on]])
+                raw = family_force(par[0], fam_n, par[1], par[3], par[4], par[2])
+            fl = [max(x, 0.0) for x in raw.tolist()]
+        else:
+            fl = []
+            for k_ in range(npl):
+                sel = [(w, x) for kk, w, x in on if kk == k_]
+                if not sel:
+                    continue
+                law = laws[k_]
+                if is_kv[k_]:
+                    kk, cc = law.k, law.c
+                    fl += [max(kk * x + cc * -R[k_][w], 0.0) for w, x in sel]
+                else:
+                    raw = law.force(np.array([x for _w, x in sel]),
+                                    np.array([-R[k_][w] for w, _x in sel]),
+                                    sys.planes[k_].v_i)
+                    fl += np.maximum(np.asarray(raw, float), 0.0).tolist()
+        # force f n at the contact point c - r n: xfrc_applied takes it at the body's com;
+        # summed over the planes in plane order
+        xi = xipos_d[wheel_body].tolist()
+        wrench = [None] * nw
+        for (k_, w, _x), f in zip(on, fl, strict=True):
+            f_n[k_ * nw + w] = f
+            n0, n1, n2 = N_l[k_]
+            F0, F1, F2 = f * n0, f * n1, f * n2
+            r = rad_l[w]
+            cw, xw = cl[w], xi[w]
+            a0, a1, a2 = (cw[0] - xw[0]) - r * n0, (cw[1] - xw[1]) - r * n1, \
+                (cw[2] - xw[2]) - r * n2
+            T0, T1, T2 = a1 * F2 - a2 * F1, a2 * F0 - a0 * F2, a0 * F1 - a1 * F0
+            s = wrench[w]
+            if s is None:       # 0.0 + as np.add.at on zeroed rows (a -0.0 becomes 0.0)
+                wrench[w] = (0.0 + F0, 0.0 + F1, 0.0 + F2, 0.0 + T0, 0.0 + T1, 0.0 + T2)
+            else:               # the next plane
+                wrench[w] = (s[0] + F0, s[1] + F1, s[2] + F2, s[3] + T0, s[4] + T1, s[5] + T2)
+        if wheels_of is None:   # one wheel per body, in wheel order
+            rows = [z if z is not None else zero6 for z in wrench]
+        else:                   # as np.add.at: each body's wheels added in wheel order
+            rows = []
+            for ws in wheels_of:
+                acc = zero6
+                for w in ws:
+                    if wrench[w] is not None:
+                        acc = [x + y for x, y in zip(acc, wrench[w], strict=True)]
+                rows.append(acc)
+        xfrc_d[body_rows] = rows
+        return f_n, any(k_ == io for k_, _w, _x in on)
 
     def advance():
         """One MuJoCo step from the current state; contact="laws": the laws' forces and
