@@ -337,6 +337,139 @@ def test_transposes_and_column_slices_take_the_one_system_kernel_as_a_copy(monke
     assert all(a.flags.c_contiguous for t in tried for a in t[:3])
 
 
+def _small_batch_cases():
+    """(label, args, kwargs, takes the small-batch fast path) for
+    :func:`test_small_batch_fast_path_equals_the_general_path`."""
+    rng = np.random.default_rng(11)
+    n, m, k = 6, 2, 3
+    M = np.stack([random_spd(rng, n) for _ in range(64)])
+    A = rng.standard_normal((64, m, n))
+    v = rng.standard_normal((64, n))
+    M3, A3, v3 = M[:k], A[:k], v[:k]
+
+    def item1(arr, fn):  # a copy of arr with item 1 changed by fn
+        out = arr.copy()
+        out[1] = fn(out[1])
+        return out
+
+    dep = item1(A3, lambda a: np.stack([a[0], 2.0 * a[0]]))
+    huge_M, huge_A = item1(M3, lambda x: 2.0 * np.eye(n)), item1(A3, lambda a: np.eye(n)[1:3])
+    near_v, over_v = item1(v3, lambda x: 0 * x), item1(v3, lambda x: 0 * x)
+    near_v[1, 0] = 0.9e154  # T = 8.1e307, just below T_LIMIT (T_c = 0)
+    over_v[1, 0] = 1e154  # 2 T = 2e308 overflows
+    asym = item1(M3, lambda x: x + np.triu(np.ones((n, n)), 1))
+    wide_A = np.concatenate([A3, A3], axis=-1)
+    return [
+        ("equal batches", (M3, A3, v3), {}, True),
+        ("no velocities", (M3, A3, v3), {"want_velocities": False}, True),
+        ("rtol", (M3, A3, v3), {"rtol": 1e-3}, True),
+        ("2-D batch", (M[:6].reshape(2, 3, n, n), A[:6].reshape(2, 3, m, n),
+                       v[:6].reshape(2, 3, n)), {}, True),
+        ("one item", (M[:1], A[:1], v[:1]), {}, True),
+        ("63 items", (M[:63], A[:63], v[:63]), {}, True),
+        ("Fortran-ordered M", (np.asfortranarray(M3), A3, v3), {}, True),
+        ("column slice of A, strided v", (M3, wide_A[..., :n], np.repeat(v3, 2, -1)[:, ::2]),
+         {}, True),
+        ("dependent rows in item 1", (M3, dep, v3), {}, True),
+        ("zero rows in item 1", (M3, item1(A3, lambda a: 0 * a), v3), {}, True),
+        ("rows of 1e-200 in item 1", (M3, item1(A3, lambda a: 1e-200 * a), v3), {}, True),
+        ("T just below T_LIMIT", (huge_M, huge_A, near_v), {}, True),
+        ("T overflows, item 1", (huge_M, huge_A, over_v), {}, True),
+        ("NaN in v, item 1", (M3, A3, item1(v3, lambda x: x + np.nan)), {}, True),
+        ("inf in A, item 1", (M3, item1(A3, lambda a: a + np.inf), v3), {}, True),
+        ("NaN in M, item 1", (item1(M3, lambda x: x + np.nan), A3, v3), {}, True),
+        ("M not SPD, item 1", (item1(M3, lambda x: -x), A3, v3), {}, True),
+        ("M not symmetric, item 1", (asym, A3, v3), {}, True),
+        ("energy overflows, item 1", (item1(M3, lambda x: 1e300 * x),
+                                      A3, item1(v3, lambda x: 1e10 * x)), {}, True),
+        ("64 items (the lanes)", (M, A, v), {}, False),
+        ("shared M", (M3[0], A3, v3), {}, False),
+        ("broadcast v", (M3, A3, v3[:1]), {}, False),
+        ("float32", (M3.astype(np.float32), A3.astype(np.float32), v3.astype(np.float32)),
+         {}, False),
+        ("lists", (M3.tolist(), A3.tolist(), v3.tolist()), {}, False),
+        ("no rows", (M3, A3[:, :0], v3), {}, False),
+        ("empty batch", (M3[:0], A3[:0], v3[:0]), {}, False),
+        ("A of the wrong width", (M3, A3[..., :-1].copy(), v3), {}, False),
+        ("v of the wrong length", (M3, A3, v3[..., :-1].copy()), {}, False),
+        ("batch shapes that differ", (M3, A3[:2], v3), {}, False),
+    ]
+
+
+@pytest.mark.parametrize("label, args, kwargs, fast", _small_batch_cases(),
+                         ids=[c[0] for c in _small_batch_cases()])
+def test_small_batch_fast_path_equals_the_general_path(monkeypatch, label, args, kwargs,
+                                                        fast):
+    """Batches of 1 to 63 items of float64 arrays of one batch shape skip the broadcasting
+    bookkeeping (``energy._partition_small``; 2 items, n = 18, m = 4: 47 us a call before,
+    about 18 after, ``benchmarks/bench_single.py``): the same result to the bit, and the
+    same error, as the general path, for inputs that take it and inputs that do not."""
+    import warnings
+
+    from roverimpact import energy
+
+    taken = []
+    real = energy._partition_small
+
+    def spy(*a):
+        try:
+            out = real(*a)
+        except InputError:
+            taken.append(True)
+            raise
+        taken.append(out is not None)
+        return out
+
+    def run():
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                return ri.partition(*args, **kwargs)
+        except InputError as e:
+            return f"InputError: {e}"
+
+    monkeypatch.setattr(energy, "_partition_small", spy)
+    got = run()
+    assert any(taken) == fast, label
+    monkeypatch.setattr(energy, "_partition_small", lambda *a: None)  # the general path
+    want = run()
+    if isinstance(want, str) or isinstance(got, str):
+        assert got == want
+        return
+    for f in ("T", "T_c", "T_a", "v_c", "v_a", "rank"):
+        x, y = getattr(got, f), getattr(want, f)
+        if y is None:
+            assert x is None, f
+            continue
+        assert type(x) is type(y) and x.dtype == y.dtype and x.shape == y.shape, f
+        assert x.tobytes() == y.tobytes(), f  # to the bit (-0.0 too)
+
+
+def test_small_batch_fast_path_against_the_textbook_formula():
+    """The small-batch path's numbers against T_c = 1/2 (A v)^T (A M^-1 A^T)^-1 (A v) and
+    v_c = M^-1 A^T (A M^-1 A^T)^-1 A v by numpy's LAPACK, item by item (full-rank rows),
+    for a (2, 3) batch."""
+    rng = np.random.default_rng(12)
+    n, m = 7, 3
+    M = np.stack([random_spd(rng, n) for _ in range(6)]).reshape(2, 3, n, n)
+    A = rng.standard_normal((2, 3, m, n))
+    v = rng.standard_normal((2, 3, n))
+    p = ri.partition(M, A, v)
+    assert p.T_c.shape == p.rank.shape == (2, 3) and p.v_c.shape == (2, 3, n)
+    for i in range(2):
+        for j in range(3):
+            Mi, Ai, vi = M[i, j], A[i, j], v[i, j]
+            MiA = np.linalg.solve(Mi, Ai.T)
+            lam = np.linalg.solve(Ai @ MiA, Ai @ vi)
+            T = 0.5 * vi @ Mi @ vi
+            assert p.T[i, j] == pytest.approx(T, rel=1e-12)
+            assert p.T_c[i, j] == pytest.approx(0.5 * (Ai @ vi) @ lam, rel=1e-9)
+            assert p.T_a[i, j] == pytest.approx(T - p.T_c[i, j], rel=1e-9, abs=1e-12 * T)
+            assert p.rank[i, j] == m
+            np.testing.assert_allclose(p.v_c[i, j], MiA @ lam, rtol=1e-9, atol=1e-12)
+            np.testing.assert_array_equal(p.v_a[i, j], vi - p.v_c[i, j])
+
+
 def test_single_system_result_is_a_normal_partition():
     """The one-system path builds its result without ``__init__``: the same type, fields,
     repr and frozenness as a Partition made the usual way."""

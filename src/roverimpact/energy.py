@@ -287,18 +287,23 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     if not ok:
         rtol = _validation.check_rtol(rtol)  # says what is wrong (or a 1-item array)
     if (type(M) is _NDARRAY and type(A) is _NDARRAY and type(v) is _NDARRAY
-            and M.ndim == 2 and A.ndim == 2 and v.ndim == 1
             and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8):
-        if not (M.flags.c_contiguous and A.flags.c_contiguous and v.flags.c_contiguous):
-            # a transpose or a column slice: a C copy costs a microsecond, numba refusing
-            # the layout (the TypeError below) about 80
-            M, A, v = np.ascontiguousarray(M), np.ascontiguousarray(A), np.ascontiguousarray(v)
-        try:  # one system: the kernel on the arrays as they are
-            single = _partition_single(M, A, v, rtol, want_velocities)
-        except _NOT_ONE_SYSTEM:  # an argument numba refuses all the same
-            single = None
-        if single is not None and (single.rank or row_scale(A) is None):
-            return single  # (rank 0: zero rows, or rows far from order 1, scaled below)
+        if M.ndim == 2 and A.ndim == 2 and v.ndim == 1:
+            if not (M.flags.c_contiguous and A.flags.c_contiguous and v.flags.c_contiguous):
+                # a transpose or a column slice: a C copy costs a microsecond, numba
+                # refusing the layout (the TypeError below) about 80
+                M, A, v = (np.ascontiguousarray(M), np.ascontiguousarray(A),
+                           np.ascontiguousarray(v))
+            try:  # one system: the kernel on the arrays as they are
+                single = _partition_single(M, A, v, rtol, want_velocities)
+            except _NOT_ONE_SYSTEM:  # an argument numba refuses all the same
+                single = None
+            if single is not None and (single.rank or row_scale(A) is None):
+                return single  # (rank 0: zero rows, or rows far from order 1, scaled below)
+        elif M.ndim > 2:
+            small = _partition_small(M, A, v, float(rtol), bool(want_velocities))
+            if small is not None:
+                return small
     if v is None:
         raise InputError("v is required: the generalized velocity (..., n)")
     M, A, v, batch, n, m = prepare(M, A, v)
@@ -379,6 +384,75 @@ def _partition_items(M, A, v, Mf, Af, vf, iM, iA, iv, batch, rtol, want_velociti
     return _new_partition(scalarize(T, batch), scalarize(out[:, _one.OUT_TC], batch),
                           scalarize(out[:, _one.OUT_TA], batch), v_c, v_a,
                           scalarize(out[:, _one.OUT_RANK].astype(np.int64), batch))
+
+
+def _partition_small(M, A, v, rtol, want_velocities) -> Partition | None:
+    """:func:`partition` of a small batch without broadcasting: float64 arrays M
+    (..., n, n), A (..., m, n) and v (..., n) of one batch shape of 1 to
+    ``LANES_MIN_BATCH - 1`` items and m >= 1; None for anything else (the general path
+    then takes it). What :func:`_partition_batch` and :func:`_partition_items` do for
+    them (the same kernel on the same numbers, the same checks and errors), without the
+    broadcasting bookkeeping, whose twenty-odd small numpy calls cost most of a call of
+    a few items (n = 18, m = 4, 2 items: about 47 us against 10 for the kernel;
+    ``benchmarks/bench_single.py``): the item index is made once per batch size, and one
+    comparison screens the results: an item that fails its checks has NaN energies, and
+    ``T`` and ``T_c`` below ``T_LIMIT`` (half the largest float64) make ``T + T_c``
+    finite; :func:`_check_items` runs on any other item (and raises what the general
+    path raises, or nothing for an energy of exactly ``T_LIMIT``)."""
+    batch = M.shape[:-2]
+    n = M.shape[-1]
+    if (A.shape[:-2] != batch or v.shape[:-1] != batch or M.shape[-2] != n
+            or A.shape[-1] != n or v.shape[-1] != n or n == 0):
+        return None
+    nb = _size(batch)
+    m = A.shape[-2]
+    if not (0 < nb < LANES_MIN_BATCH and m):
+        return None
+    if M.flags.c_contiguous and A.flags.c_contiguous and v.flags.c_contiguous:
+        Mc, Ac, vc = M, A, v
+    else:  # Fortran order, transposes, slices: C copies, as _partition_batch makes
+        Mc, Ac, vc = np.ascontiguousarray(M), np.ascontiguousarray(A), np.ascontiguousarray(v)
+    index = _ITEMS_INDEX[nb]
+    if index is None:
+        index = _items_index(nb)
+    V = _one.OUT_V
+    out = np.empty((nb, V + 2 * n) if want_velocities else (nb, V))
+    _one.partition_kernel.get(nb)(Mc.reshape(-1, n), Ac.reshape(-1, n), vc.reshape(-1),
+                                  index, m, rtol, want_velocities, out)
+    if np.count_nonzero(out[:, _one.OUT_T:_one.OUT_TC + 1] < T_LIMIT) != 2 * nb:
+        i = index[0]  # an item failed its checks, or T + T_c may overflow: the checks
+        _check_items(out[:, _one.OUT_STATUS], out[:, _one.OUT_T], out[:, _one.OUT_TC],
+                     M, A, v, i, i, i, batch)
+    rank = out[:, _one.OUT_RANK].astype(np.int64)
+    if np.count_nonzero(rank) != nb:  # zero rows, or rows far from order 1: scaled
+        scale = row_scale(A)
+        if scale is not None:
+            return _partition_batch(M, A / scale[..., None, None], v, batch, n, m, rtol,
+                                    want_velocities)
+    T, Tc, Ta = out[:, _one.OUT_T], out[:, _one.OUT_TC], out[:, _one.OUT_TA]
+    if want_velocities:
+        v_c, v_a = out[:, V:V + n], out[:, V + n:]
+    else:
+        v_c = v_a = None
+    if len(batch) > 1:
+        T, Tc, Ta, rank = (T.reshape(batch), Tc.reshape(batch), Ta.reshape(batch),
+                           rank.reshape(batch))
+        if want_velocities:
+            v_c, v_a = v_c.reshape(*batch, n), v_a.reshape(*batch, n)
+    return _new_partition(T, Tc, Ta, v_c, v_a, rank)
+
+
+#: the item index ``(3, nb)`` of a batch of nb items without broadcasting (every row
+#: 0 .. nb - 1), read-only, made on first use for each nb below ``LANES_MIN_BATCH``
+_ITEMS_INDEX: list[np.ndarray | None] = [None] * LANES_MIN_BATCH
+
+
+def _items_index(nb: int) -> np.ndarray:
+    index = np.empty((3, nb), dtype=np.int64)
+    index[:] = np.arange(nb, dtype=np.int64)
+    index.flags.writeable = False
+    _ITEMS_INDEX[nb] = index
+    return index
 
 
 #: What numba raises for arguments outside the one-system kernel's signature. Numba
