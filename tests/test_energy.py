@@ -383,8 +383,19 @@ def _small_batch_cases():
         ("energy overflows, item 1", (item1(M3, lambda x: 1e300 * x),
                                       A3, item1(v3, lambda x: 1e10 * x)), {}, True),
         ("64 items (the lanes)", (M, A, v), {}, False),
-        ("shared M", (M3[0], A3, v3), {}, False),
-        ("broadcast v", (M3, A3, v3[:1]), {}, False),
+        ("shared M", (M3[0], A3, v3), {}, True),
+        ("shared A", (M3, A3[0], v3), {}, True),
+        ("shared M and v", (M3[0], A3, v3[0]), {}, True),
+        ("shared M, 2-D batch, no velocities", (M3[0], A[:6].reshape(2, 3, m, n),
+                                                v[:6].reshape(2, 3, n)),
+         {"want_velocities": False}, True),
+        ("shared M, NaN in v, item 1", (M3[0], A3, item1(v3, lambda x: x + np.nan)), {}, True),
+        ("shared M not SPD", (-M3[0], A3, v3), {}, True),
+        ("shared A of 1e-200", (M3, 1e-200 * A3[0], v3), {}, True),
+        ("shared M, A and v", (M3[0], A3[0], v3[0]), {}, False),
+        ("v of batch shape (1,)", (M3, A3, v3[:1]), {}, False),
+        ("A of batch shape (3,) against (2, 3)", (M[:6].reshape(2, 3, n, n), A3,
+                                                  v[:6].reshape(2, 3, n)), {}, False),
         ("float32", (M3.astype(np.float32), A3.astype(np.float32), v3.astype(np.float32)),
          {}, False),
         ("lists", (M3.tolist(), A3.tolist(), v3.tolist()), {}, False),
@@ -400,8 +411,8 @@ def _small_batch_cases():
                          ids=[c[0] for c in _small_batch_cases()])
 def test_small_batch_fast_path_equals_the_general_path(monkeypatch, label, args, kwargs,
                                                         fast):
-    """Batches of 1 to 63 items of float64 arrays of one batch shape skip the broadcasting
-    bookkeeping (``energy._partition_small``; 2 items, n = 18, m = 4: 47 us a call before,
+    """Batches of 1 to 63 items of float64 arrays of one batch shape (or one M, A or v for
+    all items) skip the broadcasting bookkeeping (``energy._partition_small``; 2 items, n = 18, m = 4: 47 us a call before,
     about 18 after, ``benchmarks/bench_single.py``): the same result to the bit, and the
     same error, as the general path, for inputs that take it and inputs that do not."""
     import warnings

@@ -300,7 +300,7 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
                 single = None
             if single is not None and (single.rank or row_scale(A) is None):
                 return single  # (rank 0: zero rows, or rows far from order 1, scaled below)
-        elif M.ndim > 2:
+        else:
             small = _partition_small(M, A, v, float(rtol), bool(want_velocities))
             if small is not None:
                 return small
@@ -387,21 +387,25 @@ def _partition_items(M, A, v, Mf, Af, vf, iM, iA, iv, batch, rtol, want_velociti
 
 
 def _partition_small(M, A, v, rtol, want_velocities) -> Partition | None:
-    """:func:`partition` of a small batch without broadcasting: float64 arrays M
-    (..., n, n), A (..., m, n) and v (..., n) of one batch shape of 1 to
-    ``LANES_MIN_BATCH - 1`` items and m >= 1; None for anything else (the general path
-    then takes it). What :func:`_partition_batch` and :func:`_partition_items` do for
-    them (the same kernel on the same numbers, the same checks and errors), without the
-    broadcasting bookkeeping, whose twenty-odd small numpy calls cost most of a call of
-    a few items (n = 18, m = 4, 2 items: about 47 us against 10 for the kernel;
-    ``benchmarks/bench_single.py``): the item index is made once per batch size, and one
-    comparison screens the results: an item that fails its checks has NaN energies, and
+    """:func:`partition` of a small batch: float64 arrays M (..., n, n), A (..., m, n) and
+    v (..., n) of one batch shape of 1 to ``LANES_MIN_BATCH - 1`` items (or none, for
+    one M, A or v shared by all items: no other broadcasting) and m >= 1; None for
+    anything else (the general path then takes it). What :func:`_partition_batch` and
+    :func:`_partition_items` do for them (the same kernel on the same numbers and item
+    index, the same checks and errors), without the broadcasting bookkeeping, whose
+    twenty-odd small numpy calls cost most of a call of a few items (n = 18, m = 4,
+    2 items: about 47 us against 7 for the kernel; ``benchmarks/bench_single.py``): the
+    item index is made once per batch size and sharing, and one comparison screens the
+    results: an item that fails its checks has NaN energies, and
     ``T`` and ``T_c`` below ``T_LIMIT`` (half the largest float64) make ``T + T_c``
     finite; :func:`_check_items` runs on any other item (and raises what the general
     path raises, or nothing for an energy of exactly ``T_LIMIT``)."""
-    batch = M.shape[:-2]
+    if M.ndim < 2 or A.ndim < 2 or v.ndim < 1:
+        return None
+    bM, bA, bv = M.shape[:-2], A.shape[:-2], v.shape[:-1]
+    batch = bM or bA or bv
     n = M.shape[-1]
-    if (A.shape[:-2] != batch or v.shape[:-1] != batch or M.shape[-2] != n
+    if (not batch or (bA and bA != batch) or (bv and bv != batch) or M.shape[-2] != n
             or A.shape[-1] != n or v.shape[-1] != n or n == 0):
         return None
     nb = _size(batch)
@@ -412,17 +416,22 @@ def _partition_small(M, A, v, rtol, want_velocities) -> Partition | None:
         Mc, Ac, vc = M, A, v
     else:  # Fortran order, transposes, slices: C copies, as _partition_batch makes
         Mc, Ac, vc = np.ascontiguousarray(M), np.ascontiguousarray(A), np.ascontiguousarray(v)
-    index = _ITEMS_INDEX[nb]
-    if index is None:
-        index = _items_index(nb)
+    if bM and bA and bv:
+        index = _ITEMS_INDEX[nb]
+        if index is None:
+            index = _items_index(nb)
+    else:  # one M, A or v shared by all items
+        index = _SHARED_INDEX.get((nb, bool(bM), bool(bA), bool(bv)))
+        if index is None:
+            index = _shared_index(nb, bool(bM), bool(bA), bool(bv))
     V = _one.OUT_V
     out = np.empty((nb, V + 2 * n) if want_velocities else (nb, V))
     _one.partition_kernel.get(nb)(Mc.reshape(-1, n), Ac.reshape(-1, n), vc.reshape(-1),
                                   index, m, rtol, want_velocities, out)
     if np.count_nonzero(out[:, _one.OUT_T:_one.OUT_TC + 1] < T_LIMIT) != 2 * nb:
-        i = index[0]  # an item failed its checks, or T + T_c may overflow: the checks
+        # an item failed its checks, or T + T_c may overflow: the checks
         _check_items(out[:, _one.OUT_STATUS], out[:, _one.OUT_T], out[:, _one.OUT_TC],
-                     M, A, v, i, i, i, batch)
+                     M, A, v, index[0], index[1], index[2], batch)
     rank = out[:, _one.OUT_RANK].astype(np.int64)
     if np.count_nonzero(rank) != nb:  # zero rows, or rows far from order 1: scaled
         scale = row_scale(A)
@@ -452,6 +461,21 @@ def _items_index(nb: int) -> np.ndarray:
     index[:] = np.arange(nb, dtype=np.int64)
     index.flags.writeable = False
     _ITEMS_INDEX[nb] = index
+    return index
+
+
+#: the item index of a batch of nb items where some of M, A and v have no batch axes
+#: (what :func:`flat_index` gives: zeros for those), by (nb, M, A, v batched)
+_SHARED_INDEX: dict[tuple[int, bool, bool, bool], np.ndarray] = {}
+
+
+def _shared_index(nb: int, *batched: bool) -> np.ndarray:
+    index = np.zeros((3, nb), dtype=np.int64)
+    for row, b in zip(index, batched, strict=True):
+        if b:
+            row[:] = np.arange(nb, dtype=np.int64)
+    index.flags.writeable = False
+    _SHARED_INDEX[(nb, *batched)] = index
     return index
 
 
