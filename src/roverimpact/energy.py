@@ -287,23 +287,25 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     if not ok:
         rtol = _validation.check_rtol(rtol)  # says what is wrong (or a 1-item array)
     if (type(M) is _NDARRAY and type(A) is _NDARRAY and type(v) is _NDARRAY
+            and M.ndim == 2 and A.ndim == 2 and v.ndim == 1
             and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8):
-        if M.ndim == 2 and A.ndim == 2 and v.ndim == 1:
-            if not (M.flags.c_contiguous and A.flags.c_contiguous and v.flags.c_contiguous):
-                # a transpose or a column slice: a C copy costs a microsecond, numba
-                # refusing the layout (the TypeError below) about 80
-                M, A, v = (np.ascontiguousarray(M), np.ascontiguousarray(A),
-                           np.ascontiguousarray(v))
-            try:  # one system: the kernel on the arrays as they are
-                single = _partition_single(M, A, v, rtol, want_velocities)
-            except _NOT_ONE_SYSTEM:  # an argument numba refuses all the same
-                single = None
-            if single is not None and (single.rank or row_scale(A) is None):
-                return single  # (rank 0: zero rows, or rows far from order 1, scaled below)
-        else:
-            small = _partition_small(M, A, v, float(rtol), bool(want_velocities))
-            if small is not None:
-                return small
+        if not (M.flags.c_contiguous and A.flags.c_contiguous and v.flags.c_contiguous):
+            # a transpose or a column slice: a C copy costs a microsecond, numba refusing
+            # the layout (the TypeError below) about 80
+            M, A, v = np.ascontiguousarray(M), np.ascontiguousarray(A), np.ascontiguousarray(v)
+        try:  # one system: the kernel on the arrays as they are
+            single = _partition_single(M, A, v, rtol, want_velocities)
+        except _NOT_ONE_SYSTEM:  # an argument numba refuses all the same
+            single = None
+        if single is not None and (single.rank or row_scale(A) is None):
+            return single  # (rank 0: zero rows, or rows far from order 1, scaled below)
+    elif (type(M) is _NDARRAY and type(A) is _NDARRAY and type(v) is _NDARRAY
+            and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8):
+        # a batch below LANES_MIN_BATCH items of one batch shape (or with one M, A or v
+        # for all items): the one-item kernel without the broadcasting bookkeeping
+        small = _partition_small(M, A, v, float(rtol), bool(want_velocities))
+        if small is not None:
+            return small
     if v is None:
         raise InputError("v is required: the generalized velocity (..., n)")
     M, A, v, batch, n, m = prepare(M, A, v)
@@ -396,10 +398,10 @@ def _partition_small(M, A, v, rtol, want_velocities) -> Partition | None:
     twenty-odd small numpy calls cost most of a call of a few items (n = 18, m = 4,
     2 items: about 47 us against 7 for the kernel; ``benchmarks/bench_single.py``): the
     item index is made once per batch size and sharing, and one comparison screens the
-    results: an item that fails its checks has NaN energies, and
-    ``T`` and ``T_c`` below ``T_LIMIT`` (half the largest float64) make ``T + T_c``
-    finite; :func:`_check_items` runs on any other item (and raises what the general
-    path raises, or nothing for an energy of exactly ``T_LIMIT``)."""
+    results: an item that fails its checks has NaN energies, and ``T`` and ``T_c`` below
+    ``T_LIMIT`` (half the largest float64) make ``T + T_c`` finite; :func:`_check_items`
+    runs on any other item (and raises what the general path raises, or nothing for an
+    energy of exactly ``T_LIMIT``)."""
     if M.ndim < 2 or A.ndim < 2 or v.ndim < 1:
         return None
     bM, bA, bv = M.shape[:-2], A.shape[:-2], v.shape[:-1]
