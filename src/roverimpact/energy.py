@@ -430,8 +430,10 @@ def _partition_small(M, A, v, rtol, want_velocities) -> Partition | None:
     out = np.empty((nb, V + 2 * n) if want_velocities else (nb, V))
     _one.partition_kernel.get(nb)(Mc.reshape(-1, n), Ac.reshape(-1, n), vc.reshape(-1),
                                   index, m, rtol, want_velocities, out)
-    if np.count_nonzero(out[:, _one.OUT_T:_one.OUT_TC + 1] < T_LIMIT) != 2 * nb:
-        # an item failed its checks, or T + T_c may overflow: the checks
+    if (np.count_nonzero(out[:, _one.OUT_STATUS])
+            or np.count_nonzero(out[:, _one.OUT_T:_one.OUT_TC + 1] < T_LIMIT) != 2 * nb):
+        # an item failed its checks (its status; NaN energies too), or T + T_c may
+        # overflow: the checks
         _check_items(out[:, _one.OUT_STATUS], out[:, _one.OUT_T], out[:, _one.OUT_TC],
                      M, A, v, index[0], index[1], index[2], batch)
     rank = out[:, _one.OUT_RANK].astype(np.int64)
