@@ -346,12 +346,14 @@ def progress_bar(label: str, unit: str = "cases"):
     Drawn on stderr, by the console that prints the command's warnings and notes
     (:func:`_show_warning`), which rich then writes above the bar: printed by another
     console, a warning landed at the end of the bar's line on a terminal. stdout keeps
-    the results (tables, JSON)."""
+    the results (tables, JSON). Not drawn where stderr is not a terminal (a log, a pipe):
+    there rich would write only the bar's last state, once, before the command's own
+    last lines (an error that is one line would be two)."""
     bar = Progress(
         TextColumn("{task.description}", style="bold", markup=False), BarColumn(),
         MofNCompleteColumn(), TextColumn(unit, markup=False), TimeElapsedColumn(),
         TextColumn("ETA"), TimeRemainingColumn(),
-        console=err_console, transient=False,
+        console=err_console, transient=False, disable=not err_console.is_terminal,
     )
     task = bar.add_task(label, total=None)
     started = False
