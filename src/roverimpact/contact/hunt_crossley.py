@@ -53,6 +53,7 @@ __all__ = [
     "LeeWang",
     "ZhiyingQishao",
     "family_force",
+    "one_family",
 ]
 
 
@@ -145,6 +146,19 @@ def family_force(k, n, z, delta, delta_dot, v_i):
     one ``n`` in one evaluation (the simulator's contact pairs), with the same bits.
     """
     return k * delta**n * (1.0 + z * delta_dot / v_i)
+
+
+def one_family(laws) -> bool:
+    """Whether the ``laws`` (at least one) are all of the Hunt–Crossley family, with the
+    family's own force (no subclass overriding it), and share one exponent ``n``: their
+    forces are then :func:`family_force` with each law's ``k`` and ``z``, so the pairs of
+    several laws can be evaluated in one call with the same bits (the own simulator's
+    right-hand side, the MuJoCo engine's ``contact="laws"`` step)."""
+    laws = list(laws)
+    return (bool(laws) and all(isinstance(law, HuntCrossleyFamily)
+                               and type(law).force is HuntCrossleyFamily.force
+                               for law in laws)
+            and len({law.n for law in laws}) == 1)
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..contact.hunt_crossley import HuntCrossleyFamily, family_force
+from ..contact.hunt_crossley import family_force, one_family
 from ..exceptions import ModelError
 from ..models.constraints import loop_jdot_v
 
@@ -470,7 +470,7 @@ class ContactSystem:
 
 class _Family:
     """The laws of the planes when all are Hunt–Crossley family laws with the family's force
-    and one exponent ``n`` (:func:`~roverimpact.contact.hunt_crossley.family_force`):
+    and one exponent ``n`` (:func:`~roverimpact.contact.hunt_crossley.one_family`):
     stiffness ``k`` and damping number ``z`` per plane."""
 
     def __init__(self, laws):
@@ -483,11 +483,7 @@ class _Family:
     def of(cls, planes):
         """The family of the planes' laws, or None."""
         laws = [p.law for p in planes]
-        if laws and all(isinstance(law, HuntCrossleyFamily)
-                        and type(law).force is HuntCrossleyFamily.force for law in laws) \
-                and len({law.n for law in laws}) == 1:
-            return cls(laws)
-        return None
+        return cls(laws) if one_family(laws) else None
 
     def per_pair(self, v_i, nw):
         """(3, planes * nw): ``k``, ``z`` and ``v_i`` of every pair (flat index

@@ -108,8 +108,8 @@ import numpy as np
 import pandas as pd
 from scipy import linalg, optimize
 
-from ...contact import HuntCrossleyFamily, KelvinVoigt, achieved_restitution, predict
-from ...contact.hunt_crossley import family_force
+from ...contact import KelvinVoigt, achieved_restitution, predict
+from ...contact.hunt_crossley import family_force, one_family
 from ...energy import effective_mass
 from ...exceptions import ConfigError, InputError, SolverError
 from ...models.export_mjcf import (
@@ -571,9 +571,7 @@ def simulate_impact_mujoco(mbm, config: SimulationConfig | dict | None = None, *
     # for every plane: one family_force call for all pairs, parameters per pair), "kv"
     # (KelvinVoigt.force in Python floats: k d + c d' elementwise, the same operations),
     # else the law's own force per plane
-    family = (all(isinstance(law, HuntCrossleyFamily)
-                  and type(law).force is HuntCrossleyFamily.force for law in laws)
-              and len({law.n for law in laws}) == 1)
+    family = one_family(laws)
     fam_n = float(laws[0].n) if family else None
     fam_kz = [(float(law.k), float(law.z)) for law in laws] if family else None
     is_kv = [type(law).force is KelvinVoigt.force for law in laws]
