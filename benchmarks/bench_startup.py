@@ -188,13 +188,16 @@ def _kernel_times() -> None:
 def main() -> None:
     print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser()
-    ap.add_argument("-n", type=int, default=5, help="counted warm runs per command")
+    ap.add_argument("-n", type=int, default=None,
+                    help="counted warm runs per command (default 5; --reproduce: pairs, 2)")
     ap.add_argument("--cold-runs", type=int, default=2, help="counted cold runs per command")
     ap.add_argument("--full", action="store_true", help="also the full reproduce, cold/warm")
     ap.add_argument("--kernels", action="store_true", help="compile time of each kernel")
     ap.add_argument("--reproduce", action="store_true",
                     help="only the full reproduce: side by side vs one process, cold/warm")
     args = ap.parse_args()
+    pairs = args.n or 2  # --reproduce's pairs (two full runs each)
+    args.n = args.n or 5
     exe = shutil.which("roverimpact") or str(Path(sys.executable).with_name("roverimpact"))
     out = tempfile.mkdtemp(prefix="bench_startup_")
     energy = [exe, "energy", "examples/rover2d_beta45.toml"]
@@ -212,8 +215,7 @@ def main() -> None:
           f"{'/ python':>8s}")
     _row("python -c pass", [base], base)
     if args.reproduce:
-        _reproduce_pairs(full, [*full, "--workers", "1"], out, args.n if args.n != 5 else 2,
-                         base)
+        _reproduce_pairs(full, [*full, "--workers", "1"], out, pairs, base)
         shutil.rmtree(out, ignore_errors=True)
         return
     with tempfile.TemporaryDirectory() as cache:
