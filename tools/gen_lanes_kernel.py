@@ -36,8 +36,8 @@ Per configuration (as :func:`roverimpact._kernels.partition.partition_kernel`):
 
 1. checks of ``M`` (symmetric within ``SYM_RTOL * max|M_kk|``, positive pivots), ``A``
    and ``v`` (finite), recorded per lane without branches;
-2. Cholesky factor ``M = L L^T`` (right-looking); skipped when every lane of a block
-   shares the ``M`` of the previous block;
+2. Cholesky factor ``M = L L^T`` (left-looking, sums in registers); skipped when every
+   lane of a block shares the ``M`` of the previous block;
 3. ``W = L^{{-1}} A^T`` (forward substitution), ``u = L^T v``, ``T = 1/2 |u|^2``;
 4. columns of ``W`` normalised (rows with whitened norm below ``rtol`` times the largest
    are dropped), then Gram-Schmidt twice ("twice is enough") in row order: a row whose
@@ -127,21 +127,29 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 for i in range(n):
                     for o in range(0, n, 8):
                         prefetch(M, (m_next * n + i) * n + o)
+                    ui = np.uint64(i)  # M's lower triangle into L, checked on the way
                     for k in range(i):
-                        ok &= abs(Mi[i, k] - Mi[k, i]) <= tol
-                    fin &= np.isfinite(Mi[i, i])
+                        x = Mi[i, k]
+                        ok &= abs(x - Mi[k, i]) <= tol
+                        L[ui, np.uint64(k), w] = x
+                    x = Mi[i, i]
+                    fin &= np.isfinite(x)
+                    L[ui, ui, w] = x
                 symok[w] = 1.0 if ok else 0.0
                 mfin[w] = 1.0 if fin else 0.0
                 thresh[w] = n * _EPS * md
                 pdok[w] = 1.0
-                for i in range(n):
-                    ui = np.uint64(i)
-                    for k in range(i + 1):
-                        L[ui, np.uint64(k), w] = Mi[i, k]
-            # right-looking Cholesky; a failed pivot is replaced by 1 and flagged
+            # left-looking Cholesky: column j from the columns before it, four rows at a
+            # time with their sums in registers (the right-looking update stored every
+            # entry of the trailing matrix at every step; the same operations in the same
+            # order); a failed pivot is replaced by 1 and flagged
             for j in range(n):
                 uj = np.uint64(j)
                 @LANES p{w} = L[uj, uj, {w}]
+                for k in range(j):
+                    uk = np.uint64(k)
+                    @LANES e{w} = L[uj, uk, {w}]
+                    @LANES p{w} -= e{w} * e{w}
                 @LANES h{w} = thresh[{w}]
                 @LANES k{w} = pdok[{w}]
                 @LANES g{w} = np.float64(p{w} > h{w})
@@ -150,35 +158,37 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 @LANES L[uj, uj, {w}] = q{w}
                 @LANES d{w} = 1.0 / q{w}
                 @LANES invd[uj, {w}] = d{w}
-                for i in range(j + 1, n):
-                    ui = np.uint64(i)
-                    @LANES f{w} = L[ui, uj, {w}] * d{w}
-                    @LANES L[ui, uj, {w}] = f{w}
-                # trailing update L[i, k] -= L[i, j] L[k, j], two rows i at a time
                 i = j + 1
-                while i + 1 < n:
-                    ui = np.uint64(i)
-                    ui2 = np.uint64(i + 1)
-                    @LANES f{w} = L[ui, uj, {w}]
-                    @LANES o{w} = L[ui2, uj, {w}]
-                    for k in range(j + 1, i + 1):
+                while i + 3 < n:
+                    ui0 = np.uint64(i)
+                    ui1 = np.uint64(i + 1)
+                    ui2 = np.uint64(i + 2)
+                    ui3 = np.uint64(i + 3)
+                    @LANES a0_{w} = L[ui0, uj, {w}]
+                    @LANES a1_{w} = L[ui1, uj, {w}]
+                    @LANES a2_{w} = L[ui2, uj, {w}]
+                    @LANES a3_{w} = L[ui3, uj, {w}]
+                    for k in range(j):
                         uk = np.uint64(k)
-                        @LANES e{w} = L[uk, uj, {w}]
-                        @LANES x{w} = L[ui, uk, {w}]
-                        @LANES z{w} = L[ui2, uk, {w}]
-                        @LANES L[ui, uk, {w}] = x{w} - f{w} * e{w}
-                        @LANES L[ui2, uk, {w}] = z{w} - o{w} * e{w}
-                    @LANES z{w} = L[ui2, ui2, {w}]
-                    @LANES L[ui2, ui2, {w}] = z{w} - o{w} * o{w}
-                    i += 2
-                if i < n:
+                        @LANES e{w} = L[uj, uk, {w}]
+                        @LANES a0_{w} -= L[ui0, uk, {w}] * e{w}
+                        @LANES a1_{w} -= L[ui1, uk, {w}] * e{w}
+                        @LANES a2_{w} -= L[ui2, uk, {w}] * e{w}
+                        @LANES a3_{w} -= L[ui3, uk, {w}] * e{w}
+                    @LANES L[ui0, uj, {w}] = a0_{w} * d{w}
+                    @LANES L[ui1, uj, {w}] = a1_{w} * d{w}
+                    @LANES L[ui2, uj, {w}] = a2_{w} * d{w}
+                    @LANES L[ui3, uj, {w}] = a3_{w} * d{w}
+                    i += 4
+                while i < n:
                     ui = np.uint64(i)
-                    @LANES f{w} = L[ui, uj, {w}]
-                    for k in range(j + 1, i + 1):
+                    @LANES a0_{w} = L[ui, uj, {w}]
+                    for k in range(j):
                         uk = np.uint64(k)
-                        @LANES e{w} = L[uk, uj, {w}]
-                        @LANES x{w} = L[ui, uk, {w}]
-                        @LANES L[ui, uk, {w}] = x{w} - f{w} * e{w}
+                        @LANES e{w} = L[uj, uk, {w}]
+                        @LANES a0_{w} -= L[ui, uk, {w}] * e{w}
+                    @LANES L[ui, uj, {w}] = a0_{w} * d{w}
+                    i += 1
             last_m = im0 if same else -1
         # -- A and v of every lane, with finiteness flags
         for w in range(LANES):
@@ -204,36 +214,99 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 ok &= np.isfinite(x)
                 V[np.uint64(i), w] = x
             vfin[w] = 1.0 if ok else 0.0
-        # -- W = L^-1 A^T, column j of L at a time, and the squared norms of its columns
-        for r in range(m):
-            ur = np.uint64(r)
-            @LANES RN[ur, {w}] = 0.0
-        for j in range(n):
-            uj = np.uint64(j)
-            @LANES d{w} = invd[uj, {w}]
-            for r in range(m):
-                ur = np.uint64(r)
-                @LANES f{w} = X[ur, uj, {w}] * d{w}
-                @LANES X[ur, uj, {w}] = f{w}
-                @LANES c{w} = RN[ur, {w}]
-                @LANES RN[ur, {w}] = c{w} + f{w} * f{w}
-                for k in range(j + 1, n):
+        # -- W = L^-1 A^T (forward substitution, four rows of A at a time with their sums
+        # in registers) and the squared norms of its columns
+        r = 0
+        while r + 3 < m:
+            ur0 = np.uint64(r)
+            @LANES c0_{w} = 0.0
+            ur1 = np.uint64(r + 1)
+            @LANES c1_{w} = 0.0
+            ur2 = np.uint64(r + 2)
+            @LANES c2_{w} = 0.0
+            ur3 = np.uint64(r + 3)
+            @LANES c3_{w} = 0.0
+            for i in range(n):
+                ui = np.uint64(i)
+                @LANES a0_{w} = X[ur0, ui, {w}]
+                @LANES a1_{w} = X[ur1, ui, {w}]
+                @LANES a2_{w} = X[ur2, ui, {w}]
+                @LANES a3_{w} = X[ur3, ui, {w}]
+                for k in range(i):
                     uk = np.uint64(k)
-                    @LANES e{w} = L[uk, uj, {w}]
-                    @LANES x{w} = X[ur, uk, {w}]
-                    @LANES X[ur, uk, {w}] = x{w} - f{w} * e{w}
-        # -- u = L^T v (a row of L at a time) and T = 1/2 |u|^2
-        for k in range(n):
-            uk = np.uint64(k)
-            @LANES U[uk, {w}] = 0.0
-        for i in range(n):
-            ui = np.uint64(i)
-            @LANES s{w} = V[ui, {w}]
-            for k in range(i + 1):
-                uk = np.uint64(k)
-                @LANES l{w} = L[ui, uk, {w}]
-                @LANES x{w} = U[uk, {w}]
-                @LANES U[uk, {w}] = x{w} + l{w} * s{w}
+                    @LANES e{w} = L[ui, uk, {w}]
+                    @LANES a0_{w} -= X[ur0, uk, {w}] * e{w}
+                    @LANES a1_{w} -= X[ur1, uk, {w}] * e{w}
+                    @LANES a2_{w} -= X[ur2, uk, {w}] * e{w}
+                    @LANES a3_{w} -= X[ur3, uk, {w}] * e{w}
+                @LANES d{w} = invd[ui, {w}]
+                @LANES f0_{w} = a0_{w} * d{w}
+                @LANES X[ur0, ui, {w}] = f0_{w}
+                @LANES c0_{w} = c0_{w} + f0_{w} * f0_{w}
+                @LANES f1_{w} = a1_{w} * d{w}
+                @LANES X[ur1, ui, {w}] = f1_{w}
+                @LANES c1_{w} = c1_{w} + f1_{w} * f1_{w}
+                @LANES f2_{w} = a2_{w} * d{w}
+                @LANES X[ur2, ui, {w}] = f2_{w}
+                @LANES c2_{w} = c2_{w} + f2_{w} * f2_{w}
+                @LANES f3_{w} = a3_{w} * d{w}
+                @LANES X[ur3, ui, {w}] = f3_{w}
+                @LANES c3_{w} = c3_{w} + f3_{w} * f3_{w}
+            @LANES RN[ur0, {w}] = c0_{w}
+            @LANES RN[ur1, {w}] = c1_{w}
+            @LANES RN[ur2, {w}] = c2_{w}
+            @LANES RN[ur3, {w}] = c3_{w}
+            r += 4
+        while r < m:
+            ur0 = np.uint64(r)
+            @LANES c0_{w} = 0.0
+            for i in range(n):
+                ui = np.uint64(i)
+                @LANES a0_{w} = X[ur0, ui, {w}]
+                for k in range(i):
+                    uk = np.uint64(k)
+                    @LANES e{w} = L[ui, uk, {w}]
+                    @LANES a0_{w} -= X[ur0, uk, {w}] * e{w}
+                @LANES d{w} = invd[ui, {w}]
+                @LANES f0_{w} = a0_{w} * d{w}
+                @LANES X[ur0, ui, {w}] = f0_{w}
+                @LANES c0_{w} = c0_{w} + f0_{w} * f0_{w}
+            @LANES RN[ur0, {w}] = c0_{w}
+            r += 1
+        # -- u = L^T v (two columns of L at a time, sums in registers) and T = 1/2 |u|^2
+        k = 0
+        while k + 1 < n:
+            uk0 = np.uint64(k)
+            @LANES s0_{w} = 0.0
+            uk1 = np.uint64(k + 1)
+            @LANES s1_{w} = 0.0
+            ui = np.uint64(k)
+            @LANES x{w} = V[ui, {w}]
+            @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
+            ui = np.uint64(k + 1)
+            @LANES x{w} = V[ui, {w}]
+            @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
+            @LANES s1_{w} += L[ui, uk1, {w}] * x{w}
+            for i in range(k + 2, n):
+                ui = np.uint64(i)
+                @LANES x{w} = V[ui, {w}]
+                @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
+                @LANES s1_{w} += L[ui, uk1, {w}] * x{w}
+            @LANES U[uk0, {w}] = s0_{w}
+            @LANES U[uk1, {w}] = s1_{w}
+            k += 2
+        while k < n:
+            uk0 = np.uint64(k)
+            @LANES s0_{w} = 0.0
+            ui = np.uint64(k)
+            @LANES x{w} = V[ui, {w}]
+            @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
+            for i in range(k + 1, n):
+                ui = np.uint64(i)
+                @LANES x{w} = V[ui, {w}]
+                @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
+            @LANES U[uk0, {w}] = s0_{w}
+            k += 1
         @LANES t{w} = 0.0
         for k in range(n):
             uk = np.uint64(k)
