@@ -337,6 +337,83 @@ def test_transposes_and_column_slices_take_the_one_system_kernel_as_a_copy(monke
     assert all(a.flags.c_contiguous for t in tried for a in t[:3])
 
 
+def _unaligned(x):
+    """A copy of ``x`` whose data starts one byte into a buffer: not aligned for float64."""
+    buf = np.zeros(x.nbytes + 1, dtype=np.uint8)
+    y = np.frombuffer(buf[1:].data, dtype=x.dtype).reshape(x.shape)
+    y[...] = x
+    assert not y.flags.aligned
+    return y
+
+
+def test_one_system_kernel_takes_only_aligned_c_arrays_through_its_entry_point(monkeypatch):
+    """The one-system path calls the compiled kernel's entry point, which reads an array's
+    memory as its signature says it is, without numba's checks: an unaligned, read-only,
+    Fortran or strided input reaches it as an aligned C array (a copy where needed) and
+    gives the bits a plain C array gives."""
+    from roverimpact import energy
+    from roverimpact._kernels.partition import partition_kernel
+
+    seen = []
+    real = energy._partition_single
+
+    def spy(M, A, v, *rest):
+        for x in (M, A, v):
+            seen.append(x.flags.c_contiguous and x.flags.aligned and x.dtype == np.float64)
+        return real(M, A, v, *rest)
+
+    monkeypatch.setattr(energy, "_partition_single", spy)
+    rng = np.random.default_rng(8)
+    M = random_spd(rng, 7)
+    M = (M + M.T) / 2
+    A = rng.standard_normal((3, 7))
+    v = rng.standard_normal(7)
+    ref = ri.partition(M, A, v)
+    ro = [x.copy() for x in (M, A, v)]
+    for x in ro:
+        x.flags.writeable = False
+    for args in ((_unaligned(M), _unaligned(A), _unaligned(v)), tuple(ro),
+                 (M.T, A, v), (M, np.hstack([A, A])[:, :7], np.repeat(v, 2)[::2])):
+        for want in (True, False):
+            p = ri.partition(*args, want_velocities=want)
+            assert (p.T, p.T_c, p.T_a, p.rank) == (ref.T, ref.T_c, ref.T_a, ref.rank)
+            if want:
+                np.testing.assert_array_equal(p.v_c, ref.v_c)
+                np.testing.assert_array_equal(p.v_a, ref.v_a)
+    assert seen and all(seen)
+    if partition_kernel.compiled:  # ROVERIMPACT_KERNELS=python runs the Python code
+        assert partition_kernel.unchecked(1) is not partition_kernel.get(1)
+
+
+def test_unchecked_kernel_falls_back_to_the_dispatcher():
+    """Where numba does not lay out a dispatcher's overloads as expected (none, several,
+    no entry point), :meth:`Kernel.unchecked` returns the dispatcher, which checks."""
+    from roverimpact._kernels import _jit
+
+    class Several:
+        def __init__(self):
+            self.overloads = {1: object(), 2: object()}
+
+    class NoEntry:
+        def __init__(self):
+            self.overloads = {1: object()}
+
+    class Bare:
+        pass
+
+    for d in (Several(), NoEntry(), Bare()):
+        assert _jit._entry_point(d) is d
+
+    class Result:
+        entry_point = "the entry"
+
+    class One:
+        def __init__(self):
+            self.overloads = {1: Result()}
+
+    assert _jit._entry_point(One()) == "the entry"
+
+
 def _small_batch_cases():
     """(label, args, kwargs, takes the small-batch fast path) for
     :func:`test_small_batch_fast_path_equals_the_general_path`."""

@@ -289,16 +289,18 @@ def partition(M, A, v, *, rtol: float = RTOL, want_velocities: bool = True) -> P
     if (type(M) is _NDARRAY and type(A) is _NDARRAY and type(v) is _NDARRAY
             and M.ndim == 2 and A.ndim == 2 and v.ndim == 1
             and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8):
-        if not (M.flags.c_contiguous and A.flags.c_contiguous and v.flags.c_contiguous):
-            # a transpose or a column slice: a C copy costs a microsecond, numba refusing
-            # the layout (the TypeError below) about 80
-            M, A, v = np.ascontiguousarray(M), np.ascontiguousarray(A), np.ascontiguousarray(v)
+        if not (M.flags.carray and A.flags.carray and v.flags.carray):
+            # not C contiguous and aligned (a transpose, a column slice), or read-only
+            # (carray: C, aligned and writeable, one flag read instead of two): a C copy
+            # costs a microsecond, numba refusing the layout about 80, and the kernel's
+            # entry point takes C arrays only
+            M, A, v = (np.require(x, requirements="CA") for x in (M, A, v))
         try:  # one system: the kernel on the arrays as they are
             single = _partition_single(M, A, v, rtol, want_velocities)
         except _NOT_ONE_SYSTEM:  # an argument numba refuses all the same
             single = None
-        if single is not None and (single.rank or row_scale(A) is None):
-            return single  # (rank 0: zero rows, or rows far from order 1, scaled below)
+        if single is not None:
+            return single
     elif (type(M) is _NDARRAY and type(A) is _NDARRAY and type(v) is _NDARRAY
             and M.dtype is _F8 and A.dtype is _F8 and v.dtype is _F8):
         # a batch below LANES_MIN_BATCH items of one batch shape (or with one M, A or v
@@ -495,17 +497,20 @@ def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
     """:func:`partition` of one system given as float64 C arrays M (n, n), A (m, n),
     v (n,): the one-item kernel on the arrays as they are, without the broadcasting
     bookkeeping (the same numbers, checks and errors). Raises ``_NOT_ONE_SYSTEM`` (numba's,
-    for another layout) or returns None (other shapes) where the general path must take
-    over. The kernel returns the energies and the rank (Python floats, made numpy scalars
-    here as the batched path gives them) and writes only the velocities, when wanted."""
+    for another layout) or returns None (other shapes; rank 0 of rows far from order 1,
+    which the general path scales) where the general path must take over. The kernel
+    returns the energies and the rank (Python floats, made numpy scalars here as the
+    batched path gives them) and writes only the velocities, when wanted.
+
+    M, A and v must be float64 C arrays of those dimensions, aligned: the kernel is
+    called through its entry point (:meth:`._kernels._jit.Kernel.unchecked`)."""
+    kernel = _one.partition_kernel.unchecked(1)
     if want_velocities:
         n = len(M)  # other shapes: the kernel says so
         out = np.empty((1, 2 * n))
-        status, T, Tc, Ta, r = _one.partition_kernel.get(1)(M, A, v, _ZERO_INDEX3, -1, rtol,
-                                                            True, out)
+        status, T, Tc, Ta, r = kernel(M, A, v, _ZERO_INDEX3, -1, rtol, True, out)
     else:
-        status, T, Tc, Ta, r = _one.partition_kernel.get(1)(M, A, v, _ZERO_INDEX3, -1, rtol,
-                                                            False, _NO_OUT)
+        status, T, Tc, Ta, r = kernel(M, A, v, _ZERO_INDEX3, -1, rtol, False, _NO_OUT)
     if status:
         if status == _one.STATUS_SHAPE:
             return None
@@ -514,6 +519,8 @@ def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
     if not math.isfinite(T + Tc):
         raise_overflow(np.array([T + Tc]), M, v, _ZERO_INDEX, _ZERO_INDEX, ())
     r = int(r)
+    if not r and row_scale(A) is not None:
+        return None  # rank 0 of rows far from order 1: partition scales them
     rank = _RANKS[r] if r < len(_RANKS) else np.int64(r)
     if want_velocities:
         row = out[0]

@@ -156,6 +156,17 @@ def partition_signature():
                       rw(i8, 1))
 
 
+def _entry_point(dispatcher):
+    """The C entry point of a dispatcher compiled for one signature (numba's
+    ``CompileResult.entry_point``), or the dispatcher itself if numba lays it out
+    otherwise."""
+    try:
+        (result,) = dispatcher.overloads.values()
+        return result.entry_point
+    except (AttributeError, ValueError):
+        return dispatcher
+
+
 class Kernel:
     """``njit(signature, cache=True, nogil=True, **options)(py_func)``, built on first use.
 
@@ -179,6 +190,7 @@ class Kernel:
         self._slp = slp
         self._loop_vectorize = loop_vectorize
         self._dispatcher = None
+        self._entry = None  # the compiled overload's entry point (:meth:`unchecked`)
         self._background = None  # a process compiling this kernel into the cache
         self._lock = threading.Lock()
         self._python = None  # the Python stand-in (python_version), made on first use
@@ -218,6 +230,22 @@ class Kernel:
                         self._dispatcher = self._build()
                 d = self._dispatcher
         return d
+
+    def unchecked(self, items: int | None = None):
+        """:meth:`get`, with the compiled kernel as the entry point of its one signature:
+        it converts the arguments to that signature's types without numba's type
+        resolution, which for the one-item partition kernel's 8 arguments is about 0.35
+        of the 0.8 us a call costs beyond its work (``benchmarks/bench_single.py``).
+        For callers that have made sure of every array argument's dtype, dimensions, C
+        layout and alignment themselves: the entry point takes an array's memory as the
+        signature says it is. Where numba does not expose it, the dispatcher."""
+        e = self._entry
+        if e is None:
+            d = self.get(items)
+            if d is not self._dispatcher:  # the Python code, until the compile lands
+                return d
+            e = self._entry = _entry_point(d)
+        return e
 
     @property
     def compiled(self) -> bool:

@@ -72,12 +72,15 @@ def factor(Mi, L, invd):  # pragma: no cover - compiled
     tol = SYM_RTOL * maxdiag
     thresh = n * _EPS * maxdiag
     ok = True
+    # invd[i] holds M_ii - sum_{k<j} L_ik^2 until column i is reached: each L_ij is
+    # subtracted as it is made, so the pivot is not one chain of j dependent multiply-adds
+    # at column j (the same subtractions in the same order)
+    for i in range(n):
+        invd[i] = Mi[i, i]
     for j in range(n):
         Lj = L[j]
         Mj = Mi[j]
-        s = Mj[j]
-        for k in range(j):
-            s -= Lj[k] * Lj[k]
+        s = invd[j]
         if not s > thresh:  # the columns not yet read decide between the two codes
             for c in range(j, n):
                 Mc = Mi[c]
@@ -104,18 +107,28 @@ def factor(Mi, L, invd):  # pragma: no cover - compiled
                 t1 -= L1[k] * e
                 t2 -= L2[k] * e
                 t3 -= L3[k] * e
-            L0[j] = t0 * inv
-            L1[j] = t1 * inv
-            L2[j] = t2 * inv
-            L3[j] = t3 * inv
+            t0 *= inv
+            t1 *= inv
+            t2 *= inv
+            t3 *= inv
+            L0[j] = t0
+            L1[j] = t1
+            L2[j] = t2
+            L3[j] = t3
+            invd[i] -= t0 * t0
+            invd[i + 1] -= t1 * t1
+            invd[i + 2] -= t2 * t2
+            invd[i + 3] -= t3 * t3
             i += 4
-        for i in range(i, n):
+        for i in range(i, n):  # noqa: B020 (the rows the blocks left)
             Li = L[i]
             t = Mi[i, j]
             ok &= abs(t - Mj[i]) <= tol
             for k in range(j):
                 t -= Li[k] * Lj[k]
-            Li[j] = t * inv
+            t *= inv
+            Li[j] = t
+            invd[i] -= t * t
     return STATUS_OK if ok else STATUS_ASYMMETRIC_M
 
 
@@ -183,17 +196,19 @@ def partition_factored(
         cn[j], cn[j + 1], cn[j + 2], cn[j + 3] = (np.sqrt(n0), np.sqrt(n1), np.sqrt(n2),
                                                   np.sqrt(n3))
         j += 4
-    for j in range(j, m):
-        nrm = 0.0
+    for j in range(j, m):  # noqa: B020 (the rows the blocks left)
+        # a row alone: a column of L at a time (each W_ji gets the same subtractions in
+        # the same order, none waiting for the one before)
         Wj = W[j]
         for i in range(n):
-            s = Ab[j, i]
-            Li = L[i]
-            for k in range(i):
-                s -= Li[k] * Wj[k]
-            s *= invd[i]
-            Wj[i] = s
+            Wj[i] = Ab[j, i]
+        nrm = 0.0
+        for k in range(n):
+            s = Wj[k] * invd[k]
+            Wj[k] = s
             nrm += s * s
+            for i in range(k + 1, n):
+                Wj[i] -= L[i, k] * s
         cn[j] = np.sqrt(nrm)
     for j in range(m):
         if cn[j] > cmax:
@@ -209,14 +224,28 @@ def partition_factored(
     # Householder QR with column pivoting
     r = 0
     for k in range(kmax):
+        # squared norms of the rows left (into cn), two at a time: independent sums
+        j = k
+        while j + 1 < m:
+            s0 = s1 = 0.0
+            for i in range(k, n):
+                a0 = W[j, i]
+                a1 = W[j + 1, i]
+                s0 += a0 * a0
+                s1 += a1 * a1
+            cn[j] = s0
+            cn[j + 1] = s1
+            j += 2
+        if j < m:
+            s0 = 0.0
+            for i in range(k, n):
+                s0 += W[j, i] * W[j, i]
+            cn[j] = s0
         best = -1.0
         p = k
         for j in range(k, m):
-            s = 0.0
-            for i in range(k, n):
-                s += W[j, i] * W[j, i]
-            if s > best:
-                best = s
+            if cn[j] > best:
+                best = cn[j]
                 p = j
         norm = np.sqrt(best)
         if norm <= rtol:
@@ -236,17 +265,34 @@ def partition_factored(
             h2 += H[k, i] * H[k, i]
         hn[k] = h2
         if h2 > 0.0:
-            for j in range(k + 1, m):
-                s = 0.0
+            # the reflection of the rows below and of y: their dot products with H[k]
+            # first, two at a time (independent sums), then the updates
+            j = k + 1
+            while j + 1 < m:
+                s0 = s1 = 0.0
                 for i in range(k, n):
-                    s += H[k, i] * W[j, i]
-                f = 2.0 * s / h2
+                    h = H[k, i]
+                    s0 += h * W[j, i]
+                    s1 += h * W[j + 1, i]
+                cn[j] = s0
+                cn[j + 1] = s1
+                j += 2
+            sy = 0.0
+            if j < m:
+                s0 = 0.0
+                for i in range(k, n):
+                    h = H[k, i]
+                    s0 += h * W[j, i]
+                    sy += h * y[i]
+                cn[j] = s0
+            else:
+                for i in range(k, n):
+                    sy += H[k, i] * y[i]
+            for j in range(k + 1, m):
+                f = 2.0 * cn[j] / h2
                 for i in range(k, n):
                     W[j, i] -= f * H[k, i]
-            s = 0.0
-            for i in range(k, n):
-                s += H[k, i] * y[i]
-            f = 2.0 * s / h2
+            f = 2.0 * sy / h2
             for i in range(k, n):
                 y[i] -= f * H[k, i]
         r += 1
