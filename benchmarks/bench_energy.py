@@ -148,8 +148,8 @@ def main():
     from roverimpact._kernels.partition import partition_kernel
 
     idx = np.arange(B)
-    outs = [np.empty(B) for _ in range(3)] + [np.empty((0, n)), np.empty(B, np.int64),
-                                              np.empty(B, np.int64)]
+    outs = [np.empty(B) for _ in range(3)] + [np.empty((0, n)), np.empty((0, n)),
+                                              np.empty(B, np.int64), np.empty(B, np.int64)]
 
     def direct(kernel, ii=idx):
         kernel(M, A, v, ii, ii, ii, 1e-9, False, *outs)

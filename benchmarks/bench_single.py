@@ -258,8 +258,8 @@ def main() -> None:
 
     def kernel_only(Mk, Ak, vk, out):
         """The lane kernel into output arrays made once (``out``)."""
-        idx, T, Tc, Ta, vc, rank, status = out
-        lanes(Mk, Ak, vk, idx, idx, idx, RTOL, True, T, Tc, Ta, vc, rank, status)
+        idx, T, Tc, Ta, vc, va, rank, status = out
+        lanes(Mk, Ak, vk, idx, idx, idx, RTOL, True, T, Tc, Ta, vc, va, rank, status)
 
     def ten_times(fn, *args):  # 1e5 items ten times: as many items as one call of 1e6
         def call():
@@ -268,8 +268,8 @@ def main() -> None:
         return call
 
     def outputs(k):
-        return (np.arange(k), *np.zeros((3, k)), np.zeros((k, n)), np.zeros(k, np.int64),
-                np.zeros(k, np.int64))
+        return (np.arange(k), *np.zeros((3, k)), np.zeros((k, n)), np.zeros((k, n)),
+                np.zeros(k, np.int64), np.zeros(k, np.int64))
 
     # in turns, 1e6 items each: the machine's swings of speed would otherwise decide the
     # ratio. partition's results are dropped after each call, so the 1e5 calls reuse

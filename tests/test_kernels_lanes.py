@@ -27,7 +27,7 @@ from .reference.systems import random_spd
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
+def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, va, rank, status):
     """The one-item kernel with the arguments and outputs of the lane kernel
     (``_jit.partition_signature``), to hold the two side by side. An item whose status is
     not ``STATUS_OK`` gets NaN energies and rank 0 (its ``vc`` row is undefined)."""
@@ -40,16 +40,18 @@ def run_items(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
     rank[:], status[:] = out[:, one.OUT_RANK], out[:, one.OUT_STATUS]
     if want_vc:
         vc[:] = out[:, one.OUT_V:one.OUT_V + n]
+        va[:] = out[:, one.OUT_V + n:]
 
 
 def _run(kernel, M, A, v, iM, iA, iv, want_vc=True, rtol=1e-9):
     nb, n = iM.shape[0], M.shape[1]
     T, Tc, Ta = np.full(nb, np.nan), np.full(nb, np.nan), np.full(nb, np.nan)
     vc = np.full((nb, n), np.nan) if want_vc else np.empty((0, n))
+    va = np.full((nb, n), np.nan) if want_vc else np.empty((0, n))
     rank = np.full(nb, -1, dtype=np.int64)
     status = np.full(nb, -1, dtype=np.int64)
-    kernel(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status)
-    return T, Tc, Ta, vc, rank, status
+    kernel(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, va, rank, status)
+    return T, Tc, Ta, vc, rank, status, va
 
 
 def _batch(rng, nb, n, m, kinds):
@@ -92,6 +94,8 @@ def _compare(M, A, v, iM, iA, iv, want_vc=True):
     if want_vc:
         scale = np.abs(v[iv[ok]]).max(axis=-1, keepdims=True)
         assert np.all(np.abs(got[3][ok] - ref[3][ok]) <= 1e-7 * scale)
+        # v_a written by the kernel: v - v_c to the bit, as numpy computes it
+        np.testing.assert_array_equal(got[6][ok], v[iv[ok]] - got[3][ok])
     return got, ref
 
 
@@ -123,7 +127,7 @@ def test_lanes_match_svd_reference(rng):
     nb, n, m = 61, 18, 4
     M, A, v = _batch(rng, nb, n, m, ["full", "deficient", "duplicate"])
     idx = np.arange(nb)
-    _, Tc, _, _, rank, status = _run(lanes_kernel(), M, A, v, idx, idx, idx)
+    _, Tc, _, _, rank, status, _ = _run(lanes_kernel(), M, A, v, idx, idx, idx)
     assert np.all(status == 0)
     L = np.linalg.cholesky(M)
     Wt = np.linalg.solve(L, np.swapaxes(A, -1, -2))

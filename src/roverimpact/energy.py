@@ -338,12 +338,12 @@ def _partition_batch(M, A, v, batch, n, m, rtol, want_velocities) -> Partition:
     T, Tc, Ta = np.empty((3, nb))
     rank = np.empty(nb, dtype=np.int64)
     status = np.zeros(nb, dtype=np.int64)
-    vc = np.empty((nb, n)) if want_velocities else np.empty((0, n))
-    lanes_kernel(nb)(Mf, Af, vf, iM, iA, iv, rtol, want_velocities, T, Tc, Ta, vc, rank, status)
+    vc, va = (np.empty((nb, n)), np.empty((nb, n))) if want_velocities else (_NO_V, _NO_V)
+    lanes_kernel(nb)(Mf, Af, vf, iM, iA, iv, rtol, want_velocities, T, Tc, Ta, vc, va, rank,
+                     status)
     _check_items(status, T, Tc, M, A, v, iM, iA, iv, batch)
     if want_velocities:
-        v_c = vc.reshape(*batch, n)
-        v_a = (v if v.shape == v_c.shape else np.broadcast_to(v, v_c.shape)) - v_c
+        v_c, v_a = vc.reshape(*batch, n), va.reshape(*batch, n)
     else:
         v_c = v_a = None
     return Partition(
@@ -354,6 +354,10 @@ def _partition_batch(M, A, v, batch, n, m, rtol, want_velocities) -> Partition:
         v_a=v_a,
         rank=scalarize(rank, batch),
     )
+
+
+#: the lane kernel's v_c and v_a when no velocities are wanted: not written then
+_NO_V = np.empty((0, 0))
 
 
 def _check_items(status, T, Tc, M, A, v, iM, iA, iv, batch) -> None:

@@ -149,11 +149,11 @@ def rw(dtype, ndim: int):
 
 
 def partition_signature():
-    """``(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status)`` of the
+    """``(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, va, rank, status)`` of the
     lane-parallel partition kernel."""
     return types.void(ro(f8, 3), ro(f8, 3), ro(f8, 2), ro(i8, 1), ro(i8, 1), ro(i8, 1), f8,
-                      boolean, rw(f8, 1), rw(f8, 1), rw(f8, 1), rw(f8, 2), rw(i8, 1),
-                      rw(i8, 1))
+                      boolean, rw(f8, 1), rw(f8, 1), rw(f8, 1), rw(f8, 2), rw(f8, 2),
+                      rw(i8, 1), rw(i8, 1))
 
 
 def _entry_point(dispatcher):

@@ -45,8 +45,10 @@ WELL_CONDITIONED = 1e-4
 
 # partition.py sha256: de8c6525c3bffd02
 
-def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, status):
-    """Partition every item ``b`` (``M[iM[b]]``, ``A[iA[b]]``, ``v[iv[b]]``), LANES at a time."""
+def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, va, rank, status):
+    """Partition every item ``b`` (``M[iM[b]]``, ``A[iA[b]]``, ``v[iv[b]]``), LANES at a time;
+    with ``want_vc``, ``vc[b]`` and ``va[b] = v[iv[b]] - vc[b]`` too (written here, where
+    the item's v is still in cache: a pass of numpy over the batch cost more)."""
     nb = iM.shape[0]
     n = M.shape[1]
     m = A.shape[1]
@@ -1432,6 +1434,10 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
                 Tc[b] = res_one[1]
                 Ta[b] = res_one[2]
                 rank[b] = np.int64(res_one[3])
+                if want_vc:
+                    vb = v[iv[b]]
+                    for i in range(n):
+                        va[b, i] = vb[i] - vc[b, i]
                 continue
             if vfin[w] == 0.0:
                 status[b] = STATUS_NONFINITE_V
@@ -1444,5 +1450,8 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, rank, sta
             Ta[b] = out[2, w]
             rank[b] = np.int64(out[3, w])
             if want_vc:
+                vb = v[iv[b]]
                 for i in range(n):
-                    vc[b, i] = V[np.uint64(i), w]
+                    x = V[np.uint64(i), w]
+                    vc[b, i] = x
+                    va[b, i] = vb[i] - x
