@@ -37,8 +37,8 @@ _WHEEL, _POINT = 0, 1
 
 @njit(**NJIT_OPTIONS)
 def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-              r_const, support, A):  # pragma: no cover - compiled
-    """Fill ``A`` (m, nv).
+              r_const, support, rows, A):  # pragma: no cover - compiled
+    """Fill ``A`` (k, nv): its row ``i`` is the plan's row ``rows[i]`` (k of them).
 
     ``X`` (., 12): frame placements as Pinocchio stores an SE3, the rotation column-major
     (``R[i, j] = X[g, i + 3 j]``) then the translation (``X[g, 9:12]``); used frame ``f``
@@ -46,8 +46,8 @@ def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact
     """
     nc = c_frame.shape[0]
     nv = J.shape[1]
-    P = np.empty((nc, 3))
-    T = np.empty((nc, 3))  # no-slip direction a x n / |a x n| (wheels)
+    PT = np.empty((nc, 6))  # contact point, then no-slip direction a x n / |a x n| (wheels)
+    P, T = PT[:, :3], PT[:, 3:]
     for c in range(nc):
         g = f_row[c_frame[c]]
         n0, n1, n2 = c_normal[c, 0], c_normal[c, 1], c_normal[c, 2]
@@ -77,11 +77,12 @@ def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact
             for i in range(3):
                 P[c, i] = X[g, 9 + i] + X[g, i] * x0 + X[g, 3 + i] * x1 + X[g, 6 + i] * x2
             T[c, 0], T[c, 1], T[c, 2] = 0.0, 0.0, 0.0
-    for row in range(A.shape[0]):
+    for i in range(A.shape[0]):
+        row = rows[i]
         kind = r_kind[row]
         if kind == _CONST:
             for j in range(nv):
-                A[row, j] = r_const[row, j]
+                A[i, j] = r_const[row, j]
             continue
         c = r_contact[row]
         n0, n1, n2 = c_normal[c, 0], c_normal[c, 1], c_normal[c, 2]
@@ -98,10 +99,10 @@ def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact
         f = c_frame[c]
         for j in range(nv):
             if support[f, j]:
-                A[row, j] = (d0 * J[0, j] + d1 * J[1, j] + d2 * J[2, j]
-                             + e0 * J[3, j] + e1 * J[4, j] + e2 * J[5, j])
+                A[i, j] = (d0 * J[0, j] + d1 * J[1, j] + d2 * J[2, j]
+                           + e0 * J[3, j] + e1 * J[4, j] + e2 * J[5, j])
             else:
-                A[row, j] = 0.0
+                A[i, j] = 0.0
 
 
 @njit(**NJIT_OPTIONS)
@@ -130,36 +131,50 @@ def _evaluate_one(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_con
                   r_const, support, M, A):  # pragma: no cover - compiled
     _symmetrize(M)
     _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-              r_const, support, A)
+              r_const, support, readonly(np.arange(A.shape[0])), A)  # read-only: one compile
 
 
 def _partition_at_signature():
-    """``(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-    r_const, support, M, rows, v, rtol, res) -> status``: one configuration's inputs as
-    for :func:`_evaluate_one` (``M`` the upper triangle ``pin.crba`` filled, mirrored in
-    place), then the rows ``rows`` of ``A``, ``v`` and ``rtol`` of the partition; ``res``
-    (4,) receives ``T, T_c, T_a, rank``."""
-    return i8(ro(f8, 2), ro(f8, 2), ro(i8, 1), ro(i8, 1), ro(i8, 1), ro(f8, 2), ro(f8, 2),
-              ro(f8, 1), ro(i8, 1), ro(i8, 1), ro(f8, 2), ro(b1, 2), rw(f8, 2), ro(i8, 1),
+    """``(J, X, M, ints, floats, support, rows, v, rtol, res) -> status``: one
+    configuration's ``J``, ``X`` and ``M`` as for :func:`_evaluate_one` (``M`` the upper
+    triangle ``pin.crba`` filled, mirrored in place), the plan's other arrays packed in
+    two (:func:`_unpack`), then the rows ``rows`` of ``A``, ``v`` and ``rtol`` of the
+    partition; ``res`` (4,) receives ``T, T_c, T_a, rank``."""
+    return i8(ro(f8, 2), ro(f8, 2), rw(f8, 2), ro(i8, 1), ro(f8, 1), ro(b1, 2), ro(i8, 1),
               ro(f8, 1), f8, rw(f8, 1))
 
 
+@njit(**NJIT_OPTIONS)
+def _unpack(ints, floats, nv):  # pragma: no cover - compiled
+    """``(f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind, r_const)``
+    as views of the two buffers :class:`RowPlan` packs them in (:func:`_pack`): ``ints``
+    is ``nc, m``, then ``c_frame, c_kind`` (nc each), ``r_contact, r_kind`` (m each) and
+    ``f_row`` (the rest); ``floats`` is ``c_vec, c_normal`` (nc, 3), ``c_radius`` (nc)
+    and ``r_const`` (m, nv), each C-ordered."""
+    nc, m = ints[0], ints[1]
+    o = 2 + 2 * nc + 2 * m
+    return (ints[o:], ints[2:2 + nc], ints[2 + nc:2 + 2 * nc],
+            floats[:3 * nc].reshape((nc, 3)), floats[3 * nc:6 * nc].reshape((nc, 3)),
+            floats[6 * nc:7 * nc], ints[2 + 2 * nc:2 + 2 * nc + m],
+            ints[2 + 2 * nc + m:o], floats[7 * nc:7 * nc + m * nv].reshape((m, nv)))
+
+
+# The plan's constant arrays come packed in two: numba's dispatcher checks the type of each
+# argument of every call and converts it, a good part of a call of a few microseconds
 @kernel(_partition_at_signature())
-def _partition_at(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-                  r_const, support, M, rows, v, rtol, res):  # pragma: no cover - compiled
+def _partition_at(J, X, M, ints, floats, support, rows, v, rtol, res
+                  ):  # pragma: no cover - compiled
     """M and the chosen rows of A at one configuration, and their kinetic-energy partition
     (``T``, ``T_c``, ``T_a``, rank; no velocities), in one call: the one-item partition of
     :mod:`roverimpact._kernels.partition` (the same checks; a nonzero status is its code)."""
     nv = M.shape[0]
+    f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind, r_const = _unpack(
+        ints, floats, nv)
     _symmetrize(M)
-    A_all = np.empty((r_kind.shape[0], nv))
-    _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-              r_const, support, A_all)
     m = rows.shape[0]
-    A = np.empty((m, nv))
-    for i in range(m):
-        for j in range(nv):
-            A[i, j] = A_all[rows[i], j]
+    A = np.empty((m, nv))  # only the chosen rows
+    _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+              r_const, support, rows, A)
     L = np.zeros((nv, nv))
     invd = np.empty(nv)
     code = factor(readonly(M), L, invd)  # read-only, as the partition kernels pass them:
@@ -180,11 +195,12 @@ def _evaluate_many(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_co
     """Items ``i`` of ``J`` (k, 6, nv), ``X`` (k, ., 12), ``M`` (k, nv, nv), ``A`` (k, m, nv);
     ``r_const`` (1 or k, m, nv), ``c_normal`` (1 or k, nc, 3), ``c_radius`` (1 or k, nc)."""
     kc, kn, kr = r_const.shape[0], c_normal.shape[0], c_radius.shape[0]
+    every = readonly(np.arange(A.shape[1]))  # every row (read-only, as _partition_at's)
     for i in range(J.shape[0]):
         _symmetrize(M[i])
         _assemble(J[i], X[i], f_row, c_frame, c_kind, c_vec, c_normal[min(i, kn - 1)],
                   c_radius[min(i, kr - 1)], r_contact, r_kind, r_const[min(i, kc - 1)],
-                  support, A[i])
+                  support, every, A[i])
 
 
 class RowPlan:
@@ -267,6 +283,8 @@ class RowPlan:
                 self.support[k, jm.idx_v:jm.idx_v + jm.nv] = True
         self.m, self.nv = m, nv
         self._cs = cs
+        # the model and data every pass uses (the placement view below reads this data)
+        self._model, self._data = model, cs.data
         # frame placements: a read-only view of Pinocchio's own storage when its layout is
         # the expected one (checked here), else a buffer refilled frame by frame per call
         self._oMf = _placement_view(cs.data, model.nframes) if frames else None
@@ -275,8 +293,19 @@ class RowPlan:
         else:
             self.f_row = np.arange(max(nf, 1), dtype=np.int64)
         self._X = np.zeros((max(nf, 1), 12))
+        # the arrays above become views of two buffers (for _partition_at, which takes
+        # them packed); r_const's loop rows are written through its view
+        self._ints, (_, self.c_frame, self.c_kind, self.r_contact, self.r_kind, self.f_row) = (
+            _pack((np.array([nc, m]), self.c_frame, self.c_kind, self.r_contact, self.r_kind,
+                   self.f_row), np.int64))
+        self._floats, (self.c_vec, self.c_normal, self.c_radius, self.r_const) = _pack(
+            (self.c_vec, self.c_normal, self.c_radius, self.r_const), np.float64)
         self._args = (self.f_row, self.c_frame, self.c_kind, self.c_vec, self.c_normal,
                       self.c_radius, self.r_contact, self.r_kind)
+        # partition_at's short path: nv > 1 (Pinocchio's arrays are 2-D), the placements
+        # read in place, no loop rows to recompute; and its compiled kernel, once loaded
+        self._plain = nv > 1 and self._oMf is not None and self._loop_constant
+        self._run = None
 
     @property
     def loops_constant(self) -> bool:
@@ -302,13 +331,13 @@ class RowPlan:
         """One Pinocchio pass at ``q`` (nq,): ``M`` (its upper triangle, from CRBA), the
         world joint Jacobian ``J`` and the frame placements ``X``; the rows of a nonlinear
         loop closure updated in :attr:`r_const`."""
-        model, data = self._cs.mbm.model, self._cs.data
+        model, data = self._model, self._data
         M = pin.crba(model, data, q)
         J = pin.computeJointJacobians(model, data, q)
         if self.nv == 1:  # pinocchio hands (6, 1) and (1, 1) back as 1-D arrays
             M, J = np.reshape(M, (1, 1)).copy(), np.reshape(J, (6, 1))
         pin.updateFramePlacements(model, data)
-        X = self._placements()
+        X = self._oMf if self._oMf is not None else self._placements()
         if not self._loop_constant:
             Jl = self._cs.mbm.loop_closure(q)[1]
             for k, i in enumerate(self.loop_rows):
@@ -332,9 +361,20 @@ class RowPlan:
         ``A`` at one configuration ``q`` (nq,) with velocity ``v``: one Pinocchio pass and
         one compiled call (:func:`_partition_at`). Returns the partition's status code
         (nonzero: the caller makes the error message, from :meth:`evaluate`)."""
-        M, J, X = self._pass(q)
-        return _partition_at.get(1)(J, X, *self._args, self.r_const, self.support, M, rows,
-                                    v, rtol, res)
+        run = self._run
+        if run is None:
+            run = _partition_at.get(1)
+            if _partition_at.compiled:  # then get(1) returns it from now on
+                self._run = run
+        if not self._plain:
+            M, J, X = self._pass(q)
+            return run(J, X, M, self._ints, self._floats, self.support, rows, v, rtol, res)
+        # _pass written out for the usual plan: this is the hot path of T_c_at
+        model, data = self._model, self._data
+        M = pin.crba(model, data, q)
+        J = pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        return run(J, self._oMf, M, self._ints, self._floats, self.support, rows, v, rtol, res)
 
     def evaluate_many(self, Q, chunk: int = 64, *, before=None, c_normal=None,
                       c_radius=None) -> tuple[np.ndarray, np.ndarray]:
@@ -393,6 +433,17 @@ class RowPlan:
                                  rc if rc.shape[0] == 1 else rc[s:e], self.support, Ms[s:e],
                                  A[s:e])
         return Ms, A
+
+
+def _pack(arrays, dtype) -> tuple[np.ndarray, list[np.ndarray]]:
+    """One 1-D buffer holding ``arrays`` one after the other (C order), and a view of it
+    shaped as each of them."""
+    buf = np.concatenate([np.asarray(a, dtype=dtype).ravel() for a in arrays])
+    views, o = [], 0
+    for a in arrays:
+        views.append(buf[o:o + a.size].reshape(a.shape))
+        o += a.size
+    return buf, views
 
 
 def _placement_view(data, nframes: int):

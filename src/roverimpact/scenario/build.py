@@ -149,6 +149,8 @@ class ImpactSetup:
     _cs: Any = field(default=None, repr=False, compare=False)
     _active: Any = field(default=None, repr=False, compare=False)
     _heading: Any = field(default=None, repr=False, compare=False)
+    # what T_c_at needs at every call, made once: the shape of one q and the active rows
+    _tc_args: Any = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self):
         # T_c_at hands v to a compiled kernel as it is: a C float64 array, whatever the
@@ -156,6 +158,9 @@ class ImpactSetup:
         v = self.v
         if not (isinstance(v, np.ndarray) and v.dtype == np.float64 and v.flags.c_contiguous):
             object.__setattr__(self, "v", np.ascontiguousarray(v, dtype=float))
+        if self._cs is not None:
+            rows = np.ascontiguousarray(self._active, dtype=np.int64)  # no copy (flatnonzero)
+            object.__setattr__(self, "_tc_args", ((self.model.model.nq,), rows))
 
     def partition(self) -> ImpactEnergy:
         """T, T_c^-, T_a, m_eff along the normal and v_n of this setup.
@@ -199,12 +204,11 @@ class ImpactSetup:
             ``A`` and ``v`` at ``q`` (a mass matrix that is not positive definite, ...).
         """
         q = np.asarray(q, dtype=float)
-        nq = self.model.model.nq
-        if q.shape != (nq,):
-            raise ModelError(f"q must have shape ({nq},) for model {self.model.name!r} "
+        shape, rows = self._tc_args
+        if q.shape != shape:
+            raise ModelError(f"q must have shape ({shape[0]},) for model {self.model.name!r} "
                              f"(T_c_at takes one configuration; evaluate() takes a batch), "
                              f"got {q.shape}")
-        rows = np.ascontiguousarray(self._active, dtype=np.int64)  # no copy (flatnonzero)
         res = np.empty(4)
         if self._cs.partition_at(q, rows, self.v, RTOL, res):
             if not np.isfinite(q).all():
