@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import fnmatch
 import functools
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -101,6 +102,12 @@ class ImpactEnergy:
 
         return {k: conv(getattr(self, k)) for k in
                 ("T", "T_c_minus", "T_a", "m_eff", "m_eff_free", "v_n", "rank")}
+
+
+_F8 = np.dtype(np.float64)
+# T_c_at's result array (T, T_c, T_a, rank): one per thread, not one per call (an
+# allocation is a few percent of the call; the compiled kernel runs without the GIL)
+_TC_RESULT = threading.local()
 
 
 @dataclass(frozen=True)
@@ -203,13 +210,15 @@ class ImpactSetup:
             ``q`` holds NaN or inf; what :func:`roverimpact.partition` raises for ``M``,
             ``A`` and ``v`` at ``q`` (a mass matrix that is not positive definite, ...).
         """
-        q = np.asarray(q, dtype=float)
+        q = np.asarray(q, _F8)  # a dtype object, not float: half the time
         shape, rows = self._tc_args
         if q.shape != shape:
             raise ModelError(f"q must have shape ({shape[0]},) for model {self.model.name!r} "
                              f"(T_c_at takes one configuration; evaluate() takes a batch), "
                              f"got {q.shape}")
-        res = np.empty(4)
+        res = getattr(_TC_RESULT, "res", None)
+        if res is None:
+            res = _TC_RESULT.res = np.empty(4)
         if self._cs.partition_at(q, rows, self.v, RTOL, res):
             if not np.isfinite(q).all():
                 raise InputError(f"q contains NaN or inf: {q}")
