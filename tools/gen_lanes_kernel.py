@@ -216,31 +216,23 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, va, rank,
                 ok &= np.isfinite(x)
                 V[np.uint64(i), w] = x
             vfin[w] = 1.0 if ok else 0.0
-        # -- W = L^-1 A^T (forward substitution, four rows of A at a time with their sums
+        # -- W = L^-1 A^T (forward substitution, two rows of A at a time with their sums
         # in registers) and the squared norms of its columns
         r = 0
-        while r + 3 < m:
+        while r + 1 < m:
             ur0 = np.uint64(r)
             @LANES c0_{w} = 0.0
             ur1 = np.uint64(r + 1)
             @LANES c1_{w} = 0.0
-            ur2 = np.uint64(r + 2)
-            @LANES c2_{w} = 0.0
-            ur3 = np.uint64(r + 3)
-            @LANES c3_{w} = 0.0
             for i in range(n):
                 ui = np.uint64(i)
                 @LANES a0_{w} = X[ur0, ui, {w}]
                 @LANES a1_{w} = X[ur1, ui, {w}]
-                @LANES a2_{w} = X[ur2, ui, {w}]
-                @LANES a3_{w} = X[ur3, ui, {w}]
                 for k in range(i):
                     uk = np.uint64(k)
                     @LANES e{w} = L[ui, uk, {w}]
                     @LANES a0_{w} -= X[ur0, uk, {w}] * e{w}
                     @LANES a1_{w} -= X[ur1, uk, {w}] * e{w}
-                    @LANES a2_{w} -= X[ur2, uk, {w}] * e{w}
-                    @LANES a3_{w} -= X[ur3, uk, {w}] * e{w}
                 @LANES d{w} = invd[ui, {w}]
                 @LANES f0_{w} = a0_{w} * d{w}
                 @LANES X[ur0, ui, {w}] = f0_{w}
@@ -248,17 +240,9 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, va, rank,
                 @LANES f1_{w} = a1_{w} * d{w}
                 @LANES X[ur1, ui, {w}] = f1_{w}
                 @LANES c1_{w} = c1_{w} + f1_{w} * f1_{w}
-                @LANES f2_{w} = a2_{w} * d{w}
-                @LANES X[ur2, ui, {w}] = f2_{w}
-                @LANES c2_{w} = c2_{w} + f2_{w} * f2_{w}
-                @LANES f3_{w} = a3_{w} * d{w}
-                @LANES X[ur3, ui, {w}] = f3_{w}
-                @LANES c3_{w} = c3_{w} + f3_{w} * f3_{w}
             @LANES RN[ur0, {w}] = c0_{w}
             @LANES RN[ur1, {w}] = c1_{w}
-            @LANES RN[ur2, {w}] = c2_{w}
-            @LANES RN[ur3, {w}] = c3_{w}
-            r += 4
+            r += 2
         while r < m:
             ur0 = np.uint64(r)
             @LANES c0_{w} = 0.0
@@ -275,40 +259,18 @@ def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, va, rank,
                 @LANES c0_{w} = c0_{w} + f0_{w} * f0_{w}
             @LANES RN[ur0, {w}] = c0_{w}
             r += 1
-        # -- u = L^T v (two columns of L at a time, sums in registers) and T = 1/2 |u|^2
-        k = 0
-        while k + 1 < n:
-            uk0 = np.uint64(k)
-            @LANES s0_{w} = 0.0
-            uk1 = np.uint64(k + 1)
-            @LANES s1_{w} = 0.0
-            ui = np.uint64(k)
-            @LANES x{w} = V[ui, {w}]
-            @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
-            ui = np.uint64(k + 1)
-            @LANES x{w} = V[ui, {w}]
-            @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
-            @LANES s1_{w} += L[ui, uk1, {w}] * x{w}
-            for i in range(k + 2, n):
-                ui = np.uint64(i)
-                @LANES x{w} = V[ui, {w}]
-                @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
-                @LANES s1_{w} += L[ui, uk1, {w}] * x{w}
-            @LANES U[uk0, {w}] = s0_{w}
-            @LANES U[uk1, {w}] = s1_{w}
-            k += 2
-        while k < n:
-            uk0 = np.uint64(k)
-            @LANES s0_{w} = 0.0
-            ui = np.uint64(k)
-            @LANES x{w} = V[ui, {w}]
-            @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
-            for i in range(k + 1, n):
-                ui = np.uint64(i)
-                @LANES x{w} = V[ui, {w}]
-                @LANES s0_{w} += L[ui, uk0, {w}] * x{w}
-            @LANES U[uk0, {w}] = s0_{w}
-            k += 1
+        # -- u = L^T v (a row of L at a time) and T = 1/2 |u|^2
+        for k in range(n):
+            uk = np.uint64(k)
+            @LANES U[uk, {w}] = 0.0
+        for i in range(n):
+            ui = np.uint64(i)
+            @LANES s{w} = V[ui, {w}]
+            for k in range(i + 1):
+                uk = np.uint64(k)
+                @LANES l{w} = L[ui, uk, {w}]
+                @LANES x{w} = U[uk, {w}]
+                @LANES U[uk, {w}] = x{w} + l{w} * s{w}
         @LANES t{w} = 0.0
         for k in range(n):
             uk = np.uint64(k)
