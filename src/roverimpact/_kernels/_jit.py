@@ -234,8 +234,7 @@ class Kernel:
     def unchecked(self, items: int | None = None):
         """:meth:`get`, with the compiled kernel as the entry point of its one signature:
         it converts the arguments to that signature's types without numba's type
-        resolution, which for the one-item partition kernel's 8 arguments is about 0.35
-        of the 0.8 us a call costs beyond its work (``benchmarks/bench_single.py``).
+        resolution, a good part of what a call of a one-item kernel costs beyond its work.
         For callers that have made sure of every array argument's dtype, dimensions, C
         layout and alignment themselves: the entry point takes an array's memory as the
         signature says it is. Where numba does not expose it, the dispatcher."""
