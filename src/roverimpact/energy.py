@@ -508,7 +508,7 @@ def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
 
     M, A and v must be float64 C arrays of those dimensions, aligned: the kernel is
     called through its entry point (:meth:`._kernels._jit.Kernel.unchecked`)."""
-    kernel = _one.partition_kernel.unchecked(1)
+    kernel = _ONE.entry or _ONE.unchecked(1)
     if want_velocities:
         n = len(M)  # other shapes: the kernel says so
         out = np.empty((1, 2 * n))
@@ -525,13 +525,18 @@ def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
     r = int(r)
     if not r and row_scale(A) is not None:
         return None  # rank 0 of rows far from order 1: partition scales them
-    rank = _RANKS[r] if r < len(_RANKS) else np.int64(r)
+    try:
+        rank = _RANKS[r]
+    except IndexError:
+        rank = np.int64(r)
     if want_velocities:
         row = out[0]
         return _new_partition(_F64(T), _F64(Tc), _F64(Ta), row[:n], row[n:], rank)
     return _new_partition(_F64(T), _F64(Tc), _F64(Ta), None, None, rank)
 
 
+#: the one-item partition kernel (:class:`._kernels._jit.Kernel`)
+_ONE = _one.partition_kernel
 _ZERO_INDEX3 = np.zeros((3, 1), dtype=np.int64)
 _ZERO_INDEX3.flags.writeable = False
 #: the one-system kernel's ``out`` when no velocities are wanted: it is not written then

@@ -190,7 +190,9 @@ class Kernel:
         self._slp = slp
         self._loop_vectorize = loop_vectorize
         self._dispatcher = None
-        self._entry = None  # the compiled overload's entry point (:meth:`unchecked`)
+        #: the compiled overload's entry point once :meth:`unchecked` has returned it, else
+        #: None (hot paths read it first: an attribute costs less than the method call)
+        self.entry = None
         self._background = None  # a process compiling this kernel into the cache
         self._lock = threading.Lock()
         self._python = None  # the Python stand-in (python_version), made on first use
@@ -238,12 +240,12 @@ class Kernel:
         For callers that have made sure of every array argument's dtype, dimensions, C
         layout and alignment themselves: the entry point takes an array's memory as the
         signature says it is. Where numba does not expose it, the dispatcher."""
-        e = self._entry
+        e = self.entry
         if e is None:
             d = self.get(items)
             if d is not self._dispatcher:  # the Python code, until the compile lands
                 return d
-            e = self._entry = _entry_point(d)
+            e = self.entry = _entry_point(d)
         return e
 
     @property
