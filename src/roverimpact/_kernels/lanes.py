@@ -43,7 +43,7 @@ _EPS = np.finfo(np.float64).eps
 #: must stay far below ``rtol`` for the rank decisions of the later rows to be reliable
 WELL_CONDITIONED = 1e-4
 
-# partition.py sha256: de8c6525c3bffd02
+# partition.py sha256: 1c2af2217fa8953e
 
 def partition_lanes(M, A, v, iM, iA, iv, rtol, want_vc, T, Tc, Ta, vc, va, rank, status):
     """Partition every item ``b`` (``M[iM[b]]``, ``A[iA[b]]``, ``v[iv[b]]``), LANES at a time;
