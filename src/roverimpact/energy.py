@@ -338,7 +338,7 @@ def _partition_batch(M, A, v, batch, n, m, rtol, want_velocities) -> Partition:
     T, Tc, Ta = np.empty((3, nb))
     rank = np.empty(nb, dtype=np.int64)
     status = np.zeros(nb, dtype=np.int64)
-    vc, va = (np.empty((nb, n)), np.empty((nb, n))) if want_velocities else (_NO_V, _NO_V)
+    vc, va = (np.empty((nb, n)), np.empty((nb, n))) if want_velocities else (_NO_OUT, _NO_OUT)
     lanes_kernel(nb)(Mf, Af, vf, iM, iA, iv, rtol, want_velocities, T, Tc, Ta, vc, va, rank,
                      status)
     _check_items(status, T, Tc, M, A, v, iM, iA, iv, batch)
@@ -354,10 +354,6 @@ def _partition_batch(M, A, v, batch, n, m, rtol, want_velocities) -> Partition:
         v_a=v_a,
         rank=scalarize(rank, batch),
     )
-
-
-#: the lane kernel's v_c and v_a when no velocities are wanted: not written then
-_NO_V = np.empty((0, 0))
 
 
 def _check_items(status, T, Tc, M, A, v, iM, iA, iv, batch) -> None:
@@ -539,7 +535,8 @@ def _partition_single(M, A, v, rtol, want_velocities) -> Partition | None:
 _ONE = _one.partition_kernel
 _ZERO_INDEX3 = np.zeros((3, 1), dtype=np.int64)
 _ZERO_INDEX3.flags.writeable = False
-#: the one-system kernel's ``out`` when no velocities are wanted: it is not written then
+#: the velocity outputs (the one-system kernel's ``out``, the lane kernel's ``vc`` and
+#: ``va``) when no velocities are wanted: the kernels do not write them then
 _NO_OUT = np.empty((1, 0))
 _F64 = np.float64
 #: ranks as numpy integers, as the batched path gives them, made once (a new np.int64
