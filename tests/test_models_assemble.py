@@ -214,24 +214,34 @@ def test_point_row_of_urdf_arm_matches_finite_differences():
         assert a @ v == pytest.approx(n @ fd / (2 * h), rel=1e-7, abs=1e-9)
 
 
-def test_placements_fallback_equals_in_place_view():
-    """With the in-place view of data.oMf switched off (as on a Pinocchio build with another
-    memory layout), the frame-by-frame copy gives the same rows, single and batched."""
+def test_placements_fallback_equals_in_place_view(monkeypatch):
+    """With the in-place view of data.oMf unavailable (as on a Pinocchio build with another
+    memory layout), the frame-by-frame copy gives the same rows, single and batched, and
+    the same partition at one configuration (the plan built that way from the start, its
+    packed arrays and short paths included)."""
+    from roverimpact.models import _assemble
+
     rng = np.random.default_rng(2)
     mbm = rocker_bogie()
-    cs = ConstraintSet(mbm, _constraints(mbm, rng))
+    constraints = _constraints(mbm, rng)
+    cs = ConstraintSet(mbm, constraints)
     Q = np.array([_random_q(mbm.model, rng) for _ in range(5)])
     M, A = cs.evaluate(Q)
-    plan = cs._row_plan()
-    assert plan._oMf is not None  # the installed Pinocchio stores the placements in place
-    plan._oMf = None
-    plan.f_row = np.arange(len(plan.frame_ids), dtype=np.int64)
-    plan._args = (plan.f_row, *plan._args[1:])
-    M2, A2 = cs.evaluate(Q)
+    assert cs._row_plan()._oMf is not None  # the installed Pinocchio stores them in place
+    monkeypatch.setattr(_assemble, "_placement_view", lambda data, nframes: None)
+    cs2 = ConstraintSet(mbm, constraints)
+    assert cs2._row_plan()._oMf is None
+    M2, A2 = cs2.evaluate(Q)
     np.testing.assert_array_equal(M2, M)
     np.testing.assert_array_equal(A2, A)
+    rows = np.arange(A.shape[1], dtype=np.int64)
+    v = rng.standard_normal(A.shape[2])
     for q, a in zip(Q, A, strict=True):
-        np.testing.assert_array_equal(cs.evaluate(q)[1], a)
+        np.testing.assert_array_equal(cs2.evaluate(q)[1], a)
+        res, res2 = np.empty(4), np.empty(4)
+        assert cs.partition_at(q, rows, v, 1e-9, res) == cs2.partition_at(q, rows, v, 1e-9,
+                                                                          res2)
+        np.testing.assert_array_equal(res2, res)
 
 
 def test_copied_constraint_set_reads_its_own_data():

@@ -302,8 +302,9 @@ class RowPlan:
             (self.c_vec, self.c_normal, self.c_radius, self.r_const), np.float64)
         self._args = (self.f_row, self.c_frame, self.c_kind, self.c_vec, self.c_normal,
                       self.c_radius, self.r_contact, self.r_kind)
-        # partition_at's short path: nv > 1 (Pinocchio's arrays are 2-D), the placements
-        # read in place, no loop rows to recompute; and its compiled kernel, once loaded
+        # _pass's short path: nv > 1 (Pinocchio's arrays are 2-D), the placements
+        # read in place, no loop rows to recompute; and partition_at's compiled kernel,
+        # once loaded
         self._plain = nv > 1 and self._oMf is not None and self._loop_constant
         self._run = None
 
@@ -334,9 +335,11 @@ class RowPlan:
         model, data = self._model, self._data
         M = pin.crba(model, data, q)
         J = pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        if self._plain:  # the usual plan (the hot path of T_c_at): nothing more to do
+            return M, J, self._oMf
         if self.nv == 1:  # pinocchio hands (6, 1) and (1, 1) back as 1-D arrays
             M, J = np.reshape(M, (1, 1)).copy(), np.reshape(J, (6, 1))
-        pin.updateFramePlacements(model, data)
         X = self._oMf if self._oMf is not None else self._placements()
         if not self._loop_constant:
             Jl = self._cs.mbm.loop_closure(q)[1]
@@ -366,15 +369,8 @@ class RowPlan:
             run = _partition_at.get(1)
             if _partition_at.compiled:  # then get(1) returns it from now on
                 self._run = run
-        if not self._plain:
-            M, J, X = self._pass(q)
-            return run(J, X, M, self._ints, self._floats, self.support, rows, v, rtol, res)
-        # _pass written out for the usual plan: this is the hot path of T_c_at
-        model, data = self._model, self._data
-        M = pin.crba(model, data, q)
-        J = pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        return run(J, self._oMf, M, self._ints, self._floats, self.support, rows, v, rtol, res)
+        M, J, X = self._pass(q)
+        return run(J, X, M, self._ints, self._floats, self.support, rows, v, rtol, res)
 
     def evaluate_many(self, Q, chunk: int = 64, *, before=None, c_normal=None,
                       c_radius=None) -> tuple[np.ndarray, np.ndarray]:
