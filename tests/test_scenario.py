@@ -585,6 +585,32 @@ def test_configurations_that_are_not_one_are_refused():
             call()
 
 
+def test_one_configurations_check_takes_the_sum_only_as_a_shortcut():
+    """check_configuration's shortcut for one q (a finite sum of the coordinates) decides
+    nothing by itself: +inf and -inf (a NaN sum) and inf in a revolute coordinate are
+    refused as one configuration and in a batch, and finite coordinates whose sum
+    overflows are checked like any other q (accepted with a unit quaternion, refused
+    without)."""
+    from roverimpact.exceptions import InputError
+    from roverimpact.models.joints import check_configuration
+
+    setup = ri.ImpactSetup.from_scenario(sc(RB))
+    model = setup.model.model
+    for k, x in ((0, np.inf), (8, -np.inf), (len(setup.q) - 1, np.nan)):
+        q = setup.q.copy()
+        q[k] = x
+        q[1] = -x if np.isinf(x) else q[1]
+        for bad in (q, q[None]):
+            with pytest.raises(InputError, match="q contains NaN or inf"):
+                check_configuration(model, bad)
+    big = setup.q.copy()
+    big[:2] = 1e308  # finite, the sum overflows
+    check_configuration(model, big)
+    big[3:7] *= 2.0
+    with pytest.raises(ModelError, match="quaternion of joint 'root_joint' has norm 2"):
+        check_configuration(model, big)
+
+
 def test_coupled_joints_given_values_that_disagree(tmp_path):
     """Two joints coupled by a MuJoCo joint equality (jb = 0.2 - ja) both given in
     [configuration.joints] or [velocity.joints] with values that disagree: one ConfigError

@@ -191,7 +191,7 @@ class ImpactSetup:
         """
         q = self.q if q is None else np.asarray(q, dtype=float)
         M, A_all = self._cs.evaluate(q)
-        return M, A_all[..., self._active, :]
+        return M, A_all.take(self._active, axis=-2)  # A_all[..., active, :], cheaper
 
     def T_c_at(self, q) -> float:
         r"""T_c^- [J] of this setup's active rows and velocity ``v`` at one configuration
