@@ -4,7 +4,9 @@ many configurations, and the beta sweep; the rocker-bogie built in and as a file
 scenario: issue 14 asks for a file model as fast as a built-in rover of its size).
 
 End to end = Pinocchio kinematics at q -> M (CRBA) and the active rows of A (frame
-Jacobians) -> T_c^- (roverimpact.partition). The scenario is built once beforehand.
+Jacobians) -> T_c^- (roverimpact.partition). The scenario is built once beforehand. The
+parts (``setup.evaluate(q)``, ``partition`` of its M and A) are timed on their own, in
+turns with the whole: best of 7 rounds.
 Batched over q = ``setup.evaluate(Q)`` with Q (k, nq) -> ``partition(M, A, V)`` (k items),
 against the loop of single end-to-end calls over the same configurations.
 Run: python benchmarks/bench_models.py
@@ -24,14 +26,20 @@ from roverimpact.models import export_plain_urdf, rocker_bogie
 from roverimpact.scenario import ImpactSetup, Scenario, sweep_energy
 
 
-def per_call(fn, n):
-    fn()
-    best = np.inf
-    for _ in range(5):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        best = min(best, (time.perf_counter() - t0) / n)
+def in_turns(*timed, rounds=7):
+    """Best time per call of each ``(fn, reps)`` of ``timed``, over ``rounds`` rounds that
+    call them in turns (``reps`` calls each): this machine's speed changes from one second
+    to the next, and timed one after the other the parts of a call could add up to more
+    than the whole (a negative "partition" was printed as end to end minus kinematics)."""
+    for fn, _ in timed:
+        fn()
+    best = [np.inf] * len(timed)
+    for _ in range(rounds):
+        for i, (fn, reps) in enumerate(timed):
+            t0 = time.perf_counter()
+            for _ in range(reps):
+                fn()
+            best[i] = min(best[i], (time.perf_counter() - t0) / reps)
     return best
 
 
@@ -62,11 +70,13 @@ def main():
         def kin_only(setup=setup, q=q):
             return setup.evaluate(q)
 
-        t_e2e = per_call(end_to_end, 2000)
-        t_kin = per_call(kin_only, 2000)
-        t_one = per_call(lambda setup=setup, q=q: setup.T_c_at(q), 2000)
+        M, A = setup.evaluate(q)
+        t_e2e, t_kin, t_part, t_one = in_turns(
+            (end_to_end, 2000), (kin_only, 2000),
+            (lambda M=M, A=A, v=v: partition(M, A, v, want_velocities=False), 2000),
+            (lambda setup=setup, q=q: setup.T_c_at(q), 2000))
         print(f"{name:32s} end to end {1e6 * t_e2e:7.1f} us  (kinematics + M + A "
-              f"{1e6 * t_kin:6.1f} us, partition {1e6 * (t_e2e - t_kin):6.1f} us)")
+              f"{1e6 * t_kin:6.1f} us, partition {1e6 * t_part:6.1f} us)")
         print(f"{'':32s} setup.T_c_at(q), one compiled call: {1e6 * t_one:6.1f} us "
               f"({t_e2e / t_one:4.2f}x faster)")
         if "rocker" in name and "bogie" in name:
@@ -90,15 +100,16 @@ def main():
                 M, A = setup.evaluate(Q)
                 return partition(M, A, V, want_velocities=False).T_c
 
-            t_loop = per_call(loop, 2) / k
-            t_b = per_call(batched, 3) / k
-            t_bk = per_call(lambda Q=Q, setup=setup: setup.evaluate(Q), 3) / k
+            t_loop, t_b, t_bk = (t / k for t in in_turns(
+                (loop, 1), (batched, 3), (lambda Q=Q, setup=setup: setup.evaluate(Q), 3),
+                rounds=5))
             print(f"{'':32s} batched over {k:5d} q: {1e6 * t_b:6.2f} us per q end to end "
                   f"(evaluate {1e6 * t_bk:5.2f} us) vs loop {1e6 * t_loop:6.2f} us per q "
                   f"-> {t_loop / t_b:4.1f}x")
         for k in (91, 1000):
             beta = np.linspace(0, np.pi / 2, k)
-            t_sw = per_call(lambda beta=beta, setup=setup: sweep_energy(setup, beta), 20)
+            t_sw, = in_turns((lambda beta=beta, setup=setup: sweep_energy(setup, beta), 20),
+                             rounds=5)
             print(f"{'':32s} sweep over {k:5d} beta: {1e3 * t_sw:7.2f} ms total, "
                   f"{1e6 * t_sw / k:6.2f} us per beta ({t_e2e * k / t_sw:5.1f}x faster than "
                   "end to end per beta)")
