@@ -13,9 +13,10 @@ Cholesky of M, W = L^-1 A^T, G = W^T W, T_c = 1/2 (A v)^T G^-1 (A v) by a second
 ``partition`` checks its inputs, handles dependent rows and returns v_c, v_a and the
 ranks; the figure is what that costs per call.
 
-The 1e5 and 1e6 batches are timed in turns, over 1e6 items each, as ``partition`` and as
-the lane kernel writing into output arrays made once (the computation alone). A
-``partition`` call of 1e6 items returns 312 MB of new arrays, above glibc's threshold for
+The 1e5 and 1e6 batches are timed in turns (best of 7 rounds), over 1e6 items each, as
+``partition`` and as the lane kernel writing into output arrays made once (the
+computation alone). A
+``partition`` call of 1e6 items returns 320 MB of new arrays, above glibc's threshold for
 reusing freed memory: ``MALLOC_MMAP_MAX_=0 MALLOC_TRIM_THRESHOLD_=100000000000`` in the
 environment makes glibc reuse it at every size, as it does at 1e5 (docs/theory.md).
 
@@ -277,10 +278,10 @@ def main() -> None:
     # results (v_c and v_a 144 MB each) are fresh pages every call; the lane kernel into
     # output arrays made once shows the computation alone.
     full = in_turns(ten_times(ri.partition, *inputs[0]), lambda: ri.partition(*inputs[1]),
-                    rounds=3, reps=1)
+                    rounds=7, reps=1)
     outs = [outputs(k) for k in sizes]
     alone = in_turns(ten_times(kernel_only, *inputs[0], outs[0]),
-                     lambda: kernel_only(*inputs[1], outs[1]), rounds=3, reps=1)
+                     lambda: kernel_only(*inputs[1], outs[1]), rounds=7, reps=1)
     for what, times in (("partition", full), ("lane kernel alone", alone)):
         r = [1_000_000 / t for t in times]
         print(f"  {what:<18} 1e5 items {r[0]:9.3g}/s, 1e6 items {r[1]:9.3g}/s, "
