@@ -709,3 +709,69 @@ def test_ground_wheels_off_the_ground_are_named():
         ri.ImpactSetup.from_scenario(sc(RB, configuration={"base": {"z": nominal[2] + 0.05}}))
     assert sum("0.05 m above" in str(r.message) for r in rec) == 1
     assert str(rec[0].message).count("m above") == 5  # the ground wheels: all but the hit one
+
+
+def test_threads_sharing_a_setup_take_turns(monkeypatch):
+    """Two threads calling T_c_at, evaluate (one q and a batch) and sweep_energy on one
+    setup take turns on its Pinocchio data and get what one thread gets. Before, the
+    compiled kernels read that data with the GIL released while the other thread's
+    Pinocchio pass rewrote it: now and then a wrong T_c or M (a few of 12 000 calls in a
+    scratch run). Here every Pinocchio pass on the setup's data sleeps 2 ms, so passes of
+    the two threads would overlap without the set's lock."""
+    import threading
+    import time
+
+    setup = ri.ImpactSetup.from_scenario(sc(RB))
+    model, data = setup.model.model, setup._cs.data
+    rng = np.random.default_rng(3)
+    Q = [pin.integrate(model, setup.q, 0.1 * rng.standard_normal(model.nv)) for _ in range(2)]
+    beta = np.radians([10.0, 50.0])
+
+    def calls(q):
+        return (setup.T_c_at(q), *setup.evaluate(q), *setup.evaluate(np.stack([q, Q[0]])),
+                sweep_energy(setup, beta).T_c_minus)
+
+    expected = [calls(q) for q in Q]
+    inside, most = [0], [0]
+    jacobians = pin.computeJointJacobians
+
+    def slow(model_, data_, q):
+        if data_ is not data:
+            return jacobians(model_, data_, q)
+        inside[0] += 1
+        most[0] = max(most[0], inside[0])
+        try:
+            time.sleep(0.002)  # the other thread runs meanwhile
+            return jacobians(model_, data_, q)
+        finally:
+            inside[0] -= 1
+
+    monkeypatch.setattr(pin, "computeJointJacobians", slow)
+    got: list[list] = [[], []]
+
+    def work(i):
+        for _ in range(4):
+            got[i].append(calls(Q[i]))
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert most[0] == 1  # one pass on the data at a time
+    for i in range(2):
+        assert len(got[i]) == 4
+        for res in got[i]:
+            for a, b in zip(res, expected[i], strict=True):
+                np.testing.assert_array_equal(a, b)
+
+
+def test_a_setup_pickles_with_its_own_lock():
+    """A pickled setup (a Dask task's argument) comes back with a lock of its own and
+    gives the same T_c_at."""
+    import pickle
+
+    setup = ri.ImpactSetup.from_scenario(sc(RB))
+    copy = pickle.loads(pickle.dumps(setup))
+    assert copy._cs.lock is not setup._cs.lock
+    assert copy.T_c_at(setup.q) == setup.T_c_at(setup.q)

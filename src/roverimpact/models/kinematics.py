@@ -7,6 +7,7 @@ compiled assembly of every row in one pass (:mod:`._assemble`).
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -35,6 +36,14 @@ class ConstraintSet:
     constraints : list
         :class:`GroundContact`, :class:`PointContact`, :class:`LoopClosure`,
         :class:`LockedJoint` items.
+
+    One set holds one Pinocchio ``data``, and its compiled kernels read that data with the
+    GIL released. :meth:`evaluate`, :meth:`partition_at` and :meth:`evaluate_members`
+    therefore hold :attr:`lock` (re-entrant) while they use it: threads that share a set
+    (an :class:`~roverimpact.scenario.ImpactSetup` and its ``T_c_at``, ``evaluate`` and
+    :func:`~roverimpact.scenario.sweep_energy`) take turns and get the results of one
+    thread, where two Pinocchio passes on one data at once gave wrong numbers. To run in
+    parallel, give each thread its own setup.
     """
 
     mbm: MultibodyModel
@@ -47,6 +56,7 @@ class ConstraintSet:
     def __post_init__(self):
         model = self.mbm.model
         self._data = model.createData()
+        self.lock = threading.RLock()
         self.labels = []
         self._fids = []
         for c in self.constraints:
@@ -76,7 +86,12 @@ class ConstraintSet:
         # the compiled row plan reads ``_data``'s memory in place: rebuild it after a copy
         state = self.__dict__.copy()
         state["_plan"] = None
+        del state["lock"]  # a lock does not pickle: each copy has its own data and lock
         return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self.lock = threading.RLock()
 
     def kinematics(self, q) -> None:
         """Forward kinematics, joint Jacobians and frame placements at ``q``."""
@@ -140,9 +155,11 @@ class ConstraintSet:
         check_configuration(self.mbm.model, q)
         plan = self._plan if self._plan is not None else self._row_plan()
         if q.ndim == 1:
-            return plan.evaluate(q)
+            with self.lock:
+                return plan.evaluate(q)
         batch = q.shape[:-1]
-        M, A = plan.evaluate_many(np.ascontiguousarray(q.reshape(-1, nq)))
+        with self.lock:
+            M, A = plan.evaluate_many(np.ascontiguousarray(q.reshape(-1, nq)))
         return M.reshape(*batch, *M.shape[1:]), A.reshape(*batch, *A.shape[1:])
 
     def partition_at(self, q, rows, v, rtol: float, res: np.ndarray) -> int:
@@ -155,7 +172,8 @@ class ConstraintSet:
         if not pin.isNormalized(self.mbm.model, q, UNIT_TOL):  # 0.3 us; NaN fails it too
             check_configuration(self.mbm.model, q)  # says what is wrong
         plan = self._plan if self._plan is not None else self._row_plan()
-        return plan.partition_at(q, rows, v, rtol, res)
+        with self.lock:
+            return plan.partition_at(q, rows, v, rtol, res)
 
     def evaluate_members(self, family, Q, normals: Mapping[int, np.ndarray] | None = None
                          ) -> tuple[np.ndarray, np.ndarray]:
@@ -193,7 +211,8 @@ class ConstraintSet:
         for c, w in enumerate(plan.contact_wheel):
             if w is not None:
                 cr[:, c] = family.numbers.wheel_radius[:, wheels[w]]
-        return plan.evaluate_many(Q, before=family.write, c_normal=cn, c_radius=cr)
+        with self.lock:
+            return plan.evaluate_many(Q, before=family.write, c_normal=cn, c_radius=cr)
 
 
 def _frame_id(model, name: str) -> int:

@@ -138,6 +138,13 @@ class ImpactSetup:
         All candidate rows (active or not).
     constraints : "auto", "all" or list of str
         How the active rows were chosen (:func:`choose_active_rows`).
+
+    Notes
+    -----
+    A setup holds one Pinocchio ``data``. Threads that share a setup take turns on it in
+    :meth:`T_c_at`, :meth:`evaluate` and :func:`~roverimpact.scenario.sweep_energy` (its
+    constraint set's lock) and get the results of one thread; to run in parallel, give
+    each thread its own setup (:meth:`from_scenario` again, or a pickled copy).
     """
 
     M: np.ndarray
