@@ -64,6 +64,7 @@ def compiled_helpers() -> dict[str, list[str]]:
 
 def kernels():
     """Every :class:`~roverimpact._kernels._jit.Kernel` of the package."""
+    from roverimpact._kernels.bootstrap import agreement_kernel
     from roverimpact._kernels.friction import friction_kernel
     from roverimpact._kernels.lanes_jit import LANES
     from roverimpact._kernels.lemke import impact_kernel
@@ -72,7 +73,7 @@ def kernels():
     from roverimpact._kernels.reduced import rk4_peaks, stiff_peaks
 
     return (partition_kernel, impact_kernel, friction_kernel, masses_kernel, LANES,
-            rk4_peaks, stiff_peaks)
+            rk4_peaks, stiff_peaks, agreement_kernel)
 
 
 def main(out: str) -> None:

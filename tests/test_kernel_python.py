@@ -138,6 +138,21 @@ def test_row_assembly_of_a_scenario(monkeypatch):
         close(getattr(pm, f), getattr(cm, f))
 
 
+def test_bootstrap_of_agreement(monkeypatch, rng):
+    """The bootstrap kernel of studies above 400 cases (ties included), in Python and
+    compiled: Spearman, Kendall, Pearson and the concordant fraction of every resample,
+    and a Spearman difference."""
+    from roverimpact.studies import stats
+
+    x = np.round(rng.standard_normal(420), 1)
+    y = np.round(x + rng.standard_normal(420), 1)
+    (b_py, d_py), (b_c, d_c) = both(monkeypatch, lambda: (
+        stats._boot_stats(x, y, np.random.default_rng(2), 6),
+        stats.spearman_difference(x, -y, y, n_boot=100, seed=2)))
+    close(b_py, b_c, rtol=1e-13)
+    close([d_py.value, d_py.low, d_py.high], [d_c.value, d_c.low, d_c.high], rtol=1e-13)
+
+
 @pytest.mark.parametrize("integrator", ["rk4", "rosenbrock"])
 def test_reduced_impact_integrators(monkeypatch, integrator):
     from roverimpact.contact.reduced import reduced_impact_batch

@@ -10,12 +10,15 @@ the main statistics are rank statistics:
 - Pearson's r (linear agreement) for completeness.
 
 Each comes with a seeded percentile bootstrap confidence interval (cases resampled with
-replacement, pairs kept together). :func:`rank_correlation` gives Kendall's and
-Spearman's coefficients with p-values instead (no bootstrap), for a few conditions such
-as the experiment comparison: scipy's Kendall p (exact for small samples without ties),
-and for Spearman the exact permutation p up to :data:`SPEARMAN_EXACT_MAX_N` pairs
-(scipy's t approximation gives p = 0 for a perfect ranking of 3 or 4 pairs, where the
-exact p is 1/3 or 1/12), scipy's above.
+replacement, pairs kept together). Above :data:`SIGN_MATRIX_MAX_N` cases a compiled
+kernel (:mod:`roverimpact._kernels.bootstrap`) computes each resample's statistics from
+how often it draws each case, without sorting the resample.
+
+:func:`rank_correlation` gives Kendall's and Spearman's coefficients with p-values instead
+(no bootstrap), for a few conditions such as the experiment comparison: scipy's Kendall p
+(exact for small samples without ties), and for Spearman the exact permutation p up to
+:data:`SPEARMAN_EXACT_MAX_N` pairs (scipy's t approximation gives p = 0 for a perfect
+ranking of 3 or 4 pairs, where the exact p is 1/3 or 1/12), scipy's above.
 """
 
 from __future__ import annotations
@@ -214,20 +217,25 @@ def _rowwise_pearson(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 BOOT_BLOCK = 4_000_000
 
 
-def _pairs(counts: np.ndarray) -> int:
-    counts = counts.astype(np.int64)
-    return int(np.sum(counts * (counts - 1) // 2))
+#: Most cases whose bootstrap statistics come from sign matrices in numpy; above, the
+#: compiled kernel (:func:`_boot_kernel`).
+SIGN_MATRIX_MAX_N = 400
 
 
-def _boot_stats(x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """(n_boot, 4) Spearman, Kendall tau-b, Pearson, concordant fraction of resamples.
+def _boot_stats(x: np.ndarray, y: np.ndarray, rng: np.random.Generator,
+                n_boot: int) -> np.ndarray:
+    """(n_boot, 4) Spearman, Kendall tau-b, Pearson, concordant fraction of ``n_boot``
+    resamples of the pairs (``rng.integers(0, n, (n_boot, n))``, drawn in blocks of
+    :data:`BOOT_BLOCK` elements: the same draws as at once).
 
-    Vectorized over blocks of resamples (:data:`BOOT_BLOCK` elements at a time); the pair
-    statistics use the sign matrices ``sign(x_i - x_j) sign(y_i - y_j)`` for n <= 400,
-    above one ``scipy.stats.kendalltau`` per resample, its concordant fraction from tau-b
-    and the tie counts (counted from the groups of equal values of the sample).
+    Up to :data:`SIGN_MATRIX_MAX_N` cases, in numpy: ranks by ``scipy.stats.rankdata`` and
+    the pair statistics from the sign matrices ``sign(x_i - x_j) sign(y_i - y_j)``; above,
+    :func:`_boot_kernel`.
     """
-    n_boot, n = idx.shape
+    n = x.size
+    if n > SIGN_MATRIX_MAX_N:
+        return _boot_kernel(x, y, rng, n_boot)
+    idx = rng.integers(0, n, (n_boot, n))
     out = np.full((n_boot, 4), np.nan)
     step = max(1, BOOT_BLOCK // n)
     for s0 in range(0, n_boot, step):
@@ -235,21 +243,6 @@ def _boot_stats(x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
         out[s0:s0 + step, 2] = _rowwise_pearson(X, Y)
         out[s0:s0 + step, 0] = _rowwise_pearson(sps.rankdata(X, axis=1),
                                                 sps.rankdata(Y, axis=1))
-    if n > 400:
-        gx = np.unique(x, return_inverse=True)[1].ravel()
-        gy = np.unique(y, return_inverse=True)[1].ravel()
-        gxy = np.unique(gx * (int(gy.max()) + 1) + gy, return_inverse=True)[1].ravel()
-        n0 = n * (n - 1) // 2
-        for b in range(n_boot):
-            i = idx[b]
-            tau_b = sps.kendalltau(x[i], y[i], variant="b").statistic
-            out[b, 1] = tau_b
-            n1, n2 = _pairs(np.bincount(gx[i])), _pairs(np.bincount(gy[i]))
-            untied = n0 - n1 - n2 + _pairs(np.bincount(gxy[i]))
-            if untied > 0 and math.isfinite(tau_b):
-                diff = tau_b * math.sqrt(float(n0 - n1) * float(n0 - n2))
-                out[b, 3] = round((untied + diff) / 2) / untied
-        return out
     block = max(1, int(4e6 // (n * n)))
     for s0 in range(0, n_boot, block):
         xs, ys = x[idx[s0:s0 + block]], y[idx[s0:s0 + block]]
@@ -263,6 +256,37 @@ def _boot_stats(x: np.ndarray, y: np.ndarray, idx: np.ndarray) -> np.ndarray:
         with np.errstate(invalid="ignore", divide="ignore"):
             out[s0:s0 + block, 1] = np.where(nx * ny > 0, (C - D) / np.sqrt(nx * ny), np.nan)
             out[s0:s0 + block, 3] = np.where(C + D > 0, C / (C + D), np.nan)
+    return out
+
+
+def _groups(v: np.ndarray) -> np.ndarray:
+    """Group of each value: 0, 1, ... in increasing value, equal values one group."""
+    return np.unique(v, return_inverse=True)[1].ravel().astype(np.int64)
+
+
+def _boot_kernel(x: np.ndarray, y: np.ndarray, rng: np.random.Generator, n_boot: int, *,
+                 kendall: bool = True) -> np.ndarray:
+    """:func:`_boot_stats` by the compiled kernel
+    (:func:`roverimpact._kernels.bootstrap.agreement_kernel`): each resample's statistics
+    from the counts of its cases, O(n) for the ranks, Pearson's and Spearman's
+    coefficients and O(n log n) for Kendall's tau-b (with ``kendall`` False, its columns
+    are NaN). The same statistics as the numpy path to rounding: Kendall's and the
+    concordant fraction from the same integer pair counts."""
+    from .._kernels.bootstrap import agreement_kernel
+
+    n = x.size
+    gx, gy = _groups(x), _groups(y)
+    gxy = _groups(gx * (int(gy.max()) + 1) + gy)
+    order = np.argsort(gx, kind="stable")  # the kernel takes the cases in increasing x
+    at = np.empty(n, np.int64)
+    at[order] = np.arange(n)
+    x, y, gx, gy, gxy = (np.ascontiguousarray(a[order]) for a in (x, y, gx, gy, gxy))
+    out = np.empty((n_boot, 4))
+    step = max(1, BOOT_BLOCK // n)
+    for s0 in range(0, n_boot, step):
+        k = min(step, n_boot - s0)
+        agreement_kernel.get(k * n)(x, y, gx, gy, gxy, at, rng.integers(0, n, (k, n)),
+                                    kendall, out[s0:s0 + k])
     return out
 
 
@@ -305,9 +329,7 @@ def agreement(x, y, *, n_boot: int = 1000, confidence: float = 0.95, seed: int =
     _frac, C, D, T = concordant_pair_fraction(x, y)
     lows = highs = (float("nan"),) * 4
     if n_boot and n >= 3:
-        rng = np.random.default_rng(seed)
-        idx = rng.integers(0, n, (n_boot, n))
-        boot = _boot_stats(x, y, idx)
+        boot = _boot_stats(x, y, np.random.default_rng(seed), n_boot)
         a = (1.0 - confidence) / 2.0
         finite = np.isfinite(boot)
         lows = tuple(float(np.quantile(boot[finite[:, i], i], a)) if finite[:, i].any()
@@ -354,14 +376,20 @@ def spearman_difference(x1, x2, y, *, n_boot: int = 1000, confidence: float = 0.
     value = r1 - r2
     low = high = nan
     if n_boot and math.isfinite(value):
-        idx = np.random.default_rng(seed).integers(0, a.size, (n_boot, a.size))
-        diff = np.empty(n_boot)
-        step = max(1, BOOT_BLOCK // a.size)  # bounded memory, as _boot_stats
-        for s0 in range(0, n_boot, step):
-            i = idx[s0:s0 + step]
-            ry = sps.rankdata(c[i], axis=1)
-            diff[s0:s0 + step] = (_rowwise_pearson(sps.rankdata(a[i], axis=1), ry)
-                                  - _rowwise_pearson(sps.rankdata(b[i], axis=1), ry))
+        rng = np.random.default_rng(seed)
+        if a.size > SIGN_MATRIX_MAX_N:  # the same draws for both coefficients
+            diff = (_boot_kernel(a, c, rng, n_boot, kendall=False)[:, 0]
+                    - _boot_kernel(b, c, np.random.default_rng(seed), n_boot,
+                                   kendall=False)[:, 0])
+        else:
+            idx = rng.integers(0, a.size, (n_boot, a.size))
+            diff = np.empty(n_boot)
+            step = max(1, BOOT_BLOCK // a.size)  # bounded memory, as _boot_stats
+            for s0 in range(0, n_boot, step):
+                i = idx[s0:s0 + step]
+                ry = sps.rankdata(c[i], axis=1)
+                diff[s0:s0 + step] = (_rowwise_pearson(sps.rankdata(a[i], axis=1), ry)
+                                      - _rowwise_pearson(sps.rankdata(b[i], axis=1), ry))
         diff = diff[np.isfinite(diff)]
         if diff.size >= n_boot / 2:
             q = (1.0 - confidence) / 2.0
