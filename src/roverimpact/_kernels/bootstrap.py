@@ -63,14 +63,14 @@ def agreement_kernel(x, y, gx, gy, gxy, at, idx, kendall, out):  # pragma: no co
         ngx = max(ngx, gx[j] + 1)
         ngy = max(ngy, gy[j] + 1)
         ngxy = max(ngxy, gxy[j] + 1)
-    c = np.zeros(n, np.int64)
+    c = np.zeros(n, np.int32)
     cx = np.zeros(ngx, np.int64)
     cy = np.zeros(ngy, np.int64)
     cxy = np.zeros(ngxy, np.int64)
     rx = np.empty(ngx)
     ry = np.empty(ngy)
-    tree = np.zeros(ngy + 1, np.int64)  # Fenwick tree over the groups of y, 1-based
-    iny = np.zeros(ngy, np.int64)  # copies of each group of y in the tree
+    tree = np.zeros(ngy + 1, np.int32)  # Fenwick tree over the groups of y, 1-based
+    iny = np.zeros(ngy, np.int32)  # copies of each group of y in the tree
     mid = 0.5 * (n + 1)  # the mean rank
     n0 = n * (n - 1) // 2
     nan = math.nan
