@@ -255,7 +255,7 @@ def test_coupling_rows_are_constant_for_the_compiled_row_plan(files):
     _, A = cs.evaluate(q)
     cs.kinematics(q)
     np.testing.assert_allclose(A, cs.rows(q), atol=1e-14)
-    assert cs._plan._loop_constant
+    assert cs._row_plan()._loop_constant
 
 
 def test_a_fixed_joint_equality_holds_its_joint(tmp_path):

@@ -711,18 +711,18 @@ def test_ground_wheels_off_the_ground_are_named():
     assert str(rec[0].message).count("m above") == 5  # the ground wheels: all but the hit one
 
 
-def test_threads_sharing_a_setup_take_turns(monkeypatch):
+def test_threads_sharing_a_setup_get_one_thread_s_results(monkeypatch):
     """Two threads calling T_c_at, evaluate (one q and a batch) and sweep_energy on one
-    setup take turns on its Pinocchio data and get what one thread gets. Before, the
-    compiled kernels read that data with the GIL released while the other thread's
-    Pinocchio pass rewrote it: now and then a wrong T_c or M (a few of 12 000 calls in a
-    scratch run). Here every Pinocchio pass on the setup's data sleeps 2 ms, so passes of
-    the two threads would overlap without the set's lock."""
+    setup get what one thread gets: each thread has its own Pinocchio data, never used by
+    two passes at once. Before, both used the setup's one data, and the compiled kernels
+    read it with the GIL released while the other thread's Pinocchio pass rewrote it: now
+    and then a wrong T_c or M (a few of 12 000 calls in a scratch run). Here every
+    Pinocchio pass sleeps 2 ms, so passes of the two threads on one data would overlap."""
     import threading
     import time
 
     setup = ri.ImpactSetup.from_scenario(sc(RB))
-    model, data = setup.model.model, setup._cs.data
+    model = setup.model.model
     rng = np.random.default_rng(3)
     Q = [pin.integrate(model, setup.q, 0.1 * rng.standard_normal(model.nv)) for _ in range(2)]
     beta = np.radians([10.0, 50.0])
@@ -732,24 +732,28 @@ def test_threads_sharing_a_setup_take_turns(monkeypatch):
                 sweep_energy(setup, beta).T_c_minus)
 
     expected = [calls(q) for q in Q]
-    inside, most = [0], [0]
+    inside: dict[int, int] = {}
+    most = [0]
+    used: dict[int, set] = {0: set(), 1: set()}
+    who = threading.local()
     jacobians = pin.computeJointJacobians
 
     def slow(model_, data_, q):
-        if data_ is not data:
-            return jacobians(model_, data_, q)
-        inside[0] += 1
-        most[0] = max(most[0], inside[0])
+        key = id(data_)
+        inside[key] = inside.get(key, 0) + 1
+        most[0] = max(most[0], inside[key])
+        used[getattr(who, "i", 0)].add(key)
         try:
             time.sleep(0.002)  # the other thread runs meanwhile
             return jacobians(model_, data_, q)
         finally:
-            inside[0] -= 1
+            inside[key] -= 1
 
     monkeypatch.setattr(pin, "computeJointJacobians", slow)
     got: list[list] = [[], []]
 
     def work(i):
+        who.i = i
         for _ in range(4):
             got[i].append(calls(Q[i]))
 
@@ -758,7 +762,8 @@ def test_threads_sharing_a_setup_take_turns(monkeypatch):
         t.start()
     for t in threads:
         t.join()
-    assert most[0] == 1  # one pass on the data at a time
+    assert most[0] == 1  # never two passes on one data at once
+    assert not used[0] & used[1]  # each thread its own data
     for i in range(2):
         assert len(got[i]) == 4
         for res in got[i]:
@@ -766,12 +771,12 @@ def test_threads_sharing_a_setup_take_turns(monkeypatch):
                 np.testing.assert_array_equal(a, b)
 
 
-def test_a_setup_pickles_with_its_own_lock():
-    """A pickled setup (a Dask task's argument) comes back with a lock of its own and
-    gives the same T_c_at."""
+def test_a_setup_pickles_with_its_own_data_and_lock():
+    """A pickled setup (a Dask task's argument) comes back with its own Pinocchio data and
+    lock and gives the same T_c_at."""
     import pickle
 
     setup = ri.ImpactSetup.from_scenario(sc(RB))
     copy = pickle.loads(pickle.dumps(setup))
-    assert copy._cs.lock is not setup._cs.lock
+    assert copy._cs.lock is not setup._cs.lock and copy._cs.data is not setup._cs.data
     assert copy.T_c_at(setup.q) == setup.T_c_at(setup.q)

@@ -283,7 +283,8 @@ class RowPlan:
                 self.support[k, jm.idx_v:jm.idx_v + jm.nv] = True
         self.m, self.nv = m, nv
         self._cs = cs
-        # the model and data every pass uses (the placement view below reads this data)
+        # the model and data every pass uses (the placement view below reads this data):
+        # the data of the thread that makes the plan (ConstraintSet.data)
         self._model, self._data = model, cs.data
         # frame placements: a read-only view of Pinocchio's own storage when its layout is
         # the expected one (checked here), else a buffer refilled frame by frame per call
@@ -321,7 +322,7 @@ class RowPlan:
             X[...] = self._oMf
             return X
         X = self._X if X is None else X
-        oMf = self._cs.data.oMf
+        oMf = self._data.oMf
         for k, fid in enumerate(self.frame_ids):
             H = oMf[fid].homogeneous
             X[k, :9] = H[:3, :3].T.reshape(9)
@@ -386,7 +387,7 @@ class RowPlan:
         ``c_normal`` (k, nc, 3) and ``c_radius`` (k, nc) give each item's contact normals
         and wheel radii (default: this plan's, :attr:`c_normal`, :attr:`c_radius`).
         """
-        model, data = self._cs.mbm.model, self._cs.data
+        model, data = self._model, self._data
         cn = self.c_normal[None] if c_normal is None else np.ascontiguousarray(c_normal)
         cr = self.c_radius[None] if c_radius is None else np.ascontiguousarray(c_radius)
         for x, name in ((cn, "c_normal"), (cr, "c_radius")):

@@ -20,6 +20,7 @@ point Jacobians (:func:`roverimpact.models.constraints.point_jacobian`):
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -430,6 +431,9 @@ class FrameLoopClosure:
 
     def __init__(self, model, data, loops, ids, lengths, axes, own):
         self.model, self.data, self.own = model, data, own
+        # one Pinocchio data for the rows of every thread: they take turns on it (a
+        # model, and its closure, are shared by the setups built on it)
+        self._lock = threading.Lock()
         self.loops = list(zip(loops, ids, lengths, axes, strict=True))
         # the two points of every loop, a then b: (frame id, point in the frame)
         self._points = [pt for fa, ra, fb, rb in ids for pt in ((fa, ra), (fb, rb))]
@@ -439,15 +443,16 @@ class FrameLoopClosure:
         arithmetic of :func:`_points` and
         :func:`~roverimpact.models.constraints.point_jacobian`, every point at once."""
         model, data = self.model, self.data
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        oMf, P, R, J = data.oMf, [], [], []
-        for f, r in self._points:
-            M = oMf[f]
-            p = M.act(r)
-            P.append(p)
-            R.append(p - M.translation)
-            J.append(pin.getFrameJacobian(model, data, f, _LWA))
+        with self._lock:
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacements(model, data)
+            oMf, P, R, J = data.oMf, [], [], []
+            for f, r in self._points:
+                M = oMf[f]
+                p = M.act(r)
+                P.append(p)
+                R.append(p - M.translation)
+                J.append(pin.getFrameJacobian(model, data, f, _LWA))
         J = np.array(J).reshape(len(P), 6, model.nv)
         Jp = J[:, :3] - _skew(np.array(R)) @ J[:, 3:]          # (points, 3, nv)
         for i, (lp, _, L, ax) in enumerate(self.loops):
@@ -461,6 +466,15 @@ class FrameLoopClosure:
                 u = d / nd if nd > 1e-12 else np.zeros(3)
                 phis.append(np.array([nd - L]))
                 rows.append((u @ (Ja - Jb))[None, :])
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        del state["_lock"]  # a lock does not pickle
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
 
     def __call__(self, q):
         q = np.asarray(q, float)

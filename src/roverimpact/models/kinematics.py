@@ -37,13 +37,14 @@ class ConstraintSet:
         :class:`GroundContact`, :class:`PointContact`, :class:`LoopClosure`,
         :class:`LockedJoint` items.
 
-    One set holds one Pinocchio ``data``, and its compiled kernels read that data with the
-    GIL released. :meth:`evaluate`, :meth:`partition_at` and :meth:`evaluate_members`
-    therefore hold :attr:`lock` (re-entrant) while they use it: threads that share a set
-    (an :class:`~roverimpact.scenario.ImpactSetup` and its ``T_c_at``, ``evaluate`` and
-    :func:`~roverimpact.scenario.sweep_energy`) take turns and get the results of one
-    thread, where two Pinocchio passes on one data at once gave wrong numbers. To run in
-    parallel, give each thread its own setup.
+    Threads: each thread that uses a set gets its own Pinocchio ``data`` and row plan
+    (:attr:`data`, made on its first call), as Pinocchio's models are shared and its data
+    are not; the compiled kernels read that data with the GIL released. Threads that
+    share a set (an :class:`~roverimpact.scenario.ImpactSetup` and its ``T_c_at``,
+    ``evaluate`` and :func:`~roverimpact.scenario.sweep_energy`) get the results of one
+    thread, where two Pinocchio passes on one data at once gave wrong numbers.
+    :meth:`evaluate_members` writes each member's numbers into the model itself: it holds
+    :attr:`lock` (re-entrant), so threads sharing the set take turns there.
     """
 
     mbm: MultibodyModel
@@ -51,11 +52,12 @@ class ConstraintSet:
     labels: list[str] = field(init=False)
     _fids: list = field(init=False, repr=False)
     _data: object = field(init=False, repr=False)
-    _plan: object = field(init=False, repr=False, default=None)
 
     def __post_init__(self):
         model = self.mbm.model
-        self._data = model.createData()
+        self._data = model.createData()  # the data of the thread that made the set
+        self._local = threading.local()  # each thread's data and row plan
+        self._local.data = self._data
         self.lock = threading.RLock()
         self.labels = []
         self._fids = []
@@ -80,28 +82,35 @@ class ConstraintSet:
 
     @property
     def data(self):
-        return self._data
+        """The Pinocchio data of the calling thread (made on its first use)."""
+        try:
+            return self._local.data
+        except AttributeError:
+            data = self._local.data = self.mbm.model.createData()
+            return data
 
     def __getstate__(self):
-        # the compiled row plan reads ``_data``'s memory in place: rebuild it after a copy
+        # the row plans read their data's memory in place, and neither the threads' data
+        # nor a lock pickles: a copy makes its own
         state = self.__dict__.copy()
-        state["_plan"] = None
-        del state["lock"]  # a lock does not pickle: each copy has its own data and lock
+        del state["lock"], state["_local"]
         return state
 
     def __setstate__(self, state):
         self.__dict__.update(state)
+        self._local = threading.local()
+        self._local.data = self._data
         self.lock = threading.RLock()
 
     def kinematics(self, q) -> None:
         """Forward kinematics, joint Jacobians and frame placements at ``q``."""
-        model, data = self.mbm.model, self._data
+        model, data = self.mbm.model, self.data
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
 
     def rows(self, q) -> np.ndarray:
         """A (m, nv) at ``q`` (after :meth:`kinematics` at the same ``q``)."""
-        model, data = self.mbm.model, self._data
+        model, data = self.mbm.model, self.data
         out = []
         for c, fid in zip(self.constraints, self._fids, strict=True):
             if fid is not None:
@@ -118,9 +127,12 @@ class ConstraintSet:
         return np.vstack(out)
 
     def _row_plan(self):
-        if self._plan is None:
-            self._plan = RowPlan(self)
-        return self._plan
+        """The calling thread's row plan (on its :attr:`data`), made on first use."""
+        try:
+            return self._local.plan
+        except AttributeError:
+            plan = self._local.plan = RowPlan(self)
+            return plan
 
     def fast_rows(self, q) -> np.ndarray:
         """The same ``A`` as :meth:`rows` at ``q``, from the compiled path
@@ -153,13 +165,14 @@ class ConstraintSet:
             raise ModelError(f"q must have shape (..., {nq}) for model {self.mbm.name!r}, "
                              f"got {q.shape}")
         check_configuration(self.mbm.model, q)
-        plan = self._plan if self._plan is not None else self._row_plan()
+        try:
+            plan = self._local.plan
+        except AttributeError:
+            plan = self._row_plan()
         if q.ndim == 1:
-            with self.lock:
-                return plan.evaluate(q)
+            return plan.evaluate(q)
         batch = q.shape[:-1]
-        with self.lock:
-            M, A = plan.evaluate_many(np.ascontiguousarray(q.reshape(-1, nq)))
+        M, A = plan.evaluate_many(np.ascontiguousarray(q.reshape(-1, nq)))
         return M.reshape(*batch, *M.shape[1:]), A.reshape(*batch, *A.shape[1:])
 
     def partition_at(self, q, rows, v, rtol: float, res: np.ndarray) -> int:
@@ -171,9 +184,11 @@ class ConstraintSet:
         the problem)."""
         if not pin.isNormalized(self.mbm.model, q, UNIT_TOL):  # 0.3 us; NaN fails it too
             check_configuration(self.mbm.model, q)  # says what is wrong
-        plan = self._plan if self._plan is not None else self._row_plan()
-        with self.lock:
-            return plan.partition_at(q, rows, v, rtol, res)
+        try:
+            plan = self._local.plan
+        except AttributeError:
+            plan = self._row_plan()
+        return plan.partition_at(q, rows, v, rtol, res)
 
     def evaluate_members(self, family, Q, normals: Mapping[int, np.ndarray] | None = None
                          ) -> tuple[np.ndarray, np.ndarray]:
@@ -195,7 +210,7 @@ class ConstraintSet:
         The loop-closure rows must not depend on the configuration
         (:attr:`~roverimpact.models._assemble.RowPlan.loops_constant`).
         """
-        plan = self._plan if self._plan is not None else self._row_plan()
+        plan = self._row_plan()
         if not plan.loops_constant:
             raise ModelError("evaluate_members needs constant loop-closure rows")
         Q = np.ascontiguousarray(np.asarray(Q, dtype=float))

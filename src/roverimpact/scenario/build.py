@@ -141,10 +141,9 @@ class ImpactSetup:
 
     Notes
     -----
-    A setup holds one Pinocchio ``data``. Threads that share a setup take turns on it in
-    :meth:`T_c_at`, :meth:`evaluate` and :func:`~roverimpact.scenario.sweep_energy` (its
-    constraint set's lock) and get the results of one thread; to run in parallel, give
-    each thread its own setup (:meth:`from_scenario` again, or a pickled copy).
+    Threads may share a setup: :meth:`T_c_at`, :meth:`evaluate` and
+    :func:`~roverimpact.scenario.sweep_energy` give each thread its own Pinocchio ``data``
+    (made on the thread's first call), and the threads get the results of one thread.
     """
 
     M: np.ndarray

@@ -84,13 +84,11 @@ def sweep_energy(scenario: Scenario | ImpactSetup, beta) -> ImpactEnergy:
     if np.any(beta < -1e-12) or np.any(beta > np.pi / 2 + 1e-12):
         raise InputError("beta must be in [0, pi/2] rad (0 to 90 degrees)")
     N = normal_from_beta(beta, setup._heading)  # (k, 3)
-    with setup._cs.lock:  # oMf is the set's Pinocchio data, which another thread may use
-        J, wheel, oMf = _obstacle_basis(setup)
-        R = None if wheel is None else oMf.rotation.copy()
+    J, wheel, oMf = _obstacle_basis(setup)
     if wheel is None:
         rows = N @ J
     else:
-        a = R @ np.asarray(wheel.axis, float)
+        a = oMf.rotation @ np.asarray(wheel.axis, float)
         d = N - (N @ a)[:, None] * a
         nd = np.linalg.norm(d, axis=1, keepdims=True)
         # a normal along the wheel axis (a face hit): d = n, as the row assembly does
