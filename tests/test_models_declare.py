@@ -378,3 +378,55 @@ def test_a_urdf_planar_joint_as_planar_base_says_what_to_write(tmp_path):
     with pytest.raises(ModelError, match=r"'p' is a URDF planar joint .*write the base as "
                                          r"prismatic x, prismatic z and revolute y joints"):
         make_model(sc.model)
+
+
+def test_frame_loops_of_a_shared_model_take_turns_on_their_data(monkeypatch):
+    """A model's frame loops ([[contacts.loops]]) keep one Pinocchio data for the setups
+    built on the model: two threads asking for their rows take turns on it (every pass
+    on it sleeps 2 ms here, so passes of the two threads would overlap) and get the rows
+    of one thread."""
+    import threading
+    import time
+
+    import pinocchio as pin
+
+    from roverimpact.scenario import ImpactSetup, load_scenario
+
+    setup = ImpactSetup.from_scenario(load_scenario(XML.parent / "sawppy_like_beta.toml"))
+    loop = setup.model.loop_closure
+    model = setup.model.model
+    rng = np.random.default_rng(1)
+    Q = [pin.integrate(model, setup.q, 0.05 * rng.standard_normal(model.nv))
+         for _ in range(2)]
+    expected = [loop(q) for q in Q]
+    inside, most = [0], [0]
+    jacobians = pin.computeJointJacobians
+
+    def slow(model_, data_, q):
+        if data_ is not loop.data:
+            return jacobians(model_, data_, q)
+        inside[0] += 1
+        most[0] = max(most[0], inside[0])
+        try:
+            time.sleep(0.002)
+            return jacobians(model_, data_, q)
+        finally:
+            inside[0] -= 1
+
+    monkeypatch.setattr(pin, "computeJointJacobians", slow)
+    got: list[list] = [[], []]
+
+    def work(i):
+        for _ in range(5):
+            got[i].append(loop(Q[i]))
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert most[0] == 1
+    for i in range(2):
+        for phi, J in got[i]:
+            np.testing.assert_array_equal(phi, expected[i][0])
+            np.testing.assert_array_equal(J, expected[i][1])
