@@ -2,6 +2,7 @@
 
     python benchmarks/bench_stats.py                  # 1e4 and 1e5 cases, 1000 resamples
     python benchmarks/bench_stats.py --sizes 2000 --n-boot 200
+    python benchmarks/bench_stats.py --report 1e5     # `roverimpact report` of such a study
 
 For each size n (cases with T_c^- and F_max), in one process:
 
@@ -17,12 +18,24 @@ For each size n (cases with T_c^- and F_max), in one process:
   differences).
 
 The data are seeded: T_c^- of random (v_n, m_eff), F_max a noisy power of T_c^-.
+
+``--report N``: the whole ``roverimpact report`` of a study with F_max and N cases, in a
+child process (wall time and peak resident memory). The study is a real 4-case simulated
+sweep of the 2-D rover whose results table is then replaced by N rows of the columns above
+(the other columns copied from its rows): the report's statistics, figure and tables run
+on N cases without simulating them. To time another version of the package, put its
+``src`` first on ``PYTHONPATH``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -53,6 +66,63 @@ def by_scipy(x, y, idx) -> np.ndarray:
     return out
 
 
+STUDY = """name = "bench_stats"
+simulate = true
+x = "obstacle.beta_deg"
+
+[base]
+model = { name = "rover2d", params = { suspension = "rocker", h = 0.35 } }
+velocity = { u = 0.5 }
+contacts = { ground = "normal" }
+obstacle = { wheel = "front", beta_deg = 60.0 }
+contact_law = { name = "hunt-crossley", k = 1.0e7, e = 0.8 }
+simulation = { mu = 0.0, gravity = "earth" }
+
+[grid]
+"obstacle.beta_deg" = { start = 20.0, stop = 90.0, num = 4 }
+"""
+
+
+def report(n: int) -> None:
+    """``roverimpact report`` of a study of ``n`` cases with F_max (see the docstring)."""
+    cli = [sys.executable, "-m", "roverimpact"]
+    with tempfile.TemporaryDirectory() as tmp:
+        toml, out = Path(tmp) / "study.toml", Path(tmp) / "study"
+        toml.write_text(STUDY)
+        subprocess.run([*cli, "sweep", str(toml), "-o", str(out)], check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        rows = pd.read_parquet(out / "results.parquet")
+        rng = np.random.default_rng(0)
+        big = rows.iloc[rng.integers(0, len(rows), n)].reset_index(drop=True)
+        syn = table(n, rng)
+        big["case"] = np.arange(n)
+        big["case_id"] = [f"{i:07d}-bench" for i in range(n)]
+        big["obstacle.beta_deg"] = np.degrees(np.arcsin(syn["v_n"] / 0.2))
+        for col in ("v_n", "m_total", "m_eff_free", "T_c_minus", "F_max"):
+            big[col] = syn[col]
+        big["m_eff"] = 2 * syn["T_c_minus"] / syn["v_n"] ** 2
+        big["F_pred"] = syn["F_max"]
+        big["contact_whole_window"] = big["not_an_impact"] = False
+        big.to_parquet(out / "results.parquet", index=False)
+        manifest = json.loads((out / "manifest.json").read_text())
+        manifest["n_cases"] = manifest["n_computed"] = n
+        (out / "manifest.json").write_text(json.dumps(manifest, indent=1))
+        # the command in a process of its own, which says its own peak memory at the end
+        code = ("import resource, sys\nfrom roverimpact.cli import main\n"
+                f"rc = main(['report', {str(out)!r}])\n"
+                "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\n"
+                "sys.exit(rc)")
+        t0 = time.perf_counter()
+        run = subprocess.run([sys.executable, "-c", code], check=True, text=True,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        wall = time.perf_counter() - t0
+        peak = int(run.stderr.split()[-1]) / 1024  # kB -> MB
+    import roverimpact
+
+    print(f"roverimpact report of {n:,} cases with F_max ({roverimpact.__file__}): "
+          f"{wall:.1f} s, peak resident memory {peak:.0f} MB")
+
+
 def main() -> None:
     print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -60,7 +130,12 @@ def main() -> None:
     ap.add_argument("--n-boot", type=int, default=1000)
     ap.add_argument("--baseline", type=int, default=20,
                     help="resamples the scipy baseline is timed on (scaled to --n-boot)")
+    ap.add_argument("--report", type=float, metavar="N",
+                    help="time `roverimpact report` of a study of N cases with F_max instead")
     a = ap.parse_args()
+    if a.report:
+        report(int(a.report))
+        return
     rng = np.random.default_rng(0)
     agreement(rng.standard_normal(500), rng.standard_normal(500), n_boot=100)  # compiled
     for n in (int(s) for s in a.sizes):
