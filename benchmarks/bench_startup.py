@@ -83,6 +83,8 @@ KERNELS = [
     ("frictional impact", "roverimpact._kernels.friction", "friction_kernel"),
     ("reduced model, RK4 peaks", "roverimpact._kernels.reduced", "rk4_peaks"),
     ("reduced model, stiff peaks", "roverimpact._kernels.reduced", "stiff_peaks"),
+    ("bootstrap of agreement (> 400 cases)", "roverimpact._kernels.bootstrap",
+     "agreement_kernel"),
 ]
 
 _KERNEL_CODE = """
