@@ -168,3 +168,41 @@ def test_bootstrap_of_many_cases_matches_scipy_in_bounded_memory(rng, monkeypatc
     assert peak < 20e6, f"peak {peak / 1e6:.0f} MB"
     assert a.spearman.low < sps.spearmanr(x, y).statistic < a.spearman.high
     assert d.value == pytest.approx(2 * sps.spearmanr(x, y).statistic, abs=1e-12)
+
+
+@pytest.mark.parametrize("n", [60, 450])  # numpy's resamples, the compiled kernel's
+def test_agreements_and_gains_equal_agreement_and_spearman_difference(rng, n):
+    """The report's shared resampling gives what agreement and spearman_difference give
+    one by one, to the bit: every statistic and interval of each column, and the paired
+    Spearman gain of the first column over each other one; a column with NaN (other
+    cases) goes through spearman_difference itself, a constant one gives NaN gains."""
+    from roverimpact.studies.stats import (
+        agreement,
+        agreements_and_gains,
+        spearman_difference,
+    )
+
+    y = rng.standard_normal(n)
+    first = np.round(y + 0.5 * rng.standard_normal(n), 2)
+    other = np.round(y + rng.standard_normal(n), 1)
+    holes = other.copy()
+    holes[::7] = np.nan
+    columns = [first, other, -first, holes, np.full(n, 3.0)]
+    ags, gains = agreements_and_gains(columns, y, n_boot=150, seed=3, confidence=0.9)
+
+    def flat(a):
+        return np.array([a.n, *(getattr(a, f).value for f in ("spearman", "kendall", "pearson",
+                                                               "concordant_fraction")),
+                         *(getattr(a, f).low for f in ("spearman", "kendall", "pearson",
+                                                       "concordant_fraction")),
+                         *(getattr(a, f).high for f in ("spearman", "kendall", "pearson",
+                                                        "concordant_fraction"))])
+
+    for x, a in zip(columns, ags, strict=True):
+        np.testing.assert_array_equal(flat(a), flat(agreement(x, y, n_boot=150, seed=3,
+                                                              confidence=0.9)))
+    for x, g in zip(columns[1:], gains, strict=True):
+        ref = spearman_difference(first, x, y, n_boot=150, seed=3, confidence=0.9)
+        np.testing.assert_array_equal([g.value, g.low, g.high],
+                                      [ref.value, ref.low, ref.high])
+    assert np.isfinite([gains[0].low, gains[2].low]).all() and np.isnan(gains[3].value)

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .stats import Agreement, Estimate, agreement, spearman_difference
+from .stats import Agreement, Estimate, agreement, agreements_and_gains, spearman_difference
 
 __all__ = ["BASELINES", "INDICATORS", "IndicatorComparison", "IndicatorResult",
            "compare_indicators", "statements", "with_baselines"]
@@ -163,8 +163,8 @@ def compare_indicators(table: pd.DataFrame, force: str = "F_max", *, exclude=Non
     if keep.sum() < 3:
         return None
     y, T = y[keep], T[keep]
-    results = []
-    for col, label in INDICATORS.items():
+    cols, labels, xs, constants = [], [], [], []
+    for col, label in INDICATORS.items():  # T_c_minus first
         if col not in table:
             continue
         x = table[col].to_numpy(float)[keep]
@@ -174,10 +174,21 @@ def compare_indicators(table: pd.DataFrame, force: str = "F_max", *, exclude=Non
         constant = fin.size >= 1 and bool(np.ptp(fin) <= _SAME * np.max(np.abs(fin)))
         if constant:
             x = np.where(np.isfinite(x), fin[0], x)
-        a = agreement(x, y, n_boot=n_boot, seed=seed, confidence=confidence)
-        gain = None if col == "T_c_minus" else spearman_difference(
-            T, x, y, n_boot=n_boot, seed=seed, confidence=confidence)
-        results.append(IndicatorResult(col, label, a, constant, gain))
+        cols.append(col)
+        labels.append(label)
+        xs.append(x)
+        constants.append(constant)
+    # T_c^-'s and each baseline's agreement, and the paired Spearman gain of T_c^- over
+    # each baseline: on shared resamples (agreement and spearman_difference bit for bit),
+    # unless T_c^- is constant (its agreement then ranks the constant, its gains T)
+    opts = {"n_boot": n_boot, "seed": seed, "confidence": confidence}
+    if not constants[0]:
+        ags, gains = agreements_and_gains(xs, y, **opts)
+    else:
+        ags = [agreement(x, y, **opts) for x in xs]
+        gains = [spearman_difference(T, x, y, **opts) for x in xs[1:]]
+    results = [IndicatorResult(col, label, a, constant, gain) for col, label, a, constant, gain
+               in zip(cols, labels, ags, constants, [None, *gains], strict=True)]
     comp = IndicatorComparison(force, int(keep.sum()), tuple(results), ())
     return IndicatorComparison(force, comp.n, comp.results,
                                tuple(statements(comp, force_label or force)))

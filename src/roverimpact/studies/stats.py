@@ -40,6 +40,7 @@ __all__ = [
     "ForceRatios",
     "RankCorrelation",
     "agreement",
+    "agreements_and_gains",
     "concordant_pair_fraction",
     "force_ratios",
     "rank_correlation",
@@ -320,6 +321,13 @@ def agreement(x, y, *, n_boot: int = 1000, confidence: float = 0.95, seed: int =
     -------
     Agreement
     """
+    return _agreement(x, y, n_boot=n_boot, confidence=confidence, seed=seed)[0]
+
+
+def _agreement(x, y, *, n_boot: int, confidence: float, seed: int
+               ) -> tuple[Agreement, np.ndarray | None]:
+    """:func:`agreement` and the statistics of its resamples (:func:`_boot_stats`, None
+    without resamples)."""
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be in (0, 1), got {confidence}")
     check_n_boot(n_boot)
@@ -328,6 +336,7 @@ def agreement(x, y, *, n_boot: int = 1000, confidence: float = 0.95, seed: int =
     point = _corrs(x, y)
     _frac, C, D, T = concordant_pair_fraction(x, y)
     lows = highs = (float("nan"),) * 4
+    boot = None
     if n_boot and n >= 3:
         boot = _boot_stats(x, y, np.random.default_rng(seed), n_boot)
         a = (1.0 - confidence) / 2.0
@@ -341,7 +350,55 @@ def agreement(x, y, *, n_boot: int = 1000, confidence: float = 0.95, seed: int =
         n=n, spearman=est[0], kendall=est[1], pearson=est[2], concordant_fraction=est[3],
         n_concordant=C, n_discordant=D, n_tied=T, confidence=confidence, n_boot=n_boot,
         seed=seed,
-    )
+    ), boot
+
+
+def agreements_and_gains(columns, y, *, n_boot: int = 1000, confidence: float = 0.95,
+                         seed: int = 0) -> tuple[list[Agreement], list[Estimate]]:
+    """:func:`agreement` of each of ``columns`` with ``y``, and
+    :func:`spearman_difference` of the first column and each other one: the same numbers,
+    bit for bit, with each resample drawn and ranked once where the cases agree.
+
+    A difference's paired resamples are those of the two agreements (the same seed, the
+    same cases) wherever both columns are finite on every case ``y`` is; otherwise it is
+    :func:`spearman_difference` itself. A report with F_max compares T_c^- and three
+    baselines: four agreements and three differences, three resampling passes fewer.
+
+    Returns
+    -------
+    agreements : list of Agreement
+        One per column.
+    gains : list of Estimate
+        One per column after the first.
+    """
+    cols = [np.asarray(x, dtype=float).ravel() for x in columns]
+    c = np.asarray(y, dtype=float).ravel()
+    runs = [_agreement(x, c, n_boot=n_boot, confidence=confidence, seed=seed) for x in cols]
+    gains = []
+    first = cols[0]
+    for x, (_, boot) in zip(cols[1:], runs[1:], strict=True):
+        if x.shape != first.shape or first.shape != c.shape or not (
+                np.isfinite(first).all() and np.isfinite(x).all() and np.isfinite(c).all()):
+            gains.append(spearman_difference(first, x, c, n_boot=n_boot,
+                                             confidence=confidence, seed=seed))
+            continue
+        value = (rank_correlation(first, c).spearman_rho
+                 - rank_correlation(x, c).spearman_rho)
+        low = high = float("nan")
+        if boot is not None and math.isfinite(value):
+            low, high = _diff_interval(runs[0][1][:, 0] - boot[:, 0], n_boot, confidence)
+        gains.append(Estimate(float(value), low, high))
+    return [a for a, _ in runs], gains
+
+
+def _diff_interval(diff: np.ndarray, n_boot: int, confidence: float) -> tuple[float, float]:
+    """Percentile interval of the resampled differences ``diff``; NaN where fewer than half
+    the resamples define both coefficients."""
+    diff = diff[np.isfinite(diff)]
+    if diff.size < n_boot / 2:
+        return float("nan"), float("nan")
+    q = (1.0 - confidence) / 2.0
+    return float(np.quantile(diff, q)), float(np.quantile(diff, 1.0 - q))
 
 
 def spearman_difference(x1, x2, y, *, n_boot: int = 1000, confidence: float = 0.95,
@@ -390,10 +447,7 @@ def spearman_difference(x1, x2, y, *, n_boot: int = 1000, confidence: float = 0.
                 ry = sps.rankdata(c[i], axis=1)
                 diff[s0:s0 + step] = (_rowwise_pearson(sps.rankdata(a[i], axis=1), ry)
                                       - _rowwise_pearson(sps.rankdata(b[i], axis=1), ry))
-        diff = diff[np.isfinite(diff)]
-        if diff.size >= n_boot / 2:
-            q = (1.0 - confidence) / 2.0
-            low, high = float(np.quantile(diff, q)), float(np.quantile(diff, 1.0 - q))
+        low, high = _diff_interval(diff, n_boot, confidence)
     return Estimate(float(value), low, high)
 
 
