@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -206,3 +207,34 @@ def test_agreements_and_gains_equal_agreement_and_spearman_difference(rng, n):
         np.testing.assert_array_equal([g.value, g.low, g.high],
                                       [ref.value, ref.low, ref.high])
     assert np.isfinite([gains[0].low, gains[2].low]).all() and np.isnan(gains[3].value)
+
+
+@pytest.mark.parametrize("constant", [False, True])
+def test_report_takes_t_c_agreement_from_its_indicator_comparison(rng, constant):
+    """The report's agreement of T_c^- with F_max is the indicator comparison's own (the
+    same cases, resamples and seed), equal to the bit to a second agreement call, which
+    it no longer makes; a constant T_c^- (ranked as a constant there) and fewer than 3
+    forces keep their own paths."""
+    from roverimpact.report.html import _tc_agreement
+    from roverimpact.studies.indicators import compare_indicators
+    from roverimpact.studies.stats import agreement
+
+    n = 500
+    v_n = rng.uniform(0.05, 0.5, n)
+    T = np.full(n, 0.7) if constant else 0.5 * rng.uniform(5, 20, n) * v_n**2
+    F = 3e3 * np.abs(T + 0.01 * rng.standard_normal(n)) ** 0.6
+    F[::11] = np.nan  # failed runs
+    table = pd.DataFrame({"T_c_minus": T, "F_max": F, "v_n": v_n, "m_total": 25.0,
+                          "m_eff_free": rng.uniform(5, 20, n)})
+    ww = np.zeros(n, bool)
+    ww[::13] = True  # whole-window cases, left out
+    comp = compare_indicators(table, "F_max", exclude=ww, n_boot=120, seed=5)
+    got = _tc_agreement(table[~ww], "F_max", comp, 120, 5)
+    ref = agreement(table[~ww]["T_c_minus"], table[~ww]["F_max"], n_boot=120, seed=5)
+    assert (got is comp.result("T_c_minus").agreement) is not constant
+    for f in ("spearman", "kendall", "pearson", "concordant_fraction"):
+        e, r = getattr(got, f), getattr(ref, f)
+        np.testing.assert_array_equal([e.value, e.low, e.high], [r.value, r.low, r.high])
+    assert got.n == ref.n
+    few = table.assign(F_max=np.where(np.arange(n) < 2, 1.0, np.nan))
+    assert _tc_agreement(few, "F_max", None, 120, 5) is None

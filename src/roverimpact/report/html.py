@@ -179,6 +179,19 @@ def correlation_subtitle(a: Agreement | None, force: str | None, n_whole_window:
             f"Pearson {_fmt(a.pearson.value)} (T_c^- vs {force}, n={a.n}{excl})")
 
 
+def _tc_agreement(sub, col: str, comp, n_boot: int, seed: int):
+    """Agreement of T_c^- with the force ``col`` over the cases ``sub`` (None with fewer
+    than 3 finite forces): ``comp``'s own (:func:`compare_indicators` of the same cases,
+    bootstrap and seed) where it has one, which is the same to the bit, instead of a
+    second bootstrap of 1000 resamples."""
+    if np.isfinite(sub[col].to_numpy(float)).sum() < 3:
+        return None
+    tc = None if comp is None else comp.result("T_c_minus")
+    if tc is not None and not tc.constant:
+        return tc.agreement
+    return agreement(sub["T_c_minus"], sub[col], n_boot=n_boot, seed=seed)
+
+
 def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> StudySection:
     """Statistics and figures of one study folder (figures written into it).
 
@@ -206,11 +219,9 @@ def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> 
     engines = []
     for engine, col, suffix in simulated_forces(table, manifest.get("simulate", True)):
         ww = whole if col == "F_max" else whole_window_cases(table, suffix)
-        sub = table[~ww]
-        a = (agreement(sub["T_c_minus"], sub[col], n_boot=n_boot, seed=seed)
-             if np.isfinite(sub[col].to_numpy(float)).sum() >= 3 else None)
         comp = compare_indicators(table, col, exclude=ww, n_boot=n_boot, seed=seed,
                                   force_label=f"{ENGINE_LABELS.get(engine, engine)}'s F_max")
+        a = _tc_agreement(table[~ww], col, comp, n_boot, seed)
         engines.append(EngineStats(engine, col, a, int(ww.sum()), comp,
                                    _ratios(table, col, engine, ww)))
     n_with = (int(np.isfinite(table["F_max"].to_numpy(float)).sum()) if "F_max" in table
@@ -327,11 +338,9 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
     engines = []
     for engine, col, suffix in simulated_forces(sample, manifest.get("simulate", True)):
         ww = whole if col == "F_max" else whole_window_cases(sample, suffix)
-        sub = sample[~ww]
-        a = (agreement(sub["T_c_minus"], sub[col], n_boot=n_boot, seed=seed)
-             if np.isfinite(sub[col].to_numpy(float)).sum() >= 3 else None)
         comp = compare_indicators(sample, col, exclude=ww, n_boot=n_boot, seed=seed,
                                   force_label=f"{ENGINE_LABELS.get(engine, engine)}'s F_max")
+        a = _tc_agreement(sample[~ww], col, comp, n_boot, seed)
         engines.append(EngineStats(engine, col, a, summ.n_true.get(WHOLE_WINDOW + suffix,
                                                                    int(ww.sum())), comp))
     agr = engines[0].agreement if engines and engines[0].force == "F_max" else None
