@@ -362,7 +362,7 @@ def agreements_and_gains(columns, y, *, n_boot: int = 1000, confidence: float = 
     A difference's paired resamples are those of the two agreements (the same seed, the
     same cases) wherever both columns are finite on every case ``y`` is; otherwise it is
     :func:`spearman_difference` itself. A report with F_max compares T_c^- and three
-    baselines: four agreements and three differences, three resampling passes fewer.
+    baselines: four agreements, and three differences that no longer resample.
 
     Returns
     -------
