@@ -796,28 +796,6 @@ def test_model_file_written_again_is_read_again(tmp_path):
         assert got == pytest.approx(total, rel=1e-12)
 
 
-def test_model_is_cached_per_thread(tmp_path):
-    """build_model's cache is per thread as well as per process: a model holds Pinocchio
-    data (its frame loops' rows are computed in it), and a Dask worker of `dask worker
-    ADDRESS` runs one chunk per thread at once, where the chunks shared one model. The
-    same thread gets the same model back."""
-    import threading
-
-    from roverimpact.traverse.run import build_model
-    from roverimpact.traverse.schema import traverse_from_dict
-
-    np.save(tmp_path / "dem.npy", np.full((61, 81), 0.1))
-    cfg = traverse_from_dict({**TRAV_FILE, "terrain": {"kind": "file", "file": "dem.npy",
-                                                       "spacing": 0.1}}, base_dir=tmp_path)
-    here = build_model(cfg)
-    assert build_model(cfg) is here
-    other = []
-    t = threading.Thread(target=lambda: other.append(build_model(cfg)))
-    t.start()
-    t.join()
-    assert other[0] is not here and other[0].name == here.name
-
-
 def test_copy_of_the_traverse_file_runs_from_the_output_folder(tmp_path, monkeypatch, capfd):
     """The copy of a traverse file next to its results kept ``file = "flat.npy"``, a name
     relative to the traverse file: run from the output folder it read <out>/flat.npy, "no

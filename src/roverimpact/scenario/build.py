@@ -203,11 +203,11 @@ class ImpactSetup:
         r"""T_c^- [J] of this setup's active rows and velocity ``v`` at one configuration
         ``q`` (nq,): ``partition(*self.evaluate(q), self.v).T_c`` (to rounding) in one
         Pinocchio pass and one compiled call, with no ``M``, ``A`` or result object made
-        in Python: for loops over single configurations (the 3-D rover in 9.5-9.9 us
-        against 28-35 us end to end, ``benchmarks/bench_models.py`` on 2026-11-29, a
-        2-core machine shared with other jobs; many configurations at once are faster
-        batched, through :meth:`evaluate`). Its first call compiles that kernel (about
-        2 s on a fresh install).
+        in Python: for loops over single configurations (the 3-D rover in 9.5 us against
+        15.5-17.4 us end to end in the quieter runs of ``benchmarks/bench_models.py`` on
+        2026-11-29, a 2-core machine shared with other jobs; many configurations at once
+        are faster batched, through :meth:`evaluate`). Its first call compiles that kernel
+        (about 2 s on a fresh install).
 
         Raises
         ------

@@ -21,7 +21,6 @@ from __future__ import annotations
 import functools
 import json
 import math
-import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -83,7 +82,7 @@ def build_terrain(spec: TerrainSpec):
 
 
 @functools.lru_cache(maxsize=4)
-def _model(model_json: str, loops_json: str, stamp: tuple | None, thread: int):
+def _model(model_json: str, loops_json: str, stamp: tuple | None):
     from ..scenario.build import make_model
     from ..scenario.schema import LoopSpec, ModelSpec
 
@@ -96,16 +95,14 @@ def _model(model_json: str, loops_json: str, stamp: tuple | None, thread: int):
 
 
 def build_model(cfg: TraverseConfig):
-    """The rover of ``[model]`` (with ``[[contacts.loops]]``), cached per process and
-    thread; a ``model.file`` written again is read again (the meshes it names are not
-    followed).
-
-    Per thread: a model holds Pinocchio data (its frame loops' rows are computed in it),
-    and a Dask worker started with ``dask worker ADDRESS`` runs as many chunks at once as
-    it has threads (one per core by default)."""
+    """The rover of ``[model]`` (with ``[[contacts.loops]]``), cached per process; a
+    ``model.file`` written again is read again (the meshes it names are not followed).
+    The threads of a Dask worker share it: the traverse only reads it, and its frame
+    loops take turns on their one Pinocchio data
+    (:class:`~roverimpact.models.declare.FrameLoopClosure`)."""
     return _model(cfg.model.model_dump_json(),
                   json.dumps([lp.model_dump() for lp in cfg.contacts.loops]),
-                  _stamp(cfg.model.file), threading.get_ident())
+                  _stamp(cfg.model.file))
 
 
 def path_stations(cfg: TraverseConfig, i: int) -> Stations:
