@@ -44,7 +44,8 @@ class ConstraintSet:
     ``evaluate`` and :func:`~roverimpact.scenario.sweep_energy`) get the results of one
     thread, where two Pinocchio passes on one data at once gave wrong numbers.
     :meth:`evaluate_members` writes each member's numbers into the model itself: it holds
-    :attr:`lock` (re-entrant), so threads sharing the set take turns there.
+    :attr:`lock`, so threads sharing the set take turns there (sets built on one model
+    do not share it).
     """
 
     mbm: MultibodyModel
@@ -58,7 +59,7 @@ class ConstraintSet:
         self._data = model.createData()  # the data of the thread that made the set
         self._local = threading.local()  # each thread's data and row plan
         self._local.data = self._data
-        self.lock = threading.RLock()
+        self.lock = threading.Lock()
         self.labels = []
         self._fids = []
         for c in self.constraints:
@@ -100,7 +101,7 @@ class ConstraintSet:
         self.__dict__.update(state)
         self._local = threading.local()
         self._local.data = self._data
-        self.lock = threading.RLock()
+        self.lock = threading.Lock()
 
     def kinematics(self, q) -> None:
         """Forward kinematics, joint Jacobians and frame placements at ``q``."""
