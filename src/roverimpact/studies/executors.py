@@ -568,9 +568,16 @@ def _not_cancelled_at_close(record: logging.LogRecord) -> bool:
 
 
 def _close(cluster, *, quiet: bool) -> None:
-    """Close a local cluster; ``quiet`` (after a Ctrl-C, which the command reports): without
-    Dask's shutdown warnings (cancelled tasks, workers killed)."""
-    with _LoggerAtLeast("distributed", logging.CRITICAL) if quiet else nullcontext():
+    """Close a local cluster; ``quiet`` (after a Ctrl-C or a SIGTERM, which the command
+    reports): without Dask's shutdown warnings (cancelled tasks, workers killed), nor the
+    traceback its event loop (tornado) once logged for a call into the loop cancelled by
+    the close ("Exception in callback functools.partial(<function sync...>)", then
+    CancelledError)."""
+    if not quiet:
+        cluster.close()
+        return
+    with _LoggerAtLeast("distributed", logging.CRITICAL), \
+            _LoggerAtLeast("tornado.application", logging.CRITICAL):
         cluster.close()
 
 
