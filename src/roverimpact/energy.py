@@ -379,15 +379,27 @@ def _partition_items(M, A, v, Mf, Af, vf, iM, iA, iv, batch, rtol, want_velociti
     out = np.empty((nb, V + 2 * n if want_velocities else V))
     _one.partition_kernel.get(nb)(Mf.reshape(-1, n), Af.reshape(-1, n), vf.reshape(-1),
                                   index, m, rtol, want_velocities, out)
-    T = out[:, _one.OUT_T]
-    _check_items(out[:, _one.OUT_STATUS], T, out[:, _one.OUT_TC], M, A, v, iM, iA, iv, batch)
+    _check_items(out[:, _one.OUT_STATUS], out[:, _one.OUT_T], out[:, _one.OUT_TC], M, A, v,
+                 iM, iA, iv, batch)
+    return _rows_partition(out, out[:, _one.OUT_RANK].astype(np.int64), n, batch,
+                           want_velocities)
+
+
+def _rows_partition(out, rank, n, batch, want_velocities) -> Partition:
+    """The :class:`Partition` of the one-item kernel's output rows ``out`` (nb items of
+    batch shape ``batch``) and their ranks: views of ``out``'s columns, not copies
+    (reshaped to ``batch`` where it has more than one axis)."""
+    V = _one.OUT_V
+    T, Tc, Ta = out[:, _one.OUT_T], out[:, _one.OUT_TC], out[:, _one.OUT_TA]
     if want_velocities:
-        v_c, v_a = out[:, V:V + n].reshape(*batch, n), out[:, V + n:].reshape(*batch, n)
+        v_c, v_a = out[:, V:V + n], out[:, V + n:]
     else:
         v_c = v_a = None
-    return _new_partition(scalarize(T, batch), scalarize(out[:, _one.OUT_TC], batch),
-                          scalarize(out[:, _one.OUT_TA], batch), v_c, v_a,
-                          scalarize(out[:, _one.OUT_RANK].astype(np.int64), batch))
+    if len(batch) != 1:  # one axis: the columns already have the batch's shape
+        T, Tc, Ta, rank = (scalarize(x, batch) for x in (T, Tc, Ta, rank))
+        if want_velocities:
+            v_c, v_a = v_c.reshape(*batch, n), v_a.reshape(*batch, n)
+    return _new_partition(T, Tc, Ta, v_c, v_a, rank)
 
 
 def _partition_small(M, A, v, rtol, want_velocities) -> Partition | None:
@@ -444,17 +456,7 @@ def _partition_small(M, A, v, rtol, want_velocities) -> Partition | None:
         if scale is not None:
             return _partition_batch(M, A / scale[..., None, None], v, batch, n, m, rtol,
                                     want_velocities)
-    T, Tc, Ta = out[:, _one.OUT_T], out[:, _one.OUT_TC], out[:, _one.OUT_TA]
-    if want_velocities:
-        v_c, v_a = out[:, V:V + n], out[:, V + n:]
-    else:
-        v_c = v_a = None
-    if len(batch) > 1:
-        T, Tc, Ta, rank = (T.reshape(batch), Tc.reshape(batch), Ta.reshape(batch),
-                           rank.reshape(batch))
-        if want_velocities:
-            v_c, v_a = v_c.reshape(*batch, n), v_a.reshape(*batch, n)
-    return _new_partition(T, Tc, Ta, v_c, v_a, rank)
+    return _rows_partition(out, rank, n, batch, want_velocities)
 
 
 #: the item index ``(3, nb)`` of a batch of nb items without broadcasting (every row
