@@ -124,7 +124,7 @@ def map_forked(func: Callable[[Any, Callable[..., None]], Any], items: Sequence,
         elif kind == "warning":
             warnings.showwarning(*msg[1])
         elif kind == "result":
-            results[msg[1]] = msg[2]
+            results[msg[1]] = pickle.loads(msg[2])  # (the process pickled it)
         elif kind == "error":
             errors.append(msg[2])
             begin_no_more()
@@ -257,9 +257,14 @@ def _unpicklable(obj, what: str) -> RuntimeError | None:
     try:
         pickle.dumps(obj)
     except Exception as exc:
-        return RuntimeError(f"{what} could not be sent back from its process ({exc}): "
-                            f"{obj!r}"[:2000])
+        return _unsent(obj, what, exc)
     return None
+
+
+def _unsent(obj, what: str, exc: Exception) -> RuntimeError:
+    """The error sent instead of ``obj``, which pickling refused with ``exc``."""
+    return RuntimeError(f"{what} could not be sent back from its process ({exc}): "
+                        f"{obj!r}"[:2000])
 
 
 def _work(func, items, following, current, messages) -> None:
@@ -309,11 +314,12 @@ def _work(func, items, following, current, messages) -> None:
             except BaseException as exc:  # Ctrl-C included: the parent decides
                 messages.put(("error", i, _unpicklable(exc, "an error") or exc))
                 break
-            bad = _unpicklable(result, "a result")
-            if bad is not None:
-                messages.put(("error", i, bad))
+            try:  # pickled once, here: the queue then sends the bytes as they are
+                payload = pickle.dumps(result)
+            except Exception as exc:
+                messages.put(("error", i, _unsent(result, "a result", exc)))
                 break
-            messages.put(("result", i, result))
+            messages.put(("result", i, payload))
     finally:
         for stream in lines:
             stream.flush()
