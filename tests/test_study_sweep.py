@@ -596,9 +596,10 @@ def test_a_probe_sizes_the_work_and_every_chunk_runs_where_it_was_decided(
     serial = run_study(_study(chunk_size=6), tmp_path / "s").table
     sent, judged = [], []
 
-    def fake_dask(pending, chunks, args, params, simulate, scheduler, retries, store, note):
+    def fake_dask(pending, chunks, args, params, simulate, scheduler, retries, store, note,
+                  on_error):
         sent.extend(pending)
-        sweep.run_serial(pending, chunks, args, params, simulate, store)
+        sweep.run_serial(pending, chunks, args, params, simulate, store, on_error=on_error)
 
     def fake_worth(estimate, workers, running):
         judged.append((estimate, workers, running))
@@ -1253,3 +1254,172 @@ def test_an_evaluators_own_error_class_is_named_too(tmp_path):
     with pytest.raises(InputError, match=r"^case 2 \(model\.params\.mass = 40\.0\): E1: mass "
                        r"40\.0 too large\. The study stopped after 0 of 3 cases"):
         run_study(study, tmp_path / "r", evaluator=_refuses_heavy)
+
+
+# -- a case that cannot be posed, recorded (on_error="record") ------------------------------
+
+_ROVER2D_BAD = {"name": "bad", "base": {
+    "model": {"name": "rover2d", "params": {"suspension": "rigid", "h": 0.35}},
+    "velocity": {"u": 0.5}, "contacts": {"ground": "normal"},
+    "obstacle": {"wheel": "front", "beta_deg": 60.0}},
+    "grid": {"model.params.h": [0.35, 0.2, 0.1],
+             "model.params.wheel_mass": [1.0, 10.0, 40.0]}}
+
+
+def test_on_error_record_gives_a_case_that_cannot_be_posed_a_row_and_goes_on(tmp_path):
+    """h = 0.1 with wheel_mass = 40 puts the chassis below the ground (rover2d's own
+    check): with on_error="record" the study runs every case, that case's outputs are
+    NaN and ``error`` gives the model's reason; every other row is what a study of the
+    posable cases alone gives, bit for bit, whatever the chunking."""
+    from roverimpact.studies import not_posed
+
+    res = run_study(_ROVER2D_BAD, tmp_path / "r", chunk_size=4, on_error="record")
+    bad = res.not_posed  # read from the file by its error column (table not read yet)
+    assert res._table is None and bad["case"].tolist() == [8]
+    assert bad["error"].iloc[0].startswith("ModelError: Rover2DParams.h = 0.1 m is too small")
+    t = res.table
+    assert len(t) == 9 and not_posed(t)["case"].tolist() == [8]
+    assert (t["error"] == "").sum() == 8
+    outputs = ["T_c_minus", "m_eff", "v_n", "m_total", "T_c_obstacle"]
+    assert t.loc[8, outputs].isna().all() and not t.loc[:7, outputs].isna().any().any()
+    posable = {**_ROVER2D_BAD, "grid": None, "cases": [
+        {"model.params.h": h, "model.params.wheel_mass": w}
+        for h in (0.35, 0.2, 0.1) for w in (1.0, 10.0, 40.0)][:8]}
+    ref = run_study(posable, tmp_path / "ref").table
+    for c in outputs:
+        np.testing.assert_array_equal(t[c].to_numpy()[:8], ref[c].to_numpy())
+    # one chunk of all nine, and one per case (case 8's chunk: no posed case gives the
+    # columns; the base scenario's do): the same table
+    for size in (9, 1):
+        other = run_study(_ROVER2D_BAD, tmp_path / f"c{size}", chunk_size=size,
+                          on_error="record")
+        pd.testing.assert_frame_equal(other.table, t)
+    manifest = json.loads((tmp_path / "r" / "manifest.json").read_text())
+    assert manifest["status"] == "complete" and manifest["on_error"] == "record"
+
+
+def test_a_stopped_study_resumed_with_on_error_record_keeps_its_chunks(tmp_path):
+    """The stop's message says how to go on; --resume with record keeps the finished chunks
+    (written without the error column: "" in their rows, not missing) and computes the
+    rest."""
+    with pytest.raises(InputError, match=r"--on-error record --resume"):
+        run_study(_ROVER2D_BAD, tmp_path / "r", chunk_size=4)
+    res = run_study(_ROVER2D_BAD, tmp_path / "r", chunk_size=4, on_error="record",
+                    resume=True)
+    assert res.n_reused == 8 and res.n_computed == 1
+    assert res.table["error"].tolist() == [""] * 8 + [res.not_posed["error"].iloc[0]]
+    whole = run_study(_ROVER2D_BAD, tmp_path / "whole", chunk_size=4, on_error="record")
+    pd.testing.assert_frame_equal(res.table, whole.table)
+
+
+class _RefusesHeavyCounting(ScenarioEvaluator):
+    """A function evaluator's outputs (a float, a count, a flag, a text), refusing every
+    mass above 30 kg, and recording the cases of each call."""
+
+    name = "refuses_heavy"
+
+    def __init__(self):
+        self.calls = []
+
+    def evaluate(self, base, overrides, *, simulate=False):
+        self.calls.append(len(overrides))
+        mass = np.array([o.get("model.params.mass", 20.0) for o in overrides], float)
+        if np.any(mass > 30):
+            raise _OddError("E1", f"mass {mass[mass > 30][0]} too large")
+        return {"T_c_minus": 0.5 * mass, "n_rows": np.full(len(mass), 2, np.int64),
+                "heavy": mass > 25, "label": np.array([f"m{m:g}" for m in mass], object)}
+
+
+def test_record_finds_the_failing_cases_by_halving_and_fills_each_type(tmp_path):
+    """A chunk of 8 cases whose sixth cannot be posed: 7 evaluator calls of 8, 4, 4, 2, 1,
+    1 and 2 cases (one by one would be 1 + 8 calls). Missing outputs: NaN for floats (an
+    integer column becomes float to hold it), False for flags, "" for texts."""
+    masses = [10.0, 12.0, 14.0, 16.0, 18.0, 40.0, 22.0, 26.0]
+    study = {"name": "heavy", "base": BASE, "cases": [{"model.params.mass": m}
+                                                      for m in masses]}
+    ev = _RefusesHeavyCounting()
+    t = run_study(study, tmp_path / "r", evaluator=ev, chunk_size=8, on_error="record").table
+    assert ev.calls == [8, 4, 4, 2, 1, 1, 2]
+    assert t["error"].tolist() == [""] * 5 + ["_OddError: E1: mass 40.0 too large", "", ""]
+    np.testing.assert_array_equal(t["T_c_minus"], [5, 6, 7, 8, 9, np.nan, 11, 13])
+    np.testing.assert_array_equal(t["n_rows"], [2, 2, 2, 2, 2, np.nan, 2, 2])
+    assert t["heavy"].tolist() == [False] * 7 + [True]
+    assert t["label"].tolist() == ["m10", "m12", "m14", "m16", "m18", "", "m22", "m26"]
+    # every case refused: one call for the chunk, one per half ..., and the base's columns
+    ev = _RefusesHeavyCounting()
+    study = {"name": "heavy", "base": BASE, "cases": [{"model.params.mass": m}
+                                                      for m in (40.0, 50.0)]}
+    t = run_study(study, tmp_path / "all", evaluator=ev, on_error="record").table
+    assert ev.calls == [2, 1, 1, 1]
+    assert t["T_c_minus"].isna().all() and t["error"].str.startswith("_OddError").all()
+    assert t["heavy"].tolist() == [False, False] and t["label"].tolist() == ["", ""]
+
+
+def test_cli_on_error_record_says_how_many_cases_and_exits_1(tmp_path, capsys):
+    """The command says how many cases could not be posed and the first one's reason, and
+    exits 1 (0 with --allow-failures); --json counts them; the report says they are left
+    out; an unknown --on-error is refused in one line, exit 2, before any work."""
+    import tomli_w
+
+    from roverimpact.cli import main
+
+    study = tmp_path / "bad.toml"
+    study.write_bytes(tomli_w.dumps({k: v for k, v in _ROVER2D_BAD.items()}).encode())
+    assert main(["sweep", str(study), "-o", str(tmp_path / "a"), "--on-error", "record"]) == 1
+    err = capsys.readouterr().err
+    assert "1 of 9 cases could not be posed (case 8: ModelError: Rover2DParams.h" in err
+    html = (tmp_path / "a" / "report.html").read_text()
+    assert "1 case could not be posed (see error in the results)" in html
+    assert main(["sweep", str(study), "-o", str(tmp_path / "b"), "--on-error", "record",
+                 "--no-report", "--allow-failures", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["not_posed"] == 1
+    assert main(["sweep", str(study), "-o", str(tmp_path / "c"), "--on-error", "maybe"]) == 2
+    err = capsys.readouterr().err
+    assert "--on-error must be one of stop, record, got 'maybe'" in err
+    assert "Traceback" not in err and not (tmp_path / "c").exists()
+
+
+def test_report_of_a_large_study_counts_the_cases_that_could_not_be_posed(tmp_path,
+                                                                          monkeypatch):
+    """The streamed report of a large table (here: any table) counts the cases that could
+    not be posed from the error column, a row group at a time, and says so; they are not
+    counted as failed simulations."""
+    from roverimpact.report import html as report_html
+    from roverimpact.studies.store import count_not_posed
+
+    study = {**_ROVER2D_BAD, "simulate": True, "grid": {
+        "model.params.h": [0.35, 0.1], "model.params.wheel_mass": [1.0, 10.0, 40.0]}}
+    res = run_study(study, tmp_path / "r", on_error="record")
+    assert count_not_posed(res.files["results"]) == 1
+    monkeypatch.setattr(report_html, "LARGE_TABLE", 0)
+    section = report_html.analyse_folder(tmp_path / "r", n_boot=0)
+    assert "1 case could not be posed" in section.note
+    assert "simulation failed" not in section.note
+
+
+def test_on_error_record_on_dask_returns_the_chunk_with_its_error(tmp_path, monkeypatch):
+    """On a Dask worker the chunk is recorded there: its file comes back with the case that
+    cannot be posed in it, no error is raised, nothing is retried."""
+    pytest.importorskip("dask.distributed")
+    import io
+
+    from roverimpact.studies.executors import ChunkFile, local_cluster, run_dask
+    from roverimpact.studies.sweep import Chunks, prepare_study
+
+    monkeypatch.setenv("ROVERIMPACT_WORKER_START", "fork")
+    study = {**_ROVER2D_BAD, "grid": None, "cases": [
+        {"model.params.h": 0.35, "model.params.wheel_mass": 40.0},
+        {"model.params.h": 0.1, "model.params.wheel_mass": 40.0},
+        {"model.params.h": 0.2, "model.params.wheel_mass": 1.0}]}
+    calls = tmp_path / "calls"
+    prep = prepare_study(study, evaluator=_CountingToFile(calls), chunk_size=3)
+    got = {}
+    with local_cluster(1) as address:
+        run_dask([0], Chunks(prep.cases, 3), (prep.evaluator, prep.study.base, prep.base),
+                 prep.study.parameters(), False, address, 3,
+                 lambda k, f: got.setdefault(k, f), on_error="record")
+    assert isinstance(got[0], ChunkFile)
+    t = pd.read_parquet(io.BytesIO(got[0].data))
+    assert t["error"].str.startswith("ModelError").tolist() == [False, True, False]
+    assert np.isnan(t["T_c_minus"]).tolist() == [False, True, False]
+    assert calls.read_text().split() == ["3", "1", "2", "1", "1"]

@@ -158,20 +158,28 @@ def sweep_cmd(
     as_json: bool = typer.Option(False, "--json", help="Print the summary and the statistics "
                                  "as JSON (the progress bar goes to stderr)."),
     allow_failures: bool = typer.Option(False, "--allow-failures",
-                                        help="Exit 0 even if some simulations failed."),
+                                        help="Exit 0 even if some simulations failed or "
+                                        "some cases could not be posed."),
+    on_error: str = typer.Option("stop", "--on-error", help="A case that cannot be posed "
+                                 "(parameters no model has): stop the study (the finished "
+                                 "chunks are kept), or record it (its outputs missing, "
+                                 "column error saying why) and go on."),
 ) -> int:
     """Run a study: every case's T_c^-, effective mass, predicted (and simulated) peak force.
 
     Exit code 1 if a simulation failed (the case's forces are NaN; see sim_error in the
-    results), unless --allow-failures.
+    results) or, with --on-error record, a case could not be posed (see error), unless
+    --allow-failures.
     """
+    from ..studies.executors import check_on_error
     from ..studies.sweep import run_study
 
+    check_on_error(on_error)
     now, small = _compile_plan(study, workers, scheduler)
     with progress_bar(study.stem) as update:
         res = run_study(study, out, resume=resume, overwrite=overwrite, csv=csv,
                         workers=workers, scheduler=scheduler, chunk_size=chunk_size,
-                        progress=update,
+                        progress=update, on_error=on_error,
                         note=lambda text: err_console.print(f"note: {text}"),
                         prepare=lambda: compile_ahead(now=now, small=small,
                                                       workers=workers is not None))
@@ -187,9 +195,12 @@ def sweep_cmd(
                 f"interrupted while writing the report; the results are complete in "
                 f"{res.out_dir}: `roverimpact report {res.out_dir}` writes it") from None
     failed = _failed_simulations(res.failures, res.n_cases, allow_failures)
+    unposed = res.not_posed
+    failed = max(failed, _not_posed(unposed, res.n_cases, allow_failures))
     if as_json:
         print_json({"cases": res.n_cases, "computed": res.n_computed,
                     "reused": res.n_reused, "failed": len(res.failures),
+                    "not_posed": len(unposed),
                     "elapsed_s": res.elapsed, "files": res.files,
                     "report": path, "studies": _stats_json(sections)})
         return failed
@@ -213,6 +224,18 @@ def _failed_simulations(failures, n_cases: int, allowed: bool) -> int:
     err_console.print(f"{len(failures)} of {n_cases} simulations failed (case "
                       f"{int(failures['case'].iloc[0])}: {failures['sim_error'].iloc[0]}); "
                       "their forces are NaN in the results", style="yellow")
+    return 0 if allowed else 1
+
+
+def _not_posed(rows, n_cases: int, allowed: bool) -> int:
+    """Say (on stderr) how many cases could not be posed and why (the first error); the
+    exit code: 1 unless allowed."""
+    if rows.empty:
+        return 0
+    err_console.print(f"{len(rows)} of {n_cases} cases could not be posed (case "
+                      f"{int(rows['case'].iloc[0])}: {rows['error'].iloc[0]}); their "
+                      "outputs are missing in the results, column error says why",
+                      style="yellow")
     return 0 if allowed else 1
 
 

@@ -30,7 +30,9 @@ from ..studies.store import (
     RESULTS,
     STUDY_COPY,
     WHOLE_WINDOW,
+    count_not_posed,
     load_results,
+    not_posed,
     read_manifest,
     simulated_forces,
     whole_window_cases,
@@ -226,7 +228,8 @@ def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> 
                                    _ratios(table, col, engine, ww)))
     n_with = (int(np.isfinite(table["F_max"].to_numpy(float)).sum()) if "F_max" in table
               else 0)
-    n_failed = len(table) - n_with if n_with else 0
+    n_unposed = len(not_posed(table))
+    n_failed = len(table) - n_with - n_unposed if n_with else 0
     if n_with and np.isfinite(kept["F_max"].to_numpy(float)).sum() >= 3:
         agr = engines[0].agreement
         if n_failed:
@@ -241,6 +244,7 @@ def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> 
                                                        if n_failed else ""))
     else:
         note = _no_force_note(manifest, fcol)
+    note = " ".join(t for t in (note, _not_posed_note(n_unposed)) if t)
     name = manifest.get("name") or (study.name if study else folder.name)
     n_ww = int(whole.sum())
     subtitle = correlation_subtitle(agr, "F_max", n_ww, n_failed)
@@ -345,13 +349,15 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
                                                                    int(ww.sum())), comp))
     agr = engines[0].agreement if engines and engines[0].force == "F_max" else None
     n_with = summ.n_finite.get("F_max", 0)
-    n_failed = summ.n - n_with if n_with else 0
+    n_unposed = count_not_posed(path)
+    n_failed = summ.n - n_with - n_unposed if n_with else 0
     if agr is not None:
         note = (f"{summ.n:,} cases: the statistics are computed on {of}; the figure "
                 "summarizes every case." + (" " + _failed_note(n_failed) if n_failed
                                             else ""))
     else:
         note = _no_force_note(manifest, fcol)
+    note = " ".join(t for t in (note, _not_posed_note(n_unposed)) if t)
     name = manifest.get("name") or (study.name if study else folder.name)
     subtitle = correlation_subtitle(agr, "F_max", n_ww, n_failed)
     if agr is not None:
@@ -407,6 +413,15 @@ def _failed_note(n_failed: int) -> str:
     return (f"{n_failed:,} case{'s' if n_failed != 1 else ''} without F_max (the simulation "
             "failed: see sim_error in the results) left out of the statistics and the "
             "figure's force points.")
+
+
+def _not_posed_note(n: int) -> str:
+    """The note of a study section with cases that could not be posed (``--on-error
+    record``), or ""."""
+    if not n:
+        return ""
+    return (f"{n:,} case{'s' if n != 1 else ''} could not be posed (see error in the "
+            "results): no outputs, left out of the statistics and the figure.")
 
 
 def _no_force_note(manifest: dict, fcol: str | None) -> str:

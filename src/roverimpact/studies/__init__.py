@@ -8,7 +8,7 @@ from .config import Case, Study, expand, load_study
 from .evaluate import FunctionEvaluator, ScenarioEvaluator, evaluate_case
 from .indicators import IndicatorComparison, compare_indicators
 from .stats import Agreement, Estimate, agreement, concordant_pair_fraction, spearman_difference
-from .sweep import StudyResult, load_results, prepare_study, run_study
+from .sweep import StudyResult, load_results, not_posed, prepare_study, run_study
 
 __all__ = [
     "Agreement",
@@ -26,6 +26,7 @@ __all__ = [
     "expand",
     "load_results",
     "load_study",
+    "not_posed",
     "prepare_study",
     "run_study",
     "spearman_difference",

@@ -28,11 +28,12 @@ import pandas as pd
 
 from ..exceptions import ConfigError, InputError, RoverImpactError
 from .config import Case, flatten
-from .store import PARQUET_WRITE, code_identity
+from .store import ERROR_COLUMN, PARQUET_WRITE, code_identity
 
 __all__ = [
     "CLUSTER_CONFIG",
     "CLUSTER_START_S",
+    "ON_ERROR",
     "START_METHODS",
     "WORKERS_CHECK_S",
     "WORKERS_WAIT_S",
@@ -40,6 +41,7 @@ __all__ = [
     "ChunkFile",
     "LazyCluster",
     "as_finished",
+    "check_on_error",
     "check_scheduler",
     "check_workers",
     "compile_note",
@@ -181,23 +183,46 @@ def _cell(v):
     return v
 
 
+#: What a study does with a case that cannot be posed: stop (the default), or record it
+#: and go on (its row's outputs missing, column :data:`ERROR_COLUMN` saying why)
+ON_ERROR = ("stop", "record")
+
+
+def check_on_error(on_error) -> str:
+    """``on_error`` if it is one of :data:`ON_ERROR`, else a ConfigError naming them."""
+    if on_error not in ON_ERROR:
+        raise ConfigError(f"--on-error must be one of {', '.join(ON_ERROR)}, got "
+                          f"{on_error!r}")
+    return on_error
+
+
 def compute_chunk(evaluator, base: Mapping, normalized_base: Mapping, cases: Sequence[Case],
-                  params: Sequence[str], simulate: bool) -> pd.DataFrame:
+                  params: Sequence[str], simulate: bool, *, on_error: str = "stop"
+                  ) -> pd.DataFrame:
     """Evaluate ``cases`` and return their rows: ids, inputs, outputs.
+
+    ``on_error="record"``: a case that cannot be posed gets a row too, its outputs missing
+    (NaN; False, "" for flags and texts) and :data:`ERROR_COLUMN` saying why ("" in the
+    others' rows). Such cases are found by evaluating halves of the chunk, then halves of
+    those that fail: a chunk of c cases with one such case costs about 2 log2(c)
+    evaluations of fewer cases, not c of one.
 
     Raises
     ------
     InputError
-        A case that cannot be posed (a model of impossible parameters): the message
-        names the case (its index and parameter values), found by evaluating the
-        chunk's cases one by one.
+        ``on_error="stop"``: a case that cannot be posed (a model of impossible
+        parameters): the message names the case (its index and parameter values), found
+        by evaluating the chunk's cases one by one.
     """
     cases = list(cases)  # a chunk's view makes its cases here (on the worker), once
     overrides = [c.overrides for c in cases]
+    errors = None
     try:
         outputs = evaluator.evaluate(base, overrides, simulate=simulate)
     except InputError as exc:
-        raise _failing_case(evaluator, base, cases, simulate, exc) from None
+        if on_error != "record":
+            raise _failing_case(evaluator, base, cases, simulate, exc) from None
+        outputs, errors = _posed_outputs(evaluator, base, overrides, simulate, exc)
     n = len(cases)
     cols: dict[str, Any] = {
         "case": np.array([c.index for c in cases], dtype=np.int64),
@@ -220,7 +245,60 @@ def compute_chunk(evaluator, base: Mapping, normalized_base: Mapping, cases: Seq
                 f"shape {arr.shape}, expected ({n},)"
             )
         cols[k] = arr
+    if on_error == "record":
+        cols[ERROR_COLUMN] = errors if errors is not None else [""] * n
     return pd.DataFrame(cols)
+
+
+def _posed_outputs(evaluator, base, overrides: list, simulate, exc: InputError
+                   ) -> tuple[dict[str, np.ndarray], list[str]]:
+    """The outputs of the cases ``overrides`` whose evaluation raised ``exc``: those of
+    the cases that can be posed, found by halving (a run of cases that evaluates is kept
+    whole), the others missing; and each case's error ("" if posed)."""
+    n = len(overrides)
+    errors = [""] * n
+    runs: list[tuple[int, int, dict]] = []  # (first, end, outputs) of runs that evaluated
+    todo: list[tuple[int, int, InputError | None]] = [(0, n, exc)]
+    while todo:
+        lo, hi, err = todo.pop()
+        if err is None:
+            try:
+                runs.append((lo, hi, evaluator.evaluate(base, overrides[lo:hi],
+                                                        simulate=simulate)))
+                continue
+            except InputError as e:
+                err = e
+        if hi - lo == 1:
+            errors[lo] = f"{type(err).__name__}: {err}"
+        else:
+            mid = (lo + hi) // 2
+            todo += [(mid, hi, None), (lo, mid, None)]
+    if not runs:  # no case of the chunk: the columns and their types from the base's
+        try:
+            template = evaluator.evaluate(base, [{}], simulate=simulate)
+        except InputError:  # (an evaluator's base that cannot be posed: the errors alone)
+            template = {}
+        runs = [(0, 0, {k: np.asarray(v)[:0] for k, v in template.items()})]
+    outputs = {}
+    for k in runs[0][2]:
+        parts = [(lo, hi, np.asarray(out[k])) for lo, hi, out in runs]
+        kind = parts[0][2].dtype.kind
+        if kind == "b":
+            col = np.zeros(n, dtype=bool)
+        elif kind in "fc":
+            col = np.full(n, np.nan, dtype=parts[0][2].dtype)
+        elif kind in "iu":  # an evaluator's counts: float, to hold the missing ones
+            col = np.full(n, np.nan)
+        else:  # texts (and anything else): "" where missing
+            col = np.full(n, "", dtype=object)
+        for lo, hi, v in parts:
+            if v.shape != (hi - lo,):
+                raise RoverImpactError(
+                    f"evaluator {getattr(evaluator, 'name', evaluator)!r} returned {k!r} "
+                    f"with shape {v.shape}, expected ({hi - lo},)")
+            col[lo:hi] = v
+        outputs[k] = col
+    return outputs, errors
 
 
 def _failing_case(evaluator, base, cases: list[Case], simulate, exc: InputError
@@ -260,7 +338,7 @@ class ChunkFile:
 
 
 def compute_chunk_file(evaluator, base, normalized_base, cases, params, simulate, *,
-                       code: Mapping[str, str] | None = None
+                       code: Mapping[str, str] | None = None, on_error: str = "stop"
                        ) -> ChunkFile | RoverImpactError:
     """:func:`compute_chunk`, returned as the Parquet file's bytes (the same bytes
     :func:`~.store.atomic_parquet` writes); a case that cannot be posed is returned as its
@@ -276,7 +354,8 @@ def compute_chunk_file(evaluator, base, normalized_base, cases, params, simulate
     if wrong is not None:
         return wrong
     try:
-        df = compute_chunk(evaluator, base, normalized_base, cases, params, simulate)
+        df = compute_chunk(evaluator, base, normalized_base, cases, params, simulate,
+                           on_error=on_error)
     except InputError as exc:
         return exc
     buf = io.BytesIO()
@@ -704,10 +783,11 @@ def why_serial(workers: int, n_chunks: int, probe, n_probe: int, n_total: int, *
     return None
 
 
-def run_serial(pending, chunks, args, params, simulate, store) -> None:
+def run_serial(pending, chunks, args, params, simulate, store, *, on_error: str = "stop"
+               ) -> None:
     """Compute the ``pending`` chunks one after the other on this process."""
     for k in pending:
-        store(k, compute_chunk(*args, chunks[k], params, simulate))
+        store(k, compute_chunk(*args, chunks[k], params, simulate, on_error=on_error))
 
 
 def worker_result(fut, scheduler: str, then: str = "rerun once it runs again",
@@ -818,7 +898,7 @@ def as_finished(queue, client, scheduler: str, *, then: str,
 
 
 def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store, *,
-             note: Callable[[str], None] | None = None) -> None:
+             note: Callable[[str], None] | None = None, on_error: str = "stop") -> None:
     """Compute the ``pending`` chunks on the Dask scheduler at ``scheduler``; ``store`` each
     as it returns (once, whatever happens to the workers). Every worker gone for
     :data:`WORKERS_WAIT_S` seconds stops it (:func:`as_finished`; ``note`` says that it
@@ -852,7 +932,8 @@ def run_dask(pending, chunks, args, params, simulate, scheduler, retries, store,
                     return False
                 # arguments are small: shipped with each task, so a lost worker loses nothing
                 fut = client.submit(compute_chunk_file, *args, chunks[k], params, simulate,
-                                    code=code, retries=retries, pure=False)
+                                    code=code, on_error=on_error, retries=retries,
+                                    pure=False)
                 futures[fut] = k
                 return True
 

@@ -31,6 +31,7 @@ from .config import Case, Study, load_study
 
 __all__ = [
     "CHUNKS",
+    "ERROR_COLUMN",
     "MANIFEST",
     "PARQUET_WRITE",
     "RESULTS",
@@ -43,10 +44,12 @@ __all__ = [
     "check_out_dir",
     "chunk_path",
     "code_identity",
+    "count_not_posed",
     "finished_chunks",
     "folder_lock",
     "is_study_manifest",
     "load_results",
+    "not_posed",
     "read_manifest",
     "read_results_table",
     "remove_stale_temporaries",
@@ -93,6 +96,9 @@ def check_out_dir(out_dir: Path, *, create: bool = True) -> None:
 
 #: Column of the results saying the contact lasted the whole simulated window.
 WHOLE_WINDOW = "contact_whole_window"
+#: The column of a study run with ``on_error="record"``: "" for a case that was posed,
+#: else why it could not be ("ModelError: ...")
+ERROR_COLUMN = "error"
 
 
 def whole_window_cases(table: pd.DataFrame, suffix: str = ""):
@@ -352,6 +358,8 @@ def assemble(out_dir: Path, chunks: list[list[Case]], fresh: dict) -> pd.DataFra
     frames = [fresh[k] if k in fresh else pd.read_parquet(chunk_path(out_dir, k))
               for k in range(len(chunks))]
     table = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    if ERROR_COLUMN in table:  # chunks of a run that did not record (a resumed study)
+        table[ERROR_COLUMN] = table[ERROR_COLUMN].fillna("")
     expected = [c.case_id for chunk in chunks for c in chunk]
     if table.empty and not expected:
         return table
@@ -509,6 +517,35 @@ def write_results(out_dir: Path, chunks, path: Path, csv: Path | None = None, *,
 
         atomic_write(csv, write_csv)
     return n
+
+
+def not_posed(table: pd.DataFrame | str | Path) -> pd.DataFrame:
+    """Rows of a results table (or of its Parquet file, read only where the ``error``
+    column is not empty) whose case could not be posed; no rows if the study ran without
+    ``on_error="record"``."""
+    if not isinstance(table, pd.DataFrame):
+        import pyarrow.parquet as pq
+
+        schema = pq.read_schema(table)
+        if ERROR_COLUMN not in schema.names:
+            return schema.empty_table().to_pandas()
+        return pq.read_table(table, filters=[(ERROR_COLUMN, "!=", "")]).to_pandas()
+    if ERROR_COLUMN not in table:
+        return table.iloc[0:0]
+    return table[table[ERROR_COLUMN].fillna("").astype(str) != ""]
+
+
+def count_not_posed(path: str | Path) -> int:
+    """How many rows of the results table ``path`` are of cases that could not be posed
+    (:func:`not_posed`), reading its ``error`` column a row group at a time."""
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    f = pq.ParquetFile(path)
+    if ERROR_COLUMN not in f.schema_arrow.names:
+        return 0
+    return sum(int(pc.sum(pc.not_equal(b.column(0), "")).as_py() or 0)
+               for b in f.iter_batches(columns=[ERROR_COLUMN]))
 
 
 def read_results_table(path: Path) -> pd.DataFrame:

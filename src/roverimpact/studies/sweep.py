@@ -37,6 +37,7 @@ from .evaluate import get_evaluator
 from .executors import (
     ChunkFile,
     LazyCluster,
+    check_on_error,
     check_scheduler,
     check_workers,
     compile_note,
@@ -62,6 +63,7 @@ from .store import (
     folder_lock,
     is_study_manifest,
     load_results,
+    not_posed,
     read_results_table,
     remove_stale_temporaries,
     versions,
@@ -69,8 +71,8 @@ from .store import (
     write_results,
 )
 
-__all__ = ["StudyResult", "failed_simulations", "input_files", "load_results", "prepare_study",
-           "run_study", "study_toml"]
+__all__ = ["StudyResult", "failed_simulations", "input_files", "load_results", "not_posed",
+           "prepare_study", "run_study", "study_toml"]
 
 
 class StudyResult:
@@ -93,6 +95,9 @@ class StudyResult:
         Cases computed in this run and cases taken from finished chunks (resume).
     failures : pandas.DataFrame
         The rows whose simulation failed (their forces are NaN, ``sim_error`` says why).
+    not_posed : pandas.DataFrame
+        The rows of cases that could not be posed (a run with ``on_error="record"``: their
+        outputs are missing, ``error`` says why); empty otherwise.
     elapsed : float
         Wall time of this run [s].
     """
@@ -135,6 +140,14 @@ class StudyResult:
             path = self.files.get("results") or self.out_dir / RESULTS
             return pq.read_schema(path).empty_table().to_pandas()
         return failed_simulations(self.table)
+
+    @property
+    def not_posed(self) -> pd.DataFrame:
+        """The rows of cases that could not be posed (``error`` not empty), read from
+        ``results.parquet`` by that column alone if the table is not in memory."""
+        if self._table is not None:
+            return not_posed(self._table)
+        return not_posed(self.files.get("results") or self.out_dir / RESULTS)
 
 
 def failed_simulations(table: pd.DataFrame) -> pd.DataFrame:
@@ -246,6 +259,7 @@ def run_study(
     cluster: LazyCluster | None = None,
     note: Callable[[str], None] | None = None,
     prepare: Callable[[], None] | None = None,
+    on_error: str = "stop",
 ) -> StudyResult:
     """Run a study and write its results table next to a copy of the study file.
 
@@ -291,6 +305,13 @@ def run_study(
         kernels there, while a second process compiles the one that check needs first:
         a bad option is refused without waiting for a compile, and a bad study or folder
         waits no longer than the check itself.
+    on_error : "stop" or "record"
+        What a case that cannot be posed (a combination of parameters no model has) does:
+        stop the study with an error naming it (the finished chunks are kept), or get a
+        row whose outputs are missing (NaN; False and "" for flags and texts) with column
+        ``error`` saying why, the study going on (:attr:`StudyResult.not_posed`). With
+        ``"record"`` every row has ``error`` ("" for a case that was posed). Not part of
+        the study: ``--resume`` after a stop may record.
 
     Returns
     -------
@@ -310,6 +331,7 @@ def run_study(
         raise ConfigError("give either --workers or --scheduler, not both")
     if workers is not None and workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {workers}")
+    check_on_error(on_error)
     check_out_dir(Path(out_dir), create=False)  # before the study's check, which compiles
     if prepare is not None:  # the study's check below evaluates it: compile meanwhile
         prepare()
@@ -327,7 +349,8 @@ def run_study(
     with folder_lock(out_dir):  # one run at a time in a folder
         return _run_in_folder(prep, out_dir, resume=resume, overwrite=overwrite, csv=csv,
                               workers=workers, scheduler=scheduler, progress=progress,
-                              retries=retries, cluster=cluster, note=note, t0=t0)
+                              retries=retries, cluster=cluster, note=note, t0=t0,
+                              on_error=on_error)
 
 
 #: The compiled kernels (``module:attribute``) every study's cases use, and those of the
@@ -346,7 +369,7 @@ def study_kernels(study: Study) -> tuple[str, ...]:
 
 
 def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv, workers,
-                   scheduler, progress, retries, cluster, note, t0) -> StudyResult:
+                   scheduler, progress, retries, cluster, note, t0, on_error) -> StudyResult:
     """:func:`run_study` once the study is checked and the folder is this run's."""
     hashes = input_files(prep.study)  # each file read and hashed once per run
     _open_folder(prep, out_dir, hashes, resume=resume, overwrite=overwrite, note=note)
@@ -355,7 +378,7 @@ def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv
     chunks = Chunks(prep.cases, cs)
     done = finished_chunks(out_dir, chunks) if resume else set()
     pending = [k for k in range(len(chunks)) if k not in done]
-    manifest = _write_inputs(prep, out_dir, len(chunks), hashes)
+    manifest = _write_inputs(prep, out_dir, len(chunks), hashes, on_error)
 
     total = len(prep.cases)
     n_done = sum(chunks.n_cases(k) for k in done)
@@ -411,16 +434,16 @@ def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv
                 pass
             elif scheduler is not None:
                 run_dask(pending, chunks, args, params, simulate, scheduler, retries, store,
-                         note=note)
+                         note=note, on_error=on_error)
                 manifest["executor"] = f"Dask scheduler at {scheduler}"
             elif cluster is not None:
                 executor = _local_or_serial(pending, chunks, args, params, simulate, store,
-                                            cluster, retries, note)
+                                            cluster, retries, note, on_error)
                 manifest["executor"] = executor
                 if note and executor.startswith("serial"):
                     note(executor)
             else:
-                run_serial(pending, chunks, args, params, simulate, store)
+                run_serial(pending, chunks, args, params, simulate, store, on_error=on_error)
             finished = True
         finally:
             if own:
@@ -447,7 +470,8 @@ def _run_in_folder(prep: PreparedStudy, out_dir: Path, *, resume, overwrite, csv
             raise reworded(exc, (
                 f"{exc}. The study stopped after {kept} of {total} cases (kept in "
                 f"{out_dir}); change the study so that every case can be posed and run it "
-                "again with --overwrite")) from None
+                "again with --overwrite, or record such cases and go on: --on-error record "
+                "--resume")) from None
         if isinstance(exc, OSError) and exc.filename and exc.strerror:  # a full disk
             where = (f"all {total} cases are computed, kept in {out_dir}: once there is "
                      "room, rerun with --resume to write the table" if finished else
@@ -472,7 +496,7 @@ PROBE_FRACTION = 1 / 16
 
 
 def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: LazyCluster,
-                     retries: int, note=None) -> str:
+                     retries: int, note=None, on_error: str = "stop") -> str:
     """Run all pending chunks on ``cluster`` if a probe of the first says that is worth it
     (:func:`~.executors.why_serial`: one case untimed, then one case and about
     :data:`PROBE_FRACTION` of the chunk, timed; rows discarded), else here. Returns what
@@ -483,13 +507,14 @@ def _local_or_serial(pending, chunks, args, params, simulate, store, cluster: La
     n_probe = max(1, math.ceil(chunks.n_cases(pending[0]) * PROBE_FRACTION))
     why = why_serial(
         cluster.workers, len(pending),
-        lambda k: compute_chunk(*args, chunks.cases.view(first, first + k), params, simulate),
+        lambda k: compute_chunk(*args, chunks.cases.view(first, first + k), params, simulate,
+                                on_error=on_error),
         n_probe, sum(chunks.n_cases(k) for k in pending), running=cluster.running)
     if why is not None:
-        run_serial(pending, chunks, args, params, simulate, store)
+        run_serial(pending, chunks, args, params, simulate, store, on_error=on_error)
         return why
     run_dask(pending, chunks, args, params, simulate, cluster.address(), retries, store,
-             note=note)
+             note=note, on_error=on_error)
     return f"local Dask cluster of {cluster.workers} workers"
 
 
@@ -587,7 +612,7 @@ def input_files(study: Study) -> dict[str, str]:
 
 
 def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int,
-                  hashes: dict[str, str]) -> dict:
+                  hashes: dict[str, str], on_error: str = "stop") -> dict:
     """The study file next to the results and a manifest saying ``running``, with the
     input files' ``hashes`` the run was checked against."""
     st = prep.study
@@ -607,6 +632,7 @@ def _write_inputs(prep: PreparedStudy, out_dir: Path, n_chunks: int,
         "engines": list(st.engines()),
         "evaluator": getattr(prep.evaluator, "name", "?"),
         "input_files": hashes,
+        "on_error": on_error,
         "versions": versions(),
         "status": "running",
     }
