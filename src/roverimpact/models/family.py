@@ -21,6 +21,7 @@ import pinocchio as pin
 from ._build import FamilyNumbers
 from .base import MultibodyModel
 from .rocker_bogie import rocker_bogie_numbers
+from .rover2d import rover2d_numbers
 
 __all__ = ["FamilyNumbers", "ModelFamily", "family_numbers", "has_family"]
 
@@ -28,6 +29,7 @@ __all__ = ["FamilyNumbers", "ModelFamily", "family_numbers", "has_family"]
 #: ``(preset, [params, ...]) -> FamilyNumbers``.
 _NUMBERS: dict[str, Callable[[str | None, Sequence[Mapping]], FamilyNumbers]] = {
     "rocker_bogie": rocker_bogie_numbers,
+    "rover2d": rover2d_numbers,
 }
 
 
@@ -66,10 +68,13 @@ class ModelFamily:
     numbers : FamilyNumbers
         The members' numbers (:func:`family_numbers`).
 
-    Only the bodies whose numbers differ between members are written (a study that
-    changes the chassis mass rewrites one inertia). The wheels and ``params`` of ``mbm``
-    stay those it was built with: the members' wheel radii and nominal configurations are
-    in :attr:`numbers`.
+    Only the bodies whose numbers differ from ``mbm``'s are written (a study that
+    changes the chassis mass rewrites one inertia). ``mbm`` may be any model of the
+    family: a body whose numbers are the same in every member but not those ``mbm`` was
+    built with is written too (a block of a study's cases that keeps a parameter at
+    another value than the family's first case had: that body was once left as built).
+    The wheels and ``params`` of ``mbm`` stay those it was built with: the members' wheel
+    radii and nominal configurations are in :attr:`numbers`.
     """
 
     def __init__(self, mbm: MultibodyModel, numbers: FamilyNumbers):
@@ -83,11 +88,31 @@ class ModelFamily:
         n = numbers
 
         def varies(x):
-            return [b for b in range(nb) if not (x[:, b] == x[:1, b]).all()]
+            return {b for b in range(nb) if not (x[:, b] == x[:1, b]).all()}
 
-        inert = set(varies(n.mass)) | set(varies(n.lever)) | set(varies(n.inertia))
-        self._inertias = sorted(inert)
-        self._placements = varies(n.translation)
+        inert = varies(n.mass) | varies(n.lever) | varies(n.inertia)
+        self._inertias = sorted(inert | {b for b in range(nb)
+                                         if b not in inert and not self._as_built(b)})
+        self._placements = [b for b in range(nb) if not (
+            n.translation[:, b] == model.jointPlacements[b + 1].translation).all()]
+
+    def _inertia(self, i: int, b: int) -> pin.Inertia:
+        """Body ``b``'s inertia in member ``i``, as appendBodyToJoint adds a body to a
+        joint of no inertia (to rounding: it also moves the body's inertia by its
+        placement, the identity, which changes the rotational inertia by 1e-17)."""
+        n = self.numbers
+        return pin.Inertia.Zero() + pin.Inertia(float(n.mass[i, b]), n.lever[i, b],
+                                                n.inertia[i, b])
+
+    def _as_built(self, b: int) -> bool:
+        """Whether body ``b`` of the model holds the first member's inertia, to the bit
+        (as appendBodyToJoint stores it)."""
+        n, have = self.numbers, self.mbm.model.inertias[b + 1]
+        want = pin.Inertia.Zero()
+        want += pin.Inertia(float(n.mass[0, b]), n.lever[0, b], n.inertia[0, b]).se3Action(
+            _IDENTITY)
+        return bool(want.mass == have.mass and (want.lever == have.lever).all()
+                    and (want.inertia == have.inertia).all())
 
     @property
     def k(self) -> int:
@@ -98,11 +123,10 @@ class ModelFamily:
         """Make the Pinocchio model that of member ``i`` (inertias, joint placements)."""
         model, n = self.mbm.model, self.numbers
         for b in self._inertias:
-            # as appendBodyToJoint adds a body to a joint of no inertia
-            model.inertias[b + 1] = pin.Inertia.Zero() + pin.Inertia(
-                float(n.mass[i, b]), n.lever[i, b], n.inertia[i, b])
+            model.inertias[b + 1] = self._inertia(i, b)
         for b in self._placements:
             model.jointPlacements[b + 1] = pin.SE3(_EYE, n.translation[i, b])
 
 
 _EYE = np.eye(3)
+_IDENTITY = pin.SE3.Identity()

@@ -42,7 +42,9 @@ Fig. 3; the chassis centre of mass is placed to achieve it.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, fields
+from types import SimpleNamespace
 from typing import Literal
 
 import numpy as np
@@ -50,7 +52,9 @@ import pinocchio as pin
 
 from ..exceptions import ModelError
 from ._build import (
-    add_body,
+    Body,
+    FamilyNumbers,
+    add_bodies,
     box_inertia,
     check_bool,
     check_finite,
@@ -60,7 +64,7 @@ from ._build import (
 )
 from .base import MultibodyModel, Wheel
 
-__all__ = ["Rover2DParams", "rover2d"]
+__all__ = ["Rover2DParams", "rover2d", "rover2d_numbers"]
 
 
 @dataclass(frozen=True)
@@ -120,12 +124,8 @@ class Rover2DParams:
     strut_mass: float = 0.5
 
     def __post_init__(self):
-        check_positive(self, (
-            "chassis_mass", "wheel_mass", "wheel_radius", "wheel_width", "wheelbase", "h",
-            "chassis_length", "chassis_height", "chassis_width", "rocker_mass",
-            "rocker_pivot_height", "strut_mass",
-        ))
-        check_finite(self, ("com_x",))
+        check_positive(self, _POSITIVE)
+        check_finite(self, _FINITE)
         check_bool(self, ("middle_wheel",))
         if self.suspension not in ("rigid", "rocker", "prismatic"):
             raise ModelError(
@@ -135,21 +135,15 @@ class Rover2DParams:
 
     @property
     def wheel_names(self) -> tuple[str, ...]:
-        # alphabetical = the order of Pinocchio's URDF parser, so exports load back identically
-        return ("front", "middle", "rear") if self.middle_wheel else ("front", "rear")
+        return _wheel_names(self.middle_wheel)
 
     def wheel_x(self, name: str) -> float:
         """x of a wheel axle relative to mid-wheelbase [m]."""
-        return {"rear": -0.5, "middle": 0.0, "front": 0.5}[name] * self.wheelbase
+        return _wheel_x(self, name)
 
     @property
     def total_mass(self) -> float:
-        m = self.chassis_mass + self.wheel_mass * len(self.wheel_names)
-        if self.suspension == "rocker":
-            m += self.rocker_mass
-        elif self.suspension == "prismatic":
-            m += self.strut_mass * len(self.wheel_names)
-        return m
+        return _total_mass(self)
 
     @property
     def chassis_com_height(self) -> float:
@@ -157,13 +151,98 @@ class Rover2DParams:
 
         ``m_tot h = m_c z_c + sum_w m_w r + m_rocker (r + p/2) + sum_s m_s r``.
         """
-        r = self.wheel_radius
-        rest = self.wheel_mass * r * len(self.wheel_names)
-        if self.suspension == "rocker":
-            rest += self.rocker_mass * (r + 0.5 * self.rocker_pivot_height)
-        elif self.suspension == "prismatic":
-            rest += self.strut_mass * r * len(self.wheel_names)
-        return (self.total_mass * self.h - rest) / self.chassis_mass
+        return _chassis_com_height(self)
+
+
+_POSITIVE = ("chassis_mass", "wheel_mass", "wheel_radius", "wheel_width", "wheelbase", "h",
+             "chassis_length", "chassis_height", "chassis_width", "rocker_mass",
+             "rocker_pivot_height", "strut_mass")
+_FINITE = ("com_x",)
+#: the parameters that are not numbers: they set the model's structure (one family each)
+_STRUCTURE = ("suspension", "middle_wheel")
+
+
+# The rover's numbers from its parameters ``p``: a Rover2DParams, or the same fields as
+# (k,) arrays (a family, rover2d_numbers), with the same operations in the same order.
+
+def _wheel_names(middle_wheel: bool) -> tuple[str, ...]:
+    # alphabetical = the order of Pinocchio's URDF parser, so exports load back identically
+    return ("front", "middle", "rear") if middle_wheel else ("front", "rear")
+
+
+def _wheel_x(p, name: str):
+    return {"rear": -0.5, "middle": 0.0, "front": 0.5}[name] * p.wheelbase
+
+
+def _total_mass(p):
+    nw = len(_wheel_names(p.middle_wheel))
+    m = p.chassis_mass + p.wheel_mass * nw
+    if p.suspension == "rocker":
+        m += p.rocker_mass
+    elif p.suspension == "prismatic":
+        m += p.strut_mass * nw
+    return m
+
+
+def _chassis_com_height(p):
+    nw = len(_wheel_names(p.middle_wheel))
+    r = p.wheel_radius
+    rest = p.wheel_mass * r * nw
+    if p.suspension == "rocker":
+        rest += p.rocker_mass * (r + 0.5 * p.rocker_pivot_height)
+    elif p.suspension == "prismatic":
+        rest += p.strut_mass * r * nw
+    return (_total_mass(p) * p.h - rest) / p.chassis_mass
+
+
+def _check_com(p: Rover2DParams) -> float:
+    """The chassis COM height z_c of ``p``, or the ModelError of an ``h`` that puts it
+    below the ground."""
+    z_c = p.chassis_com_height
+    if not z_c > 0.0:
+        raise ModelError(
+            f"Rover2DParams.h = {p.h} m is too small: the chassis COM would be at "
+            f"z = {z_c:.3g} m (below the ground); increase h or lower the wheel masses"
+        )
+    return z_c
+
+
+def _layout(p, z_c) -> list[Body]:
+    """Bodies of the rover of parameters ``p`` (numbers or (k,) arrays) whose chassis COM
+    is at height ``z_c``, in the order they are added; the wheels are the bodies named
+    ``wheel_<name>``, in the order of :func:`_wheel_names`."""
+    r = p.wheel_radius
+    bodies = [
+        Body(-1, "PX", (0, 0, 0), "base_x", "base_x_link", 0.0),
+        Body(0, "PZ", (0, 0, 0), "base_z", "base_z_link", 0.0),
+        Body(1, "RY", (0, 0, 0), "base_pitch", "chassis", p.chassis_mass,
+             inertia=box_inertia(p.chassis_mass, p.chassis_length, p.chassis_width,
+                                 p.chassis_height)),
+    ]
+    Iw = wheel_inertia(p.wheel_mass, r, p.wheel_width)
+
+    def add_wheel(parent: int, name: str, xyz) -> None:
+        bodies.append(Body(parent, "RY", xyz, f"wheel_{name}", f"wheel_{name}_link",
+                           p.wheel_mass, inertia=Iw))
+
+    names = _wheel_names(p.middle_wheel)
+    if p.suspension == "rocker":
+        ph = p.rocker_pivot_height
+        bodies.append(Body(2, "RY", (-p.com_x, 0.0, r + ph - z_c), "rocker", "rocker_link",
+                           p.rocker_mass, com=(0.0, 0.0, -0.5 * ph),
+                           inertia=rod_inertia(p.rocker_mass, p.wheelbase)))
+        for name in names:
+            add_wheel(3, name, (_wheel_x(p, name), 0.0, -ph))
+    elif p.suspension == "prismatic":
+        Is = box_inertia(p.strut_mass, 0.05, 0.05, 0.05)
+        for name in names:
+            bodies.append(Body(2, "PZ", (_wheel_x(p, name) - p.com_x, 0.0, r - z_c),
+                               f"susp_{name}", f"strut_{name}", p.strut_mass, inertia=Is))
+            add_wheel(len(bodies) - 1, name, (0.0, 0.0, 0.0))
+    else:
+        for name in names:
+            add_wheel(2, name, (_wheel_x(p, name) - p.com_x, 0.0, r - z_c))
+    return bodies
 
 
 def rover2d(params: Rover2DParams | None = None, **overrides) -> MultibodyModel:
@@ -207,48 +286,15 @@ def rover2d(params: Rover2DParams | None = None, **overrides) -> MultibodyModel:
             raise ModelError(f"unknown rover2d parameter(s) {bad}; known: {sorted(known)}")
         params = Rover2DParams(**{**asdict(params), **overrides})
     p = params
-    r = p.wheel_radius
-    z_c = p.chassis_com_height
-    if not z_c > 0.0:
-        raise ModelError(
-            f"Rover2DParams.h = {p.h} m is too small: the chassis COM would be at "
-            f"z = {z_c:.3g} m (below the ground); increase h or lower the wheel masses"
-        )
+    z_c = _check_com(p)
     model = pin.Model()
     model.name = "rover2d"
-    jx = add_body(model, 0, pin.JointModelPX(), (0, 0, 0), "base_x", "base_x_link", 0.0)
-    jz = add_body(model, jx, pin.JointModelPZ(), (0, 0, 0), "base_z", "base_z_link", 0.0)
-    jc = add_body(model, jz, pin.JointModelRY(), (0, 0, 0), "base_pitch", "chassis",
-                  p.chassis_mass, inertia=box_inertia(p.chassis_mass, p.chassis_length,
-                                                      p.chassis_width, p.chassis_height))
-    Iw = wheel_inertia(p.wheel_mass, r, p.wheel_width)
-    lockable: list[str] = []
-    wheels: list[Wheel] = []
-
-    def add_wheel(parent: int, name: str, xyz) -> None:
-        add_body(model, parent, pin.JointModelRY(), xyz, f"wheel_{name}", f"wheel_{name}_link",
-                 p.wheel_mass, inertia=Iw)
-        wheels.append(Wheel(name=name, frame=f"wheel_{name}", radius=r, width=p.wheel_width))
-
-    if p.suspension == "rocker":
-        ph = p.rocker_pivot_height
-        jr = add_body(model, jc, pin.JointModelRY(), (-p.com_x, 0.0, r + ph - z_c), "rocker",
-                      "rocker_link", p.rocker_mass, com=(0.0, 0.0, -0.5 * ph),
-                      inertia=rod_inertia(p.rocker_mass, p.wheelbase))
-        lockable.append("rocker")
-        for name in p.wheel_names:
-            add_wheel(jr, name, (p.wheel_x(name), 0.0, -ph))
-    elif p.suspension == "prismatic":
-        Is = box_inertia(p.strut_mass, 0.05, 0.05, 0.05)
-        for name in p.wheel_names:
-            js = add_body(model, jc, pin.JointModelPZ(), (p.wheel_x(name) - p.com_x, 0.0, r - z_c),
-                          f"susp_{name}", f"strut_{name}", p.strut_mass, inertia=Is)
-            lockable.append(f"susp_{name}")
-            add_wheel(js, name, (0.0, 0.0, 0.0))
-    else:
-        for name in p.wheel_names:
-            add_wheel(jc, name, (p.wheel_x(name) - p.com_x, 0.0, r - z_c))
-
+    add_bodies(model, _layout(p, z_c))
+    wheels = [Wheel(name=name, frame=f"wheel_{name}", radius=p.wheel_radius,
+                    width=p.wheel_width) for name in p.wheel_names]
+    lockable = (["rocker"] if p.suspension == "rocker" else
+                [f"susp_{name}" for name in p.wheel_names] if p.suspension == "prismatic"
+                else [])
     q_nominal = np.zeros(model.nq)
     q_nominal[1] = z_c
     info = asdict(p) | {
@@ -260,3 +306,65 @@ def rover2d(params: Rover2DParams | None = None, **overrides) -> MultibodyModel:
     }
     return MultibodyModel(model=model, name="rover2d", wheels=wheels, loop_closure=None,
                           loop_names=[], lockable_joints=lockable, params=info)
+
+
+def rover2d_numbers(preset: str | None, params: Sequence[Mapping]) -> FamilyNumbers:
+    """The numbers of the rovers ``rover2d(**params[i])`` without building them
+    (:class:`~roverimpact.models.family.ModelFamily` writes them into one model of the
+    family), each parameter set checked as :func:`rover2d` checks it. The parameters that
+    are not numbers (``suspension``, ``middle_wheel``) must be the same in every set: they
+    set the model's structure.
+
+    Raises
+    ------
+    ModelError
+        As :func:`rover2d`, for the first bad parameter set; a preset (rover2d has none).
+    ValueError
+        Parameter sets of more than one structure.
+    """
+    if preset is not None:
+        raise ModelError(f"rover2d has no presets, got {preset!r}")
+    base = {f.name: getattr(Rover2DParams(), f.name) for f in fields(Rover2DParams)}
+    params = list(params)
+    k = len(params)
+    given = set().union(*params) if params else set()
+    ok = given <= base.keys()
+    structure = {}
+    for name in _STRUCTURE:
+        col = [ov.get(name, base[name]) for ov in params] if ok else []
+        structure[name] = col[0] if col else base[name]
+        if any(type(x) is not type(col[0]) or x != col[0] for x in col):
+            raise ValueError(f"rover2d_numbers: the parameter sets differ in {name} (the "
+                             "model's structure)")
+    cols = {}
+    for name in (given - set(_STRUCTURE)) if ok else ():
+        col = [ov.get(name, base[name]) for ov in params]
+        ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in col)
+        if not ok:
+            break
+        cols[name] = np.array(col, dtype=float)
+    if ok:
+        p = SimpleNamespace(**{name: cols[name] if name in cols else np.full(k, float(val))
+                               for name, val in base.items() if name not in _STRUCTURE},
+                            **structure)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ok = (all(bool(np.all(np.isfinite(getattr(p, n)) & (getattr(p, n) > 0)))
+                      for n in _POSITIVE)
+                  and all(bool(np.all(np.isfinite(getattr(p, n)))) for n in _FINITE)
+                  and structure["suspension"] in ("rigid", "rocker", "prismatic")
+                  and isinstance(structure["middle_wheel"], (bool, np.bool_))
+                  and bool(np.all(_chassis_com_height(p) > 0.0)))
+    if not ok:  # a bad parameter set: Rover2DParams or the COM check says which (raises)
+        for ov in params:
+            bad = set(ov) - base.keys()
+            if bad:
+                raise ModelError(f"unknown rover2d parameter(s) {sorted(bad)}; known: "
+                                 f"{sorted(base)}")
+            _check_com(Rover2DParams(**{**base, **ov}))
+        raise AssertionError("rover2d_numbers: no parameter set refused")  # pragma: no cover
+    z_c = _chassis_com_height(p)
+    bodies = _layout(p, z_c)
+    q_nominal = np.zeros((k, len(bodies)))  # one coordinate per joint (PX, PZ, RY, ...)
+    q_nominal[:, 1] = z_c
+    n_wheels = len(_wheel_names(p.middle_wheel))
+    return FamilyNumbers.of_layout(bodies, k, q_nominal, [p.wheel_radius] * n_wheels)
