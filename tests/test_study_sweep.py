@@ -1423,3 +1423,53 @@ def test_on_error_record_on_dask_returns_the_chunk_with_its_error(tmp_path, monk
     assert t["error"].str.startswith("ModelError").tolist() == [False, True, False]
     assert np.isnan(t["T_c_minus"]).tolist() == [False, True, False]
     assert calls.read_text().split() == ["3", "1", "2", "1", "1"]
+
+
+def test_record_in_a_model_changing_design_costs_the_refused_cases_only(tmp_path):
+    """A random design of the 2-D rover's h and wheel mass where some combinations cannot
+    be posed: the scenario evaluator records them itself in one call per chunk (members of
+    a model family's block refused by its numbers, found by halving over the numbers; the
+    others stay one block), so each posed case is computed once and equals that of a study
+    of the posed cases alone; every refused case carries the builder's own message."""
+    from roverimpact.studies.evaluate import ScenarioEvaluator
+
+    calls = []
+
+    class Counting(ScenarioEvaluator):
+        def evaluate(self, base, overrides, *, simulate=False, errors=None):
+            calls.append(len(overrides))
+            return super().evaluate(base, overrides, simulate=simulate, errors=errors)
+
+    study = {**_ROVER2D_BAD, "grid": None, "random": {"n": 300, "seed": 4, "params": {
+        "model.params.h": {"low": 0.05, "high": 0.35},
+        "model.params.wheel_mass": {"low": 1.0, "high": 40.0}}}}
+    res = run_study(study, tmp_path / "r", evaluator=Counting(), chunk_size=100,
+                    on_error="record")
+    assert calls == [100, 100, 100]  # one call per chunk: nothing evaluated twice
+    t = res.table
+    bad = t["error"] != ""
+    assert 10 < bad.sum() < 290
+    assert t.loc[bad, "error"].str.match(r"ModelError: Rover2DParams\.h = .* is too small")\
+        .all()
+    assert t.loc[bad, ["T_c_minus", "F_pred", "m_total"]].isna().all().all()
+    posed = {**_ROVER2D_BAD, "grid": None, "cases": [
+        {"model.params.h": h, "model.params.wheel_mass": w}
+        for h, w in t.loc[~bad, ["model.params.h", "model.params.wheel_mass"]].to_numpy()]}
+    ref = run_study(posed, tmp_path / "ref").table
+    for c in ("T_c_minus", "m_eff", "v_n", "m_total"):
+        np.testing.assert_allclose(t.loc[~bad, c].to_numpy(), ref[c].to_numpy(), rtol=1e-12)
+
+
+def test_record_with_a_plain_function_evaluator(tmp_path):
+    """A plain function (FunctionEvaluator) records its cases one by one as it computes
+    them: the refused case's own error, its output NaN; the texts and flags of the others'
+    types."""
+    def outputs(scenario):
+        out = _refuses_heavy(scenario)
+        return {**out, "heavy": out["T_c_minus"] > 12, "tag": "ok"}
+
+    study = {"name": "odd", "base": BASE, "grid": {"model.params.mass": [10.0, 40.0, 30.0]}}
+    t = run_study(study, tmp_path / "r", evaluator=outputs, on_error="record").table
+    assert t["error"].tolist() == ["", "_OddError: E1: mass 40.0 too large", ""]
+    np.testing.assert_array_equal(t["T_c_minus"], [5.0, np.nan, 15.0])
+    assert t["heavy"].tolist() == [False, False, True] and t["tag"].tolist() == ["ok", "", "ok"]

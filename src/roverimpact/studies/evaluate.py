@@ -55,7 +55,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..contact import peak_force
-from ..exceptions import RoverImpactError
+from ..exceptions import InputError, RoverImpactError
 from ..scenario import ImpactSetup, Scenario, scenario_from_dict, sweep_energy
 from ..scenario.block import block_key, is_number, member_block
 from ..scenario.build import (
@@ -320,7 +320,19 @@ class ScenarioEvaluator:
             models.setdefault(key, setup.model)
         return setup
 
-    def evaluate(self, base, overrides, *, simulate=False) -> dict[str, np.ndarray]:
+    def evaluate(self, base, overrides, *, simulate=False,
+                 errors: list[str] | None = None) -> dict[str, np.ndarray]:
+        """The outputs of the cases ``overrides`` of ``base`` (arrays over the cases).
+
+        ``errors``: None (a case that cannot be posed raises its error), or a list of one
+        string per case: a case of its own (one that changes the model: the usual case
+        that cannot be posed) that cannot be posed gets its error there (``"ModelError:
+        ..."``) and missing outputs (NaN; False and "" for flags and texts), and the other
+        cases are computed. In a block of a model family, the members whose numbers the
+        family refuses are found by halving the block over
+        :func:`~roverimpact.models.family.family_numbers` (no model is built), the others
+        stay one block. A case of a group sharing one model still raises.
+        """
         engines = engines_of(simulate)
         n = len(overrides)
         T = np.full(n, np.nan)
@@ -347,73 +359,91 @@ class ScenarioEvaluator:
         firsts: dict[str, Scenario] = {}
         family: dict[str, tuple[str | None, Scenario]] = {}
         for idx in groups.values():
-            ov = overrides[idx[0]]
-            fkey = None
-            if len(idx) == 1 and not engines:
-                # a case of its own (a model-changing design): computed with the other
-                # cases of its model family, in blocks; after the first, from its numbers
-                # (no scenario of its own, unless they need the full validation)
-                fkey = _family_key(ov)
-                bkey, first = family.get(fkey, (None, None))
-                if bkey is not None:
-                    member = _member(idx[0], first, ov)
-                    if member is not None:
-                        blocks[bkey].append(member)
+            try:
+                ov = overrides[idx[0]]
+                fkey = None
+                if len(idx) == 1 and not engines:
+                    # a case of its own (a model-changing design): computed with the other
+                    # cases of its model family, in blocks; after the first, from its numbers
+                    # (no scenario of its own, unless they need the full validation)
+                    fkey = _family_key(ov)
+                    bkey, first = family.get(fkey, (None, None))
+                    if bkey is not None:
+                        member = _member(idx[0], first, ov)
+                        if member is not None:
+                            blocks[bkey].append(member)
+                            continue
+                sc = scenario_from_dict(apply_overrides(base, ov))
+                if fkey is not None and sc.band is None:
+                    if fkey not in family:
+                        family[fkey] = (block_key(sc), sc)
+                    bkey = family[fkey][0]
+                    if bkey is not None:
+                        firsts.setdefault(bkey, sc)
+                        blocks.setdefault(bkey, []).append(_member_of(idx[0], sc))
                         continue
-            sc = scenario_from_dict(apply_overrides(base, ov))
-            if fkey is not None and sc.band is None:
-                if fkey not in family:
-                    family[fkey] = (block_key(sc), sc)
-                bkey = family[fkey][0]
-                if bkey is not None:
-                    firsts.setdefault(bkey, sc)
-                    blocks.setdefault(bkey, []).append(_member_of(idx[0], sc))
+                setup = self._setup(sc, models)
+                m_total[idx] = _total_mass(setup.model)
+                if engines or sc.band is not None:
+                    pending.append((idx, setup))
+                if len(idx) == 1:
+                    # a case of its own: the setup was built at its angle, so its T_c^- is the
+                    # setup's partition (as evaluate_case computes it), batched with the other
+                    # such cases of the same shape
+                    own.add(idx[0], setup)
                     continue
-            setup = self._setup(sc, models)
-            m_total[idx] = _total_mass(setup.model)
-            if engines or sc.band is not None:
-                pending.append((idx, setup))
-            if len(idx) == 1:
-                # a case of its own: the setup was built at its angle, so its T_c^- is the
-                # setup's partition (as evaluate_case computes it), batched with the other
-                # such cases of the same shape
-                own.add(idx[0], setup)
-                continue
-            if sc.obstacle.beta_deg is not None:
-                betas = np.array([float(overrides[i].get(_BETA, sc.obstacle.beta_deg))
-                                  for i in idx])
-                en = sweep_energy(setup, np.deg2rad(betas))
-            else:
-                en = setup.partition()
-            T[idx] = en.T_c_minus
-            m_eff[idx] = en.m_eff
-            m_eff_free[idx] = en.m_eff_free
-            v_n[idx] = en.v_n
+                if sc.obstacle.beta_deg is not None:
+                    betas = np.array([float(overrides[i].get(_BETA, sc.obstacle.beta_deg))
+                                      for i in idx])
+                    en = sweep_energy(setup, np.deg2rad(betas))
+                else:
+                    en = setup.partition()
+                T[idx] = en.T_c_minus
+                m_eff[idx] = en.m_eff
+                m_eff_free[idx] = en.m_eff_free
+                v_n[idx] = en.v_n
+            except InputError as exc:  # (a case of its own may be recorded: errors)
+                if errors is None or len(idx) != 1:
+                    raise
+                errors[idx[0]] = f"{type(exc).__name__}: {exc}"
+        pulling = None
         for bkey, members in blocks.items():
             first = firsts[bkey]
             for s in range(0, len(members), _OwnCases.BLOCK):
                 part = members[s:s + _OwnCases.BLOCK]
-                idx = [m.index for m in part]
-                try:
-                    blk = member_block(first, [m.params for m in part], [m.u for m in part],
-                                       None if first.obstacle.beta_deg is None
-                                       else [m.beta_deg for m in part])
-                except RoverImpactError:
-                    blk = None  # case by case below: the same error, from its own case
+                refused: list[_Member] = []
+                blk = _block(first, part)
+                if blk is None and errors is not None:
+                    part, refused = _numbers_refused(first, part)
+                    if part:  # (the family's first case may be one refused)
+                        blk = _block(first, part) or _block(scenario_from_dict(
+                            apply_overrides(base, overrides[part[0].index])), part)
                 if blk is not None:
+                    idx = [m.index for m in part]
                     m_total[idx] = blk.total_mass
-                    own.add_block(idx, blk, pulling_applies(first.constraints, first.contacts))
-                    continue
-                for i in idx:
-                    setup = self._setup(scenario_from_dict(apply_overrides(base, overrides[i])),
-                                        models)
-                    m_total[i] = _total_mass(setup.model)
-                    own.add(i, setup)
+                    if pulling is None:
+                        pulling = pulling_applies(first.constraints, first.contacts)
+                    own.add_block(idx, blk, pulling)
+                    part = []
+                # case by case: the error of the case's own build
+                for m in sorted(part + refused, key=lambda m: m.index):
+                    try:
+                        setup = self._setup(scenario_from_dict(
+                            apply_overrides(base, overrides[m.index])), models)
+                    except InputError as exc:
+                        if errors is None:
+                            raise
+                        errors[m.index] = f"{type(exc).__name__}: {exc}"
+                        continue
+                    m_total[m.index] = _total_mass(setup.model)
+                    own.add(m.index, setup)
         own.flush()
+        missing = [i for i, e in enumerate(errors) if e] if errors is not None else []
         # the predicted peak force: one vectorized call per contact law over all the cases
         for members in laws.values():
             sc_i = scenario_from_dict(apply_overrides(base, overrides[members[0]]))
             F_pred[members] = _peak_force(T[members], v_n[members], _law_of(sc_i))
+        F_pred[missing] = np.nan
         # the refined prediction (needs m_eff) and the simulations, case by case
         for idx, setup in pending:
             for i in idx:
@@ -427,7 +457,7 @@ class ScenarioEvaluator:
                "m_total": m_total, "m_eff_free": m_eff_free,
                **_baselines(v_n, m_total, m_eff_free)}
         if any(sims):
-            out.update(_columns(sims))
+            out.update(_columns(sims, missing))
         return out
 
 
@@ -550,6 +580,37 @@ class _Member(NamedTuple):
     beta_deg: float | None
 
 
+def _block(first: Scenario, part: Sequence[_Member]):
+    """:func:`~roverimpact.scenario.block.member_block` of the members ``part`` of
+    ``first``'s family; None if it raises (a member that cannot be posed: then each is
+    computed on its own, which raises that member's own error)."""
+    try:
+        return member_block(first, [m.params for m in part], [m.u for m in part],
+                            None if first.obstacle.beta_deg is None
+                            else [m.beta_deg for m in part])
+    except RoverImpactError:
+        return None
+
+
+def _numbers_refused(first: Scenario, part: list[_Member]
+                     ) -> tuple[list[_Member], list[_Member]]:
+    """``part`` split into the members whose numbers ``first``'s model family takes and
+    those it refuses (:func:`~roverimpact.models.family.family_numbers` of halves, then of
+    halves of those refused: no model is built), each in order."""
+    from ..models.family import family_numbers
+
+    try:
+        family_numbers(first.model.name, first.model.preset, [m.params for m in part])
+        return part, []
+    except InputError:
+        if len(part) == 1:
+            return [], part
+    h = len(part) // 2
+    good, bad = _numbers_refused(first, part[:h])
+    good2, bad2 = _numbers_refused(first, part[h:])
+    return good + good2, bad + bad2
+
+
 def _member_of(index: int, sc: Scenario) -> _Member:
     return _Member(index, sc.model.params, sc.velocity.u, sc.obstacle.beta_deg)
 
@@ -597,19 +658,28 @@ def _family_key(ov: Mapping[str, Any]) -> str:
 _FAMILY_NUMBERS = ("velocity.u", _BETA)
 
 
-def _columns(rows: Sequence[Mapping[str, Any]]) -> dict[str, np.ndarray]:
+def _columns(rows: Sequence[Mapping[str, Any]], missing: Sequence[int] = ()
+             ) -> dict[str, np.ndarray]:
+    """Columns of the per-case ``rows``; the rows ``missing`` (cases that could not be
+    posed) get "" in a column of texts, False in one of flags, NaN in the others (the
+    column's type is that of the other rows)."""
     keys: dict[str, None] = {}
     for r in rows:
         keys.update(dict.fromkeys(r))
+    gone = set(missing)
     out = {}
     for k in keys:
         vals = [r.get(k, np.nan) for r in rows]
-        if any(isinstance(v, str) for v in vals):
-            out[k] = np.array(vals, dtype=object)
-        elif all(isinstance(v, (bool, np.bool_)) for v in vals):
-            out[k] = np.array(vals, dtype=bool)
+        given = [v for i, v in enumerate(vals) if i not in gone]
+        if any(isinstance(v, str) for v in given):
+            fill, dtype = "", object
+        elif given and all(isinstance(v, (bool, np.bool_)) for v in given):
+            fill, dtype = False, bool
         else:
-            out[k] = np.array(vals, dtype=float)
+            fill, dtype = np.nan, float
+        for i in gone:
+            vals[i] = fill
+        out[k] = np.array(vals, dtype=dtype)
     return out
 
 
@@ -634,8 +704,22 @@ class FunctionEvaluator:
     def validate(self, scenario):
         return dict(self._validate(scenario)) if self._validate else dict(scenario)
 
-    def evaluate(self, base, overrides, *, simulate: bool = False):
-        return _columns([self.fn(apply_overrides(base, ov)) for ov in overrides])
+    def evaluate(self, base, overrides, *, simulate: bool = False,
+                 errors: list[str] | None = None):
+        """The function's outputs for each case; ``errors`` as for
+        :meth:`ScenarioEvaluator.evaluate` (an InputError of the function records the
+        case)."""
+        rows, missing = [], []
+        for i, ov in enumerate(overrides):
+            try:
+                rows.append(self.fn(apply_overrides(base, ov)))
+            except InputError as exc:
+                if errors is None:
+                    raise
+                errors[i] = f"{type(exc).__name__}: {exc}"
+                rows.append({})
+                missing.append(i)
+        return _columns(rows, missing)
 
 
 def get_evaluator(evaluator=None):

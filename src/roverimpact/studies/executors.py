@@ -6,6 +6,7 @@ is recomputed by the scheduler (and retried on errors), and the chunk is written
 
 from __future__ import annotations
 
+import inspect
 import io
 import json
 import logging
@@ -202,10 +203,13 @@ def compute_chunk(evaluator, base: Mapping, normalized_base: Mapping, cases: Seq
     """Evaluate ``cases`` and return their rows: ids, inputs, outputs.
 
     ``on_error="record"``: a case that cannot be posed gets a row too, its outputs missing
-    (NaN; False, "" for flags and texts) and :data:`ERROR_COLUMN` saying why ("" in the
-    others' rows). Such cases are found by evaluating halves of the chunk, then halves of
-    those that fail: a chunk of c cases with one such case costs about 2 log2(c)
-    evaluations of fewer cases, not c of one.
+    (NaN; False, "" for flags and texts) and :data:`~.store.ERROR_COLUMN` saying why (""
+    in the others' rows). An evaluator whose ``evaluate`` takes ``errors`` (a list of one
+    string per case, :meth:`.evaluate.ScenarioEvaluator.evaluate`) records them itself in
+    one call; where it raises all the same, or for any other evaluator, such cases are
+    found by evaluating halves of the chunk, then halves of those that fail (a chunk of
+    c cases with one such case: about 2 log2(c) evaluations of fewer cases, not c of
+    one).
 
     Raises
     ------
@@ -218,7 +222,13 @@ def compute_chunk(evaluator, base: Mapping, normalized_base: Mapping, cases: Seq
     overrides = [c.overrides for c in cases]
     errors = None
     try:
-        outputs = evaluator.evaluate(base, overrides, simulate=simulate)
+        if on_error == "record" and _takes_errors(evaluator):
+            errors = [""] * len(cases)
+            outputs = evaluator.evaluate(base, overrides, simulate=simulate, errors=errors)
+            if all(errors):  # no case posed: the columns and their types from the base's
+                outputs = _filled(evaluator, base, simulate, [], len(cases))
+        else:
+            outputs = evaluator.evaluate(base, overrides, simulate=simulate)
     except InputError as exc:
         if on_error != "record":
             raise _failing_case(evaluator, base, cases, simulate, exc) from None
@@ -273,7 +283,33 @@ def _posed_outputs(evaluator, base, overrides: list, simulate, exc: InputError
         else:
             mid = (lo + hi) // 2
             todo += [(mid, hi, None), (lo, mid, None)]
-    if not runs:  # no case of the chunk: the columns and their types from the base's
+    return _filled(evaluator, base, simulate, runs, n), errors
+
+
+def _takes_errors(evaluator) -> bool:
+    """Whether ``evaluator.evaluate`` takes ``errors`` (records the cases that cannot be
+    posed itself)."""
+    kind = type(evaluator)
+    known = _TAKES_ERRORS.get(kind)
+    if known is None:
+        try:
+            known = "errors" in inspect.signature(evaluator.evaluate).parameters
+        except (TypeError, ValueError):  # pragma: no cover - a builtin's evaluate
+            known = False
+        _TAKES_ERRORS[kind] = known
+    return known
+
+
+_TAKES_ERRORS: dict[type, bool] = {}
+
+
+def _filled(evaluator, base, simulate, runs: list[tuple[int, int, dict]], n: int
+            ) -> dict[str, np.ndarray]:
+    """The outputs of ``n`` cases from the ``runs`` ``(first, end, outputs)`` that
+    evaluated, the other cases' missing (NaN; False and "" for flags and texts; an
+    integer column becomes float); with no run, the columns and their types are the base
+    scenario's."""
+    if not runs:
         try:
             template = evaluator.evaluate(base, [{}], simulate=simulate)
         except InputError:  # (an evaluator's base that cannot be posed: the errors alone)
@@ -298,7 +334,7 @@ def _posed_outputs(evaluator, base, overrides: list, simulate, exc: InputError
                     f"with shape {v.shape}, expected ({hi - lo},)")
             col[lo:hi] = v
         outputs[k] = col
-    return outputs, errors
+    return outputs
 
 
 def _failing_case(evaluator, base, cases: list[Case], simulate, exc: InputError
