@@ -19,7 +19,9 @@ and after the report, the sweep and report wall times.
 ``--model-sweep N`` (issue #19: model-changing sweeps at >= 5000 cases/s on one core): a
 seeded random design of N cases of the 3-D rover where every case changes the model (COM
 height, chassis mass, speed, angle), through ``run_study`` on one core, against an angle
-grid (one model, 20 000 angles) and one ``evaluate_case`` per case, in the same run.
+grid (one model, 20 000 angles) and one ``evaluate_case`` per case, in the same run; then
+the same for the 2-D rover (rocker suspension: COM height h, wheel and chassis masses,
+speed, angle), the papers' own study variable.
 """
 
 from __future__ import annotations
@@ -116,14 +118,29 @@ def simulated_sweep(n_sim: int, workers: int) -> None:
           f"(target: 1000 in < 60 s -> {wall / n_sim * 1000:6.1f} s per 1000)")
 
 
+#: The model-changing designs: the rover, its base scenario and its numbers' ranges.
+MODEL_SWEEPS = (
+    ("3-D rocker-bogie", BASE_3D, {
+        "model.params.chassis_com_above_pivot": {"low": 0.02, "high": 0.2},
+        "model.params.chassis_mass": {"low": 10.0, "high": 20.0}}),
+    ("2-D rover (rocker)", {k: v for k, v in BASE_2D.items() if k != "simulation"}, {
+        "model.params.h": {"low": 0.25, "high": 0.6},
+        "model.params.wheel_mass": {"low": 1.0, "high": 4.0},
+        "model.params.chassis_mass": {"low": 12.0, "high": 30.0}}),
+)
+
+
 def model_sweep(n: int) -> None:
-    study = {"name": "bench model-changing", "base": BASE_3D, "random": {
+    for name, base, params in MODEL_SWEEPS:
+        _model_sweep(n, name, base, params)
+
+
+def _model_sweep(n: int, name: str, base: dict, params: dict) -> None:
+    study = {"name": "bench model-changing", "base": base, "random": {
         "n": n, "seed": 1, "params": {
-            "obstacle.beta_deg": {"low": 10.0, "high": 90.0},
-            "model.params.chassis_com_above_pivot": {"low": 0.02, "high": 0.2},
-            "model.params.chassis_mass": {"low": 10.0, "high": 20.0},
+            "obstacle.beta_deg": {"low": 10.0, "high": 90.0}, **params,
             "velocity.u": {"low": 0.1, "high": 0.5}}}}
-    grid = {"name": "bench angle grid", "base": BASE_3D, "grid": {
+    grid = {"name": "bench angle grid", "base": base, "grid": {
         "obstacle.beta_deg": {"start": 1.0, "stop": 90.0, "num": 20_000}}}
     with tempfile.TemporaryDirectory() as tmp:
         run_study({**grid, "grid": {"obstacle.beta_deg": [30.0]}}, f"{tmp}/warm")
@@ -136,10 +153,10 @@ def model_sweep(n: int) -> None:
     sample = expand(prepare_study(study).study)[:200]
     t0 = time.perf_counter()
     for c in sample:
-        evaluate_case(apply_overrides(BASE_3D, c.overrides))
+        evaluate_case(apply_overrides(base, c.overrides))
     per_case = (time.perf_counter() - t0) / len(sample)
     r_model, r_grid = n / t_model, 20_000 / t_grid
-    print(f"model-changing random design, 3-D rocker-bogie, {n:,} cases (every case a new "
+    print(f"model-changing random design, {name}, {n:,} cases (every case a new "
           "model), 1 core:")
     print(f"  run_study          {r_model:9,.0f} cases/s   (target >= 5000)")
     print(f"  angle grid (1 model, 20,000 angles) {r_grid:9,.0f} cases/s   "
