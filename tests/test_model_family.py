@@ -370,10 +370,19 @@ def test_rover2d_family_numbers_refuse_what_the_builder_refuses(bad):
 
 
 def test_rover2d_family_numbers_are_of_one_structure():
-    with pytest.raises(ValueError, match="differ in suspension"):
+    """Two suspensions are two families; a middle_wheel of 1 and 0 (numbers to a block's
+    key) is refused as the builder refuses it, not taken for two structures."""
+    from roverimpact.models import rover2d
+
+    with pytest.raises(ValueError, match="more than one structure"):
         family_numbers("rover2d", None, [{"suspension": "rigid"}, {"suspension": "rocker"}])
     with pytest.raises(ModelError, match="no presets"):
         family_numbers("rover2d", "mer", [{}])
+    with pytest.raises(ModelError) as ref:
+        rover2d(middle_wheel=1)
+    with pytest.raises(ModelError) as got:
+        family_numbers("rover2d", None, [{"middle_wheel": 1}, {"middle_wheel": 0}])
+    assert str(got.value) == str(ref.value) and "true or false" in str(ref.value)
 
 
 SETUPS_2D = [

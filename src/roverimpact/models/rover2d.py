@@ -320,7 +320,8 @@ def rover2d_numbers(preset: str | None, params: Sequence[Mapping]) -> FamilyNumb
     ModelError
         As :func:`rover2d`, for the first bad parameter set; a preset (rover2d has none).
     ValueError
-        Parameter sets of more than one structure.
+        Parameter sets of more than one structure (each of them a model ``rover2d``
+        builds).
     """
     if preset is not None:
         raise ModelError(f"rover2d has no presets, got {preset!r}")
@@ -333,9 +334,9 @@ def rover2d_numbers(preset: str | None, params: Sequence[Mapping]) -> FamilyNumb
     for name in _STRUCTURE:
         col = [ov.get(name, base[name]) for ov in params] if ok else []
         structure[name] = col[0] if col else base[name]
-        if any(type(x) is not type(col[0]) or x != col[0] for x in col):
-            raise ValueError(f"rover2d_numbers: the parameter sets differ in {name} (the "
-                             "model's structure)")
+        # two values: a bad one (middle_wheel = 1 and 0, which a block takes for numbers;
+        # the checks below say which) or two structures (ValueError below)
+        ok = ok and all(type(x) is type(col[0]) and x == col[0] for x in col)
     cols = {}
     for name in (given - set(_STRUCTURE)) if ok else ():
         col = [ov.get(name, base[name]) for ov in params]
@@ -361,7 +362,8 @@ def rover2d_numbers(preset: str | None, params: Sequence[Mapping]) -> FamilyNumb
                 raise ModelError(f"unknown rover2d parameter(s) {sorted(bad)}; known: "
                                  f"{sorted(base)}")
             _check_com(Rover2DParams(**{**base, **ov}))
-        raise AssertionError("rover2d_numbers: no parameter set refused")  # pragma: no cover
+        raise ValueError("rover2d_numbers: the parameter sets are of more than one "
+                         "structure (suspension, middle_wheel)")
     z_c = _chassis_com_height(p)
     bodies = _layout(p, z_c)
     q_nominal = np.zeros((k, len(bodies)))  # one coordinate per joint (PX, PZ, RY, ...)
