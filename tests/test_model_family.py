@@ -64,9 +64,16 @@ def test_rewritten_model_gives_the_fresh_models_M_A_v(preset):
     a model built for the member; so do its nominal q and total mass."""
     rng = np.random.default_rng(11)
     params = _random_params(rng, 9)
-    sc = scenario_from_dict(ROVER)
-    nums = family_numbers("rocker_bogie", preset, params)
-    fam = ModelFamily(rocker_bogie(preset, **params[0]), nums)
+    _assert_members_are_fresh_builds(lambda **p: rocker_bogie(preset, **p),
+                                     family_numbers("rocker_bogie", preset, params), params,
+                                     scenario_from_dict(ROVER), rng)
+
+
+def _assert_members_are_fresh_builds(build, nums, params, sc, rng):
+    """Each member of the family ``nums`` (of parameter sets ``params``), from one model
+    rewritten member by member, has the M, A (every candidate row), v, nominal q and total
+    mass of ``build(**params[i])``."""
+    fam = ModelFamily(build(**params[0]), nums)
     mbm = fam.mbm
     Q = configuration(mbm, sc.configuration, q_nominal=nums.q_nominal)
     u = rng.uniform(0.1, 0.5, len(params))
@@ -77,7 +84,7 @@ def test_rewritten_model_gives_the_fresh_models_M_A_v(preset):
     M, A = ConstraintSet(mbm, cons).evaluate_members(fam, Q,
                                                      normals={len(cons) - 1: normals})
     for i, p in enumerate(params):
-        fresh = rocker_bogie(preset, **p)
+        fresh = build(**p)
         q = configuration(fresh, sc.configuration)
         np.testing.assert_array_equal(Q[i], q)
         assert nums.total_mass()[i] == sum(Y.mass for Y in fresh.model.inertias)
@@ -186,8 +193,18 @@ def test_impact_block_is_the_setup_of_each_scenario(extra):
     """M, v, the active set and the active rows of each member of a block equal those of
     ImpactSetup.from_scenario (fresh model) for its scenario, to 1e-12."""
     rng = np.random.default_rng(3)
-    params = _random_params(rng, 7)
-    base = {**ROVER, **extra}
+    scs = _scenarios({**ROVER, **extra}, _random_params(rng, 7), rng)
+    keys = {block_key(sc) for sc in scs}
+    params_set = {tuple(sorted(sc.model.params)) for sc in scs}
+    if len(keys) != 1:  # members that set other parameters: give them all the same
+        assert len(params_set) > 1
+        scs = [sc for sc in scs if tuple(sorted(sc.model.params)) == max(params_set)]
+    _assert_block_is_each_setup(scs)
+
+
+def _scenarios(base, params, rng):
+    """A scenario of ``base`` per parameter set, each at its own speed and (unless the
+    obstacle has a normal) angle, the first at 90 degrees."""
     scs = []
     for i, p in enumerate(params):
         ov = {f"model.params.{k}": v for k, v in p.items()}
@@ -195,11 +212,11 @@ def test_impact_block_is_the_setup_of_each_scenario(extra):
         if "normal" not in base["obstacle"]:
             ov["obstacle.beta_deg"] = float(rng.uniform(5.0, 90.0)) if i else 90.0
         scs.append(scenario_from_dict(apply_overrides(base, ov)))
-    keys = {block_key(sc) for sc in scs}
-    params_set = {tuple(sorted(sc.model.params)) for sc in scs}
-    if len(keys) != 1:  # members that set other parameters: give them all the same
-        assert len(params_set) > 1
-        scs = [sc for sc in scs if tuple(sorted(sc.model.params)) == max(params_set)]
+    return scs
+
+
+def _assert_block_is_each_setup(scs):
+    """impact_block of ``scs`` equals ImpactSetup.from_scenario of each, to 1e-12."""
     blk = impact_block(scs)
     for i, sc in enumerate(scs):
         ref = ImpactSetup.from_scenario(sc)
@@ -241,6 +258,10 @@ def test_evaluator_blocks_match_evaluate_case():
             "model.params.wheel_radius": float(rng.uniform(0.08, 0.14)),
             "model.params.front_x": float(rng.uniform(0.25, 0.4)),
             "model.params.chassis_com_above_pivot": float(rng.uniform(0.0, 0.2))})
+    _assert_evaluator_is_evaluate_case(base, overrides)
+
+
+def _assert_evaluator_is_evaluate_case(base, overrides):
     got = ScenarioEvaluator().evaluate(base, overrides)
     for i, ov in enumerate(overrides):
         ref = evaluate_case(apply_overrides(base, ov))
@@ -331,29 +352,8 @@ def test_rover2d_rewritten_model_gives_the_fresh_models_M_A_v(structure):
 
     rng = np.random.default_rng(12)
     params = _random_params_2d(rng, 8, structure)
-    sc = scenario_from_dict(ROVER2D)
-    nums = family_numbers("rover2d", None, params)
-    fam = ModelFamily(rover2d(**params[0]), nums)
-    mbm = fam.mbm
-    Q = configuration(mbm, sc.configuration, q_nominal=nums.q_nominal)
-    u = rng.uniform(0.1, 0.5, len(params))
-    V = velocity(mbm, Q[0], sc.velocity, u=u, wheel_radius=nums.wheel_radius)
-    beta = np.deg2rad(rng.uniform(5.0, 90.0, len(params)))
-    normals = normal_from_beta(beta, (1.0, 0.0, 0.0))
-    cons = candidate_constraints(mbm, sc.obstacle, sc.contacts, normals[0])
-    M, A = ConstraintSet(mbm, cons).evaluate_members(fam, Q,
-                                                     normals={len(cons) - 1: normals})
-    for i, p in enumerate(params):
-        fresh = rover2d(**p)
-        q = configuration(fresh, sc.configuration)
-        np.testing.assert_array_equal(Q[i], q)
-        assert nums.total_mass()[i] == sum(Y.mass for Y in fresh.model.inertias)
-        _close(V[i], velocity(fresh, q, sc.velocity.model_copy(update={"u": u[i]})))
-        Mi, Ai = ConstraintSet(fresh, candidate_constraints(
-            fresh, sc.obstacle, sc.contacts, normals[i])).evaluate(q)
-        _close(M[i], Mi)
-        _close(A[i], Ai)
-    assert len({round(float(m), 9) for m in M[:, 0, 0]}) > 5  # the model did change
+    _assert_members_are_fresh_builds(rover2d, family_numbers("rover2d", None, params), params,
+                                     scenario_from_dict(ROVER2D), rng)
 
 
 @pytest.mark.parametrize("bad", [{"h": 0.1, "wheel_mass": 40.0}, {"chassis_mass": -1.0},
@@ -403,29 +403,11 @@ def test_rover2d_impact_block_is_the_setup_of_each_scenario(structure, extra):
     """M, v, q, the active set and the active rows of each member of a rover2d block equal
     those of ImpactSetup.from_scenario for its scenario, to 1e-12."""
     rng = np.random.default_rng(4)
-    params = _random_params_2d(rng, 6, structure)
-    base = {**ROVER2D, **extra}
-    scs = []
-    for i, p in enumerate(params):
-        ov = {f"model.params.{k}": v for k, v in p.items()}
-        ov["velocity.u"] = float(rng.uniform(0.1, 0.5))
-        if "normal" not in base["obstacle"]:
-            ov["obstacle.beta_deg"] = float(rng.uniform(5.0, 90.0)) if i else 90.0
-        scs.append(scenario_from_dict(apply_overrides(base, ov)))
+    scs = _scenarios({**ROVER2D, **extra}, _random_params_2d(rng, 6, structure), rng)
     most = max(len(sc.model.params) for sc in scs)
     scs = [sc for sc in scs if len(sc.model.params) == most]  # one block: the same keys
     assert len({block_key(sc) for sc in scs}) == 1 and len(scs) >= 4
-    blk = impact_block(scs)
-    for i, sc in enumerate(scs):
-        ref = ImpactSetup.from_scenario(sc)
-        _close(blk.M[i], ref.M)
-        _close(blk.v[i], ref.v)
-        _close(blk.q[i], ref.q)
-        assert blk.labels == ref.candidate_labels
-        rows = np.flatnonzero(blk.active[i])
-        assert tuple(blk.labels[r] for r in rows) == ref.labels
-        _close(blk.A[i][rows], ref.A)
-        assert blk.total_mass[i] == sum(Y.mass for Y in ref.model.model.inertias)
+    _assert_block_is_each_setup(scs)
 
 
 @pytest.mark.filterwarnings("ignore::roverimpact.exceptions.PullingContactWarning")  # noslip
@@ -443,9 +425,4 @@ def test_rover2d_evaluator_blocks_match_evaluate_case(suspension):
             "velocity.u": float(rng.uniform(0.1, 0.5)),
             "model.params.h": float(rng.uniform(0.25, 0.5)),
             "model.params.wheel_mass": float(rng.uniform(1.0, 5.0))})
-    got = ScenarioEvaluator().evaluate(base, overrides)
-    for i, ov in enumerate(overrides):
-        ref = evaluate_case(apply_overrides(base, ov))
-        for col in ("T_c_minus", "m_eff", "v_n", "F_pred", "m_total", "m_eff_free",
-                    "T_n_total", "T_c_obstacle"):
-            assert got[col][i] == pytest.approx(ref[col], rel=1e-12, abs=1e-15), (i, col)
+    _assert_evaluator_is_evaluate_case(base, overrides)

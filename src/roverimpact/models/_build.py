@@ -111,6 +111,38 @@ def add_body(
     return jid
 
 
+def family_columns(base: dict[str, Any], params, structure: dict[str, Any] | None = None):
+    """The parameter sets ``params`` (overrides of the defaults ``base``) as one namespace
+    of (k,) float arrays, a field of ``base`` each, and the fields ``structure`` (the
+    same in every set) as they are; None if a set names a field ``base`` lacks or gives
+    one a value that is not a number (the builder's own check then says which)."""
+    from types import SimpleNamespace
+
+    structure = structure or {}
+    k = len(params)
+    given = set().union(*params) if params else set()
+    if not given <= base.keys():
+        return None
+    cols = {}
+    for name in given - structure.keys():
+        col = [ov.get(name, base[name]) for ov in params]
+        if not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in col):
+            return None
+        cols[name] = np.array(col, dtype=float)
+    return SimpleNamespace(**{name: cols[name] if name in cols else np.full(k, float(val))
+                              for name, val in base.items() if name not in structure},
+                           **structure)
+
+
+def numbers_ok(p, positive, finite) -> bool:
+    """Whether every field ``positive`` of the family namespace ``p`` is finite and > 0 in
+    every set, and every field ``finite`` finite."""
+    with np.errstate(invalid="ignore"):
+        return (all(bool(np.all(np.isfinite(getattr(p, n)) & (getattr(p, n) > 0)))
+                    for n in positive)
+                and all(bool(np.all(np.isfinite(getattr(p, n)))) for n in finite))
+
+
 @dataclass(frozen=True)
 class Body:
     """One body of a built-in rover's layout: its joint, placed in its parent's joint frame

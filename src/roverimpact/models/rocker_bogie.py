@@ -44,6 +44,8 @@ from ._build import (
     box_inertia,
     check_finite,
     check_positive,
+    family_columns,
+    numbers_ok,
     rod_inertia,
     wheel_inertia,
 )
@@ -293,23 +295,9 @@ def rocker_bogie_numbers(preset: str | None, params: Sequence[Mapping]) -> Famil
     base = _fields(_params(preset, {}))
     params = list(params)
     k = len(params)
-    given = set().union(*params) if params else set()
-    cols = {}
-    ok = given <= base.keys()
-    for name in given if ok else ():
-        col = [ov.get(name, base[name]) for ov in params]
-        ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in col)
-        if not ok:
-            break
-        cols[name] = np.array(col, dtype=float)
-    if ok:
-        p = SimpleNamespace(**{name: cols[name] if name in cols else np.full(k, float(val))
-                               for name, val in base.items()})
-        with np.errstate(invalid="ignore"):
-            ok = (all(bool(np.all(np.isfinite(getattr(p, n)) & (getattr(p, n) > 0)))
-                      for n in _POSITIVE)
-                  and all(bool(np.all(np.isfinite(getattr(p, n)))) for n in _FINITE)
-                  and bool(np.all(_axles_ordered(p))) and bool(np.all(_pivots_ordered(p))))
+    p = family_columns(base, params)
+    ok = (p is not None and numbers_ok(p, _POSITIVE, _FINITE)
+          and bool(np.all(_axles_ordered(p))) and bool(np.all(_pivots_ordered(p))))
     if not ok:  # a bad parameter set: RockerBogieParams says which (raises)
         ps = [_params(preset, dict(ov)) for ov in params]
         p = SimpleNamespace(**{name: np.array([getattr(x, name) for x in ps], dtype=float)

@@ -44,7 +44,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, fields
-from types import SimpleNamespace
 from typing import Literal
 
 import numpy as np
@@ -59,6 +58,8 @@ from ._build import (
     check_bool,
     check_finite,
     check_positive,
+    family_columns,
+    numbers_ok,
     rod_inertia,
     wheel_inertia,
 )
@@ -328,33 +329,20 @@ def rover2d_numbers(preset: str | None, params: Sequence[Mapping]) -> FamilyNumb
     base = {f.name: getattr(Rover2DParams(), f.name) for f in fields(Rover2DParams)}
     params = list(params)
     k = len(params)
-    given = set().union(*params) if params else set()
-    ok = given <= base.keys()
+    ok = True
     structure = {}
     for name in _STRUCTURE:
-        col = [ov.get(name, base[name]) for ov in params] if ok else []
+        col = [ov.get(name, base[name]) for ov in params]
         structure[name] = col[0] if col else base[name]
         # two values: a bad one (middle_wheel = 1 and 0, which a block takes for numbers;
         # the checks below say which) or two structures (ValueError below)
         ok = ok and all(type(x) is type(col[0]) and x == col[0] for x in col)
-    cols = {}
-    for name in (given - set(_STRUCTURE)) if ok else ():
-        col = [ov.get(name, base[name]) for ov in params]
-        ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in col)
-        if not ok:
-            break
-        cols[name] = np.array(col, dtype=float)
-    if ok:
-        p = SimpleNamespace(**{name: cols[name] if name in cols else np.full(k, float(val))
-                               for name, val in base.items() if name not in _STRUCTURE},
-                            **structure)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            ok = (all(bool(np.all(np.isfinite(getattr(p, n)) & (getattr(p, n) > 0)))
-                      for n in _POSITIVE)
-                  and all(bool(np.all(np.isfinite(getattr(p, n)))) for n in _FINITE)
-                  and structure["suspension"] in ("rigid", "rocker", "prismatic")
-                  and isinstance(structure["middle_wheel"], (bool, np.bool_))
-                  and bool(np.all(_chassis_com_height(p) > 0.0)))
+    p = family_columns(base, params, structure) if ok else None
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ok = (p is not None and numbers_ok(p, _POSITIVE, _FINITE)
+              and structure["suspension"] in ("rigid", "rocker", "prismatic")
+              and isinstance(structure["middle_wheel"], (bool, np.bool_))
+              and bool(np.all(_chassis_com_height(p) > 0.0)))
     if not ok:  # a bad parameter set: Rover2DParams or the COM check says which (raises)
         for ov in params:
             bad = set(ov) - base.keys()
