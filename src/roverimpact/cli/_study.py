@@ -195,12 +195,12 @@ def sweep_cmd(
                 f"interrupted while writing the report; the results are complete in "
                 f"{res.out_dir}: `roverimpact report {res.out_dir}` writes it") from None
     failed = _failed_simulations(res.failures, res.n_cases, allow_failures)
-    unposed = res.not_posed
-    failed = max(failed, _not_posed(unposed, res.n_cases, allow_failures))
+    unposed = _not_posed(res, allow_failures)
+    failed = max(failed, unposed[1])
     if as_json:
         print_json({"cases": res.n_cases, "computed": res.n_computed,
                     "reused": res.n_reused, "failed": len(res.failures),
-                    "not_posed": len(unposed),
+                    "not_posed": unposed[0],
                     "elapsed_s": res.elapsed, "files": res.files,
                     "report": path, "studies": _stats_json(sections)})
         return failed
@@ -227,16 +227,19 @@ def _failed_simulations(failures, n_cases: int, allowed: bool) -> int:
     return 0 if allowed else 1
 
 
-def _not_posed(rows, n_cases: int, allowed: bool) -> int:
-    """Say (on stderr) how many cases could not be posed and why (the first error); the
-    exit code: 1 unless allowed."""
-    if rows.empty:
-        return 0
-    err_console.print(f"{len(rows)} of {n_cases} cases could not be posed (case "
-                      f"{int(rows['case'].iloc[0])}: {rows['error'].iloc[0]}); their "
-                      "outputs are missing in the results, column error says why",
-                      style="yellow")
-    return 0 if allowed else 1
+def _not_posed(res, allowed: bool) -> tuple[int, int]:
+    """Say (on stderr) how many cases of the study ``res`` could not be posed and why
+    (the first error; the table is read by its error column only); how many, and the exit
+    code: 1 unless allowed."""
+    from ..studies.store import count_not_posed
+
+    n, case, error = count_not_posed(res.files["results"])
+    if not n:
+        return 0, 0
+    err_console.print(f"{n} of {res.n_cases} cases could not be posed (case {case}: "
+                      f"{error}); their outputs are missing in the results, column error "
+                      "says why", style="yellow")
+    return n, 0 if allowed else 1
 
 
 @app.command("report")

@@ -349,7 +349,7 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
                                                                    int(ww.sum())), comp))
     agr = engines[0].agreement if engines and engines[0].force == "F_max" else None
     n_with = summ.n_finite.get("F_max", 0)
-    n_unposed = count_not_posed(path)
+    n_unposed = count_not_posed(path)[0]
     n_failed = summ.n - n_with - n_unposed if n_with else 0
     if agr is not None:
         note = (f"{summ.n:,} cases: the statistics are computed on {of}; the figure "

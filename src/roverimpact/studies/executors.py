@@ -185,7 +185,7 @@ def _cell(v):
 
 
 #: What a study does with a case that cannot be posed: stop (the default), or record it
-#: and go on (its row's outputs missing, column :data:`ERROR_COLUMN` saying why)
+#: and go on (its row's outputs missing, column :data:`~.store.ERROR_COLUMN` saying why)
 ON_ERROR = ("stop", "record")
 
 
@@ -225,7 +225,7 @@ def compute_chunk(evaluator, base: Mapping, normalized_base: Mapping, cases: Seq
         if on_error == "record" and _takes_errors(evaluator):
             errors = [""] * len(cases)
             outputs = evaluator.evaluate(base, overrides, simulate=simulate, errors=errors)
-            if all(errors):  # no case posed: the columns and their types from the base's
+            if errors and all(errors):  # no case posed: the columns' types from the base
                 outputs = _filled(evaluator, base, simulate, [], len(cases))
         else:
             outputs = evaluator.evaluate(base, overrides, simulate=simulate)
@@ -289,18 +289,10 @@ def _posed_outputs(evaluator, base, overrides: list, simulate, exc: InputError
 def _takes_errors(evaluator) -> bool:
     """Whether ``evaluator.evaluate`` takes ``errors`` (records the cases that cannot be
     posed itself)."""
-    kind = type(evaluator)
-    known = _TAKES_ERRORS.get(kind)
-    if known is None:
-        try:
-            known = "errors" in inspect.signature(evaluator.evaluate).parameters
-        except (TypeError, ValueError):  # pragma: no cover - a builtin's evaluate
-            known = False
-        _TAKES_ERRORS[kind] = known
-    return known
-
-
-_TAKES_ERRORS: dict[type, bool] = {}
+    try:
+        return "errors" in inspect.signature(evaluator.evaluate).parameters
+    except (TypeError, ValueError):  # pragma: no cover - a builtin's evaluate
+        return False
 
 
 def _filled(evaluator, base, simulate, runs: list[tuple[int, int, dict]], n: int

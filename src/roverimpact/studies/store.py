@@ -535,17 +535,26 @@ def not_posed(table: pd.DataFrame | str | Path) -> pd.DataFrame:
     return table[table[ERROR_COLUMN].fillna("").astype(str) != ""]
 
 
-def count_not_posed(path: str | Path) -> int:
+def count_not_posed(path: str | Path) -> tuple[int, int | None, str]:
     """How many rows of the results table ``path`` are of cases that could not be posed
-    (:func:`not_posed`), reading its ``error`` column a row group at a time."""
+    (:func:`not_posed`), with the first one's case and error (None and "" if none),
+    reading the ``case`` and ``error`` columns a row group at a time: a table of 1e7
+    cases is never read whole."""
     import pyarrow.compute as pc
     import pyarrow.parquet as pq
 
     f = pq.ParquetFile(path)
     if ERROR_COLUMN not in f.schema_arrow.names:
-        return 0
-    return sum(int(pc.sum(pc.not_equal(b.column(0), "")).as_py() or 0)
-               for b in f.iter_batches(columns=[ERROR_COLUMN]))
+        return 0, None, ""
+    n, case, error = 0, None, ""
+    for b in f.iter_batches(columns=["case", ERROR_COLUMN]):
+        bad = pc.fill_null(pc.not_equal(b.column(1), ""), False)
+        k = int(pc.sum(bad).as_py() or 0)
+        if k and case is None:
+            i = int(pc.index(bad, True).as_py())
+            case, error = int(b.column(0)[i].as_py()), str(b.column(1)[i].as_py())
+        n += k
+    return n, case, error
 
 
 def read_results_table(path: Path) -> pd.DataFrame:
