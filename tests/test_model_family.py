@@ -410,6 +410,22 @@ def test_rover2d_impact_block_is_the_setup_of_each_scenario(structure, extra):
     _assert_block_is_each_setup(scs)
 
 
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.GroundGapWarning")  # rocker set
+@pytest.mark.parametrize("extra", [
+    {"configuration": {"joints": {"rocker": 0.05}},
+     "velocity": {"u": 0.3, "joints": {"rocker": 0.2}}},
+    {"contacts": {"ground": "normal", "locked": ["rocker"]}},
+    {"contacts": {"ground": "noslip"}, "obstacle": {"wheel": "middle", "beta_deg": 45.0}},
+])
+def test_rover2d_rocker_block_with_its_joint_set_or_locked(extra):
+    """The rocker's own joint in a block: set in the configuration and the velocity, or
+    locked; and the middle wheel hitting the obstacle. As for the other setups."""
+    rng = np.random.default_rng(6)
+    structure = {"suspension": "rocker", "middle_wheel": True}
+    scs = _scenarios({**ROVER2D, **extra}, _random_params_2d(rng, 6, structure)[3:] * 2, rng)
+    _assert_block_is_each_setup(scs)
+
+
 @pytest.mark.filterwarnings("ignore::roverimpact.exceptions.PullingContactWarning")  # noslip
 @pytest.mark.parametrize("suspension", ["rigid", "rocker"])
 def test_rover2d_evaluator_blocks_match_evaluate_case(suspension):
