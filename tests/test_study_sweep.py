@@ -1372,7 +1372,7 @@ def test_cli_on_error_record_says_how_many_cases_and_exits_1(tmp_path, capsys):
     from roverimpact.cli import main
 
     study = tmp_path / "bad.toml"
-    study.write_bytes(tomli_w.dumps({k: v for k, v in _ROVER2D_BAD.items()}).encode())
+    study.write_bytes(tomli_w.dumps(_ROVER2D_BAD).encode())
     assert main(["sweep", str(study), "-o", str(tmp_path / "a"), "--on-error", "record"]) == 1
     err = capsys.readouterr().err
     assert "1 of 9 cases could not be posed (case 8: ModelError: Rover2DParams.h" in err
