@@ -52,13 +52,10 @@ class ConstraintSet:
     constraints: list
     labels: list[str] = field(init=False)
     _fids: list = field(init=False, repr=False)
-    _data: object = field(init=False, repr=False)
 
     def __post_init__(self):
         model = self.mbm.model
-        self._data = model.createData()  # the data of the thread that made the set
-        self._local = threading.local()  # each thread's data and row plan
-        self._local.data = self._data
+        self._local = threading.local()  # each thread's data and row plan (see data)
         self.lock = threading.Lock()
         self.labels = []
         self._fids = []
@@ -100,7 +97,6 @@ class ConstraintSet:
     def __setstate__(self, state):
         self.__dict__.update(state)
         self._local = threading.local()
-        self._local.data = self._data
         self.lock = threading.Lock()
 
     def kinematics(self, q) -> None:
