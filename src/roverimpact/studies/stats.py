@@ -376,14 +376,16 @@ def agreements_and_gains(columns, y, *, n_boot: int = 1000, confidence: float = 
     runs = [_agreement(x, c, n_boot=n_boot, confidence=confidence, seed=seed) for x in cols]
     gains = []
     first = cols[0]
+    rho_first = None  # the first column's Spearman rho, once (as spearman_difference's)
     for x, (_, boot) in zip(cols[1:], runs[1:], strict=True):
         if x.shape != first.shape or first.shape != c.shape or not (
                 np.isfinite(first).all() and np.isfinite(x).all() and np.isfinite(c).all()):
             gains.append(spearman_difference(first, x, c, n_boot=n_boot,
                                              confidence=confidence, seed=seed))
             continue
-        value = (rank_correlation(first, c).spearman_rho
-                 - rank_correlation(x, c).spearman_rho)
+        if rho_first is None:
+            rho_first = rank_correlation(first, c).spearman_rho
+        value = rho_first - rank_correlation(x, c).spearman_rho
         low = high = float("nan")
         if boot is not None and math.isfinite(value):
             low, high = _diff_interval(runs[0][1][:, 0] - boot[:, 0], n_boot, confidence)
