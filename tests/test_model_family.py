@@ -442,3 +442,18 @@ def test_rover2d_evaluator_blocks_match_evaluate_case(suspension):
             "model.params.h": float(rng.uniform(0.25, 0.5)),
             "model.params.wheel_mass": float(rng.uniform(1.0, 5.0))})
     _assert_evaluator_is_evaluate_case(base, overrides)
+
+
+def test_each_family_of_one_call_has_its_own_pulling_check():
+    """Two model families in one evaluate call, the first on a normal ground and the
+    second on a no-slip ground: the second still warns of its pulling wheel (a draft of
+    this stop decided the check once per call, from the first family)."""
+    from roverimpact.exceptions import PullingContactWarning
+
+    base = {"model": {"name": "rocker_bogie"}, "velocity": {"u": 0.5},
+            "obstacle": {"wheel": "left_front", "beta_deg": 60.0}}
+    overrides = [{"contacts.ground": ground, "model.params.chassis_mass": m}
+                 for ground in ("normal", "noslip") for m in (10.0, 12.0)]
+    with pytest.warns(PullingContactWarning, match=r"ground:right_front"):
+        out = ScenarioEvaluator().evaluate(base, overrides)
+    assert np.isfinite(out["T_c_minus"]).all()

@@ -406,9 +406,9 @@ class ScenarioEvaluator:
                 if errors is None or len(idx) != 1:
                     raise
                 errors[idx[0]] = f"{type(exc).__name__}: {exc}"
-        pulling = None
         for bkey, members in blocks.items():
             first = firsts[bkey]
+            pulling = pulling_applies(first.constraints, first.contacts)
             for s in range(0, len(members), _OwnCases.BLOCK):
                 part = members[s:s + _OwnCases.BLOCK]
                 refused: list[_Member] = []
@@ -421,8 +421,6 @@ class ScenarioEvaluator:
                 if blk is not None:
                     idx = [m.index for m in part]
                     m_total[idx] = blk.total_mass
-                    if pulling is None:
-                        pulling = pulling_applies(first.constraints, first.contacts)
                     own.add_block(idx, blk, pulling)
                     part = []
                 # case by case: the error of the case's own build
