@@ -253,3 +253,51 @@ def test_study_copy_names_its_files_by_absolute_path(tmp_path, monkeypatch):
     assert study.fingerprint() == json.loads((out / "manifest.json").read_text())["fingerprint"]
     again = run_study(out / "study.toml", out, resume=True)
     pd.testing.assert_frame_equal(again.table, first.table)
+
+
+def _validated(study: dict) -> tuple[list, list]:
+    """The values of ``obstacle.beta_deg`` / ``model.params.mass`` that
+    ``validate_scenarios`` gave the schema check and the deep check, in order."""
+    from roverimpact.studies.config import Study, validate_scenarios
+    from roverimpact.studies.evaluate import ScenarioEvaluator
+
+    ev = ScenarioEvaluator()
+    seen: tuple[list, list] = ([], [])
+
+    def value(scn):
+        return scn["obstacle"]["beta_deg"], scn["model"]["params"]["mass"]
+
+    def validate(scn):
+        seen[0].append(value(scn))
+        return ev.validate(scn)
+
+    def check(scn):
+        seen[1].append(value(scn))
+        return ev.check(scn)
+
+    validate_scenarios(Study.model_validate(study), validate, check)
+    return seen
+
+
+def _rigid_study(grid: dict) -> dict:
+    import tomllib
+
+    return {**tomllib.loads(GOOD), "grid": grid}
+
+
+def test_a_fine_grid_is_validated_at_its_ends_and_every_other_value_on_its_own():
+    """Numbers: the smallest and largest of each type are validated and checked (the rules
+    on a number are ranges), not each of 20 000; texts, booleans and non-finite numbers
+    each; 1, 1.0 and true are three values (they were one: true went unchecked)."""
+    schema, deep = _validated(_rigid_study(
+        {"obstacle.beta_deg": {"start": 1.0, "stop": 90.0, "num": 20_000}}))
+    assert schema == deep == [(90.0, 20.0), (1.0, 20.0), (90.0, 20.0)]  # base, then ends
+    schema, deep = _validated(_rigid_study({"model.params.mass": [30.0, 12, 5, 18.5, 7.0,
+                                                                  40]}))
+    assert [m for _, m in schema[1:]] == [m for _, m in deep[1:]] == [30.0, 5, 7.0, 40]
+    with pytest.raises(ConfigError, match=r"beta_deg = True.*boolean"):
+        _validated(_rigid_study({"obstacle.beta_deg": [30.0, 1, True]}))
+    with pytest.raises(ConfigError, match=r"mass = nan"):  # the deep check (the builder)
+        _validated(_rigid_study({"model.params.mass": [10.0, float("nan"), 20.0]}))
+    with pytest.raises(ConfigError, match=r"beta_deg = 95.0"):
+        _validated(_rigid_study({"obstacle.beta_deg": [30.0, 95.0, 60.0]}))

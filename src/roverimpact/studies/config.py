@@ -30,6 +30,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -626,12 +627,38 @@ def distinct_values(study: Study) -> dict[str, list]:
         for case in study.cases or []:
             for k, v in case.items():
                 out.setdefault(k, []).append(v)
-    # keep order, drop duplicates
-    return {k: list(dict.fromkeys(map(_hashable, v))) for k, v in out.items()}
+    # keep order, drop duplicates (of the same type: 1, 1.0 and true are three values)
+    return {k: list({(type(h), h): h for h in map(_hashable, v)}.values())
+            for k, v in out.items()}
 
 
 def _hashable(v):
     return tuple(v) if isinstance(v, list) else v
+
+
+def _schema_values(values: Sequence) -> list:
+    """Of a parameter's distinct ``values``, those the schema check validates, in order:
+    every value but a finite number, and of the finite numbers the smallest and the
+    largest of each type (int, float). The schema's rules on a number are ranges, so the
+    values between two that pass pass too: a grid of 20 000 angles is not validated
+    20 000 times (0.6 s), as a random design's samples are not (its bounds are)."""
+    bounds: dict[type, list] = {}
+    for v in values:
+        if _finite_number(v):
+            lo_hi = bounds.setdefault(type(v), [v, v])
+            lo_hi[0], lo_hi[1] = min(lo_hi[0], v), max(lo_hi[1], v)
+    out, seen = [], set()
+    for v in values:
+        if not _finite_number(v):
+            out.append(v)
+        elif v in bounds[type(v)] and (type(v), v) not in seen:
+            seen.add((type(v), v))
+            out.append(v)
+    return out
+
+
+def _finite_number(v) -> bool:
+    return type(v) in (int, float) and math.isfinite(v)
 
 
 def _builder_parameters(base: Mapping[str, Any]) -> list[str]:
@@ -666,11 +693,14 @@ def validate_scenarios(study: Study, validate, check=None) -> dict:
     ``validate(scenario_dict) -> normalized dict`` (a cheap schema check) raises
     :class:`ConfigError` (or a pydantic ``ValidationError``) for a bad scenario; the
     optional ``check(scenario_dict)`` is a deep check (e.g. building the model). The base
-    is validated and checked; every distinct swept value (grid values, sample bounds,
-    listed cases) is validated, and the smallest and largest value of each numeric
-    parameter (every value of the others) is checked. A swept parameter must name a leaf
-    of the normalized scenario (free-form tables such as ``model.params`` count once the
-    checks accept the key). Returns the normalized base.
+    is validated and checked; of each parameter's distinct swept values (grid values,
+    sample bounds, listed cases), every value that is not a finite number is validated
+    and checked, and of the finite numbers the smallest and largest of each type (int,
+    float): the checks' rules on a number are ranges (:func:`_schema_values`). A case's
+    value between them that a rule refuses all the same stops the study at that case.
+    A swept parameter must name a leaf of the normalized scenario (free-form tables such
+    as ``model.params`` count once the checks accept the key). Returns the normalized
+    base.
 
     Raises
     ------
@@ -706,14 +736,12 @@ def validate_scenarios(study: Study, validate, check=None) -> dict:
                 raise _unknown_parameter(study, key, leaves) from None
             if key not in flatten(got):
                 raise _unknown_parameter(study, key, leaves)
-        for val in values:
+        checked = _schema_values(values)
+        for val in checked:
             _run(validate, apply_overrides(study.base, {key: val}), f"{where}: {key} = {val!r}",
                  val)
         if check is not None:
-            numeric = [v for v in values if isinstance(v, (int, float))
-                       and not isinstance(v, bool)]
-            deep = ([min(numeric), max(numeric)] if len(numeric) == len(values) else values)
-            for val in dict.fromkeys(deep):
+            for val in checked:
                 _run(check, apply_overrides(study.base, {key: val}), f"{where}: {key} = {val!r}",
                      val)
     if study.x is not None and study.x not in study.parameters():
