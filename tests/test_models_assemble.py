@@ -376,3 +376,39 @@ def test_partition_at_recomputes_a_nonlinear_loop_and_takes_one_dof(tmp_path):
                              1e-9, res) == 0
     a, m = -0.5 * np.sin(0.4), 0.04 + 2.0 * 0.3**2
     assert res[1] == pytest.approx(0.5 * (a * 2.0) ** 2 / (a * a / m), rel=1e-13)
+
+
+@pytest.mark.parametrize("build", [rover2d, rocker_bogie, lambda: _panda(True)])
+def test_world_convention_crba_makes_the_joint_jacobians_and_placements_to_the_bit(build):
+    """The compiled path takes M from CRBA in Pinocchio's world convention and the world
+    joint Jacobian data.J that it fills on the way (models._assemble._WORLD): data.J and the
+    frame placements equal those of pin.computeJointJacobians to the bit, M the
+    local-convention CRBA to rounding, and the plan's (M, A) the per-constraint reference
+    (local CRBA, pin.getFrameJacobian)."""
+    rng = np.random.default_rng(3)
+    mbm = build()
+    model = mbm.model
+    local, world = model.createData(), model.createData()
+    iu = np.triu_indices(model.nv)
+    for _ in range(5):
+        q = _random_q(model, rng)
+        M_local = pin.crba(model, local, q).copy()
+        J_local = pin.computeJointJacobians(model, local, q).copy()
+        pin.updateFramePlacements(model, local)
+        M_world = pin.crba(model, world, q, pin.Convention.WORLD)
+        pin.updateFramePlacements(model, world)
+        assert np.array_equal(world.J, J_local)
+        for a, b in zip(world.oMf, local.oMf, strict=True):
+            assert np.array_equal(a.homogeneous, b.homogeneous)
+        scale = np.abs(M_local[iu]).max()
+        assert np.abs(M_world[iu] - M_local[iu]).max() <= 1e-14 * scale
+    cons = (_arm_constraints(mbm, rng) if model.name.startswith("panda")
+            else _constraints(mbm, rng))
+    cs = ConstraintSet(mbm, cons)
+    for _ in range(3):
+        q = _random_q(model, rng)
+        M, A = cs.evaluate(q)
+        cs.kinematics(q)
+        np.testing.assert_allclose(M, mass_matrix(model, local, q), rtol=0,
+                                   atol=1e-13 * np.abs(M).max())
+        np.testing.assert_allclose(A, cs.rows(q), rtol=0, atol=1e-12)

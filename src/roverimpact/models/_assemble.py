@@ -2,8 +2,9 @@ r"""Vectorised assembly of a :class:`~roverimpact.models.kinematics.ConstraintSe
 
 The per-constraint path (``GroundContact.rows`` etc.) is the readable reference; this
 module computes the same ``A`` in one compiled pass from the world-frame joint Jacobian
-``data.J`` of ``pin.computeJointJacobians`` (the twist of each joint's motion subspace at
-the world origin). For a point ``p`` of a body with supporting joints ``S``:
+``data.J`` (the twist of each joint's motion subspace at the world origin), which the
+world-convention CRBA fills as ``pin.computeJointJacobians`` does. For a point ``p`` of
+a body with supporting joints ``S``:
 
 .. math::
 
@@ -36,16 +37,19 @@ _WHEEL, _POINT = 0, 1
 
 
 @njit(**NJIT_OPTIONS)
-def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+def _assemble(Jt, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
               r_const, support, rows, A):  # pragma: no cover - compiled
     """Fill ``A`` (k, nv): its row ``i`` is the plan's row ``rows[i]`` (k of them).
+
+    ``Jt`` (nv, 6): the world joint Jacobian ``data.J`` (6, nv) transposed, as Pinocchio
+    stores it (column-major: read in place, :data:`_WORLD`).
 
     ``X`` (., 12): frame placements as Pinocchio stores an SE3, the rotation column-major
     (``R[i, j] = X[g, i + 3 j]``) then the translation (``X[g, 9:12]``); used frame ``f``
     is row ``g = f_row[f]``. ``support`` (F, nv) masks the columns of frame ``f``.
     """
     nc = c_frame.shape[0]
-    nv = J.shape[1]
+    nv = Jt.shape[0]
     PT = np.empty((nc, 6))  # contact point, then no-slip direction a x n / |a x n| (wheels)
     P, T = PT[:, :3], PT[:, 3:]
     for c in range(nc):
@@ -99,8 +103,8 @@ def _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact
         f = c_frame[c]
         for j in range(nv):
             if support[f, j]:
-                A[i, j] = (d0 * J[0, j] + d1 * J[1, j] + d2 * J[2, j]
-                           + e0 * J[3, j] + e1 * J[4, j] + e2 * J[5, j])
+                A[i, j] = (d0 * Jt[j, 0] + d1 * Jt[j, 1] + d2 * Jt[j, 2]
+                           + e0 * Jt[j, 3] + e1 * Jt[j, 4] + e2 * Jt[j, 5])
             else:
                 A[i, j] = 0.0
 
@@ -115,8 +119,8 @@ def _symmetrize(M):  # pragma: no cover - compiled
 
 
 def _evaluate_signature(nd: int):
-    """``(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-    r_const, support, M, A)``: ``J, X, r_const, M, A`` with ``nd`` dimensions (2: one
+    """``(Jt, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+    r_const, support, M, A)``: ``Jt, X, r_const, M, A`` with ``nd`` dimensions (2: one
     configuration, 3: stacked; stacked, ``c_normal`` and ``c_radius`` have one more),
     inputs read-only C arrays, ``M`` and ``A`` written."""
     return (ro(f8, nd), ro(f8, nd), ro(i8, 1), ro(i8, 1), ro(i8, 1), ro(f8, 2),
@@ -127,16 +131,16 @@ def _evaluate_signature(nd: int):
 # one explicit signature each (compiled on first use): the placements X may be a read-only
 # view of Pinocchio's storage or a writable buffer, which would otherwise compile twice
 @kernel(_evaluate_signature(2))
-def _evaluate_one(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-                  r_const, support, M, A):  # pragma: no cover - compiled
+def _evaluate_one(Jt, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact,
+                  r_kind, r_const, support, M, A):  # pragma: no cover - compiled
     _symmetrize(M)
-    _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+    _assemble(Jt, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
               r_const, support, readonly(np.arange(A.shape[0])), A)  # read-only: one compile
 
 
 def _partition_at_signature():
-    """``(J, X, M, ints, floats, support, rows, v, rtol, res) -> status``: one
-    configuration's ``J``, ``X`` and ``M`` as for :func:`_evaluate_one` (``M`` the upper
+    """``(Jt, X, M, ints, floats, support, rows, v, rtol, res) -> status``: one
+    configuration's ``Jt``, ``X`` and ``M`` as for :func:`_evaluate_one` (``M`` the upper
     triangle ``pin.crba`` filled, mirrored in place), the plan's other arrays packed in
     two (:func:`_unpack`), then the rows ``rows`` of ``A``, ``v`` and ``rtol`` of the
     partition; ``res`` (4,) receives ``T, T_c, T_a, rank``."""
@@ -162,7 +166,7 @@ def _unpack(ints, floats, nv):  # pragma: no cover - compiled
 # The plan's constant arrays come packed in two: numba's dispatcher checks the type of each
 # argument of every call and converts it, a good part of a call of a few microseconds
 @kernel(_partition_at_signature())
-def _partition_at(J, X, M, ints, floats, support, rows, v, rtol, res
+def _partition_at(Jt, X, M, ints, floats, support, rows, v, rtol, res
                   ):  # pragma: no cover - compiled
     """M and the chosen rows of A at one configuration, and their kinetic-energy partition
     (``T``, ``T_c``, ``T_a``, rank; no velocities), in one call: the one-item partition of
@@ -173,7 +177,7 @@ def _partition_at(J, X, M, ints, floats, support, rows, v, rtol, res
     _symmetrize(M)
     m = rows.shape[0]
     A = np.empty((m, nv))  # only the chosen rows
-    _assemble(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
+    _assemble(Jt, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
               r_const, support, rows, A)
     L = np.zeros((nv, nv))
     invd = np.empty(nv)
@@ -190,15 +194,15 @@ def _partition_at(J, X, M, ints, floats, support, rows, v, rtol, res
 
 
 @kernel(_evaluate_signature(3))
-def _evaluate_many(J, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact, r_kind,
-                   r_const, support, M, A):  # pragma: no cover - compiled
-    """Items ``i`` of ``J`` (k, 6, nv), ``X`` (k, ., 12), ``M`` (k, nv, nv), ``A`` (k, m, nv);
+def _evaluate_many(Jt, X, f_row, c_frame, c_kind, c_vec, c_normal, c_radius, r_contact,
+                   r_kind, r_const, support, M, A):  # pragma: no cover - compiled
+    """Items ``i`` of ``Jt`` (k, nv, 6), ``X`` (k, ., 12), ``M`` (k, nv, nv), ``A`` (k, m, nv);
     ``r_const`` (1 or k, m, nv), ``c_normal`` (1 or k, nc, 3), ``c_radius`` (1 or k, nc)."""
     kc, kn, kr = r_const.shape[0], c_normal.shape[0], c_radius.shape[0]
     every = readonly(np.arange(A.shape[1]))  # every row (read-only, as _partition_at's)
-    for i in range(J.shape[0]):
+    for i in range(Jt.shape[0]):
         _symmetrize(M[i])
-        _assemble(J[i], X[i], f_row, c_frame, c_kind, c_vec, c_normal[min(i, kn - 1)],
+        _assemble(Jt[i], X[i], f_row, c_frame, c_kind, c_vec, c_normal[min(i, kn - 1)],
                   c_radius[min(i, kr - 1)], r_contact, r_kind, r_const[min(i, kc - 1)],
                   support, every, A[i])
 
@@ -289,6 +293,9 @@ class RowPlan:
         # frame placements: a read-only view of Pinocchio's own storage when its layout is
         # the expected one (checked here), else a buffer refilled frame by frame per call
         self._oMf = _placement_view(cs.data, model.nframes) if frames else None
+        # the world joint Jacobian, transposed (nv, 6): a view of Pinocchio's data.J (its
+        # column-major storage), which the world-convention CRBA fills (:data:`_WORLD`)
+        self._Jt = _jacobian_view(cs.data, nv)
         if self._oMf is not None:
             self.f_row = np.array(frames, dtype=np.int64)
         else:
@@ -331,22 +338,22 @@ class RowPlan:
 
     def _pass(self, q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """One Pinocchio pass at ``q`` (nq,): ``M`` (its upper triangle, from CRBA), the
-        world joint Jacobian ``J`` and the frame placements ``X``; the rows of a nonlinear
-        loop closure updated in :attr:`r_const`."""
+        world joint Jacobian transposed ``Jt`` (nv, 6) and the frame placements ``X``; the
+        rows of a nonlinear loop closure updated in :attr:`r_const`."""
         model, data = self._model, self._data
-        M = pin.crba(model, data, q)
-        J = pin.computeJointJacobians(model, data, q)
+        M = pin.crba(model, data, q, _WORLD)
+        Jt = self._Jt if self._Jt is not None else _jacobian_copy(data, self.nv)
         pin.updateFramePlacements(model, data)
         if self._plain:  # the usual plan (the hot path of T_c_at): nothing more to do
-            return M, J, self._oMf
-        if self.nv == 1:  # pinocchio hands (6, 1) and (1, 1) back as 1-D arrays
-            M, J = np.reshape(M, (1, 1)).copy(), np.reshape(J, (6, 1))
+            return M, Jt, self._oMf
+        if self.nv == 1:  # (pinocchio may hand a (1, 1) matrix back as a 1-D array)
+            M = np.reshape(M, (1, 1)).copy()
         X = self._oMf if self._oMf is not None else self._placements()
         if not self._loop_constant:
             Jl = self._cs.mbm.loop_closure(q)[1]
             for k, i in enumerate(self.loop_rows):
                 self.r_const[i] = Jl[k]
-        return M, J, X
+        return M, Jt, X
 
     def evaluate(self, q) -> tuple[np.ndarray, np.ndarray]:
         """``(M (nv, nv), A (m, nv))`` at ``q`` (nq,) from one Pinocchio pass.
@@ -354,9 +361,9 @@ class RowPlan:
         CRBA (upper triangle of ``M``), joint Jacobians ``data.J`` and frame placements,
         then one compiled call that mirrors ``M`` and fills every row of ``A``.
         """
-        M, J, X = self._pass(q)
+        M, Jt, X = self._pass(q)
         A = np.empty((self.m, self.nv))
-        _evaluate_one.get(1)(J, X, *self._args, self.r_const, self.support, M, A)
+        _evaluate_one.get(1)(Jt, X, *self._args, self.r_const, self.support, M, A)
         return M, A
 
     def partition_at(self, q, rows: np.ndarray, v: np.ndarray, rtol: float,
@@ -370,8 +377,8 @@ class RowPlan:
             run = _partition_at.get(1)
             if _partition_at.compiled:  # then get(1) returns it from now on
                 self._run = run
-        M, J, X = self._pass(q)
-        return run(J, X, M, self._ints, self._floats, self.support, rows, v, rtol, res)
+        M, Jt, X = self._pass(q)
+        return run(Jt, X, M, self._ints, self._floats, self.support, rows, v, rtol, res)
 
     def evaluate_many(self, Q, chunk: int = 64, *, before=None, c_normal=None,
                       c_radius=None) -> tuple[np.ndarray, np.ndarray]:
@@ -398,7 +405,7 @@ class RowPlan:
         Ms = np.empty((k, nv, nv))
         A = np.empty((k, m, nv))
         c = max(1, min(chunk, k))
-        Js = np.empty((c, 6, nv))
+        Js = np.empty((c, nv, 6))
         Xs = np.empty((c, *self._placements().shape))
         if self._loop_constant:
             rc = self.r_const[None]
@@ -406,10 +413,9 @@ class RowPlan:
             rc = np.broadcast_to(self.r_const, (k, m, nv)).copy()
             for i in range(k):
                 rc[i, self.loop_rows] = self._cs.mbm.loop_closure(Q[i])[1]
-        crba, jac, place = pin.crba, pin.computeJointJacobians, pin.updateFramePlacements
-        # pinocchio hands (1, 1) and (6, 1) back as 1-D arrays: write through 1-D views then
+        crba, place, world, Jt = pin.crba, pin.updateFramePlacements, _WORLD, self._Jt
+        # (pinocchio may hand a (1, 1) matrix back as a 1-D array: write through 1-D views)
         Mo = Ms.reshape(k, 1) if nv == 1 else Ms
-        Jo = Js.reshape(c, 6) if nv == 1 else Js
         view = self._oMf
         for s in range(0, k, c):
             e = min(s + c, k)
@@ -417,8 +423,8 @@ class RowPlan:
                 q = Q[i]
                 if before is not None:
                     before(i)
-                Mo[i] = crba(model, data, q)
-                Jo[i - s] = jac(model, data, q)
+                Mo[i] = crba(model, data, q, world)
+                Js[i - s] = Jt if Jt is not None else _jacobian_copy(data, nv)
                 place(model, data)
                 if view is not None:
                     Xs[i - s] = view
@@ -430,6 +436,32 @@ class RowPlan:
                                  rc if rc.shape[0] == 1 else rc[s:e], self.support, Ms[s:e],
                                  A[s:e])
         return Ms, A
+
+
+#: CRBA in Pinocchio's world convention: ``M``'s upper triangle as the local convention
+#: makes it (to rounding, 1e-14 of its largest entry), and on the way the world joint
+#: Jacobian ``data.J`` and ``data.oMi`` that ``pin.computeJointJacobians`` makes (the
+#: same forward step, equal to the bit: ``tests/test_models_assemble.py``): one pass over
+#: the tree for both.
+_WORLD = pin.Convention.WORLD
+
+
+def _jacobian_view(data, nv: int) -> np.ndarray | None:
+    """``data.J`` (6, nv) transposed, (nv, 6) C-ordered: a view of Pinocchio's column-major
+    storage, which every pass rewrites in place; None if ``data.J`` is not handed out as
+    such a view (then :func:`_jacobian_copy` per pass). Like :func:`_placement_view`, it
+    refers to ``data``'s memory: the owner keeps ``data`` alive and never resizes it."""
+    J = data.J
+    Jt = J.reshape(1, 6) if nv == 1 else J.T
+    if (Jt.shape == (nv, 6) and Jt.flags.c_contiguous and Jt.dtype == np.float64
+            and np.shares_memory(Jt, data.J)):
+        return Jt
+    return None  # pragma: no cover - Pinocchio as installed hands out views
+
+
+def _jacobian_copy(data, nv: int) -> np.ndarray:
+    """``data.J`` transposed as a new (nv, 6) C-ordered array."""
+    return np.ascontiguousarray(np.reshape(data.J, (6, nv)).T)
 
 
 def _pack(arrays, dtype) -> tuple[np.ndarray, list[np.ndarray]]:
