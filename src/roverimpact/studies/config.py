@@ -574,29 +574,39 @@ class CaseSequence(Sequence):
     def _cases(self, start: int, stop: int) -> list[Case]:
         """Cases ``start ... stop - 1`` of a grid or random design, made together: their
         values a column at a time (numpy), their ids by :func:`case_id`'s text written
-        out (the same ids: tests/test_study_config.py checks them against :meth:`case`)."""
+        out (the same ids: tests/test_study_config.py checks them against :meth:`case`).
+        A grid value's text is written once per value of the block, not once per case."""
         names = self.names
+        heads = [f"({name!r}, " for name in names]
+        cols, texts = [], []  # per parameter: each case's value, and its text in the id
         if self._grid is not None:
             idx = np.arange(start, stop, dtype=np.int64) + self._offset
-            cols = []
-            for axis in reversed(self._grid):
+            for axis, head in zip(reversed(self._grid), reversed(heads), strict=True):
                 idx, r = np.divmod(idx, len(axis))
-                ax = [_to_python(v) for v in axis]
-                cols.append([ax[j] for j in r.tolist()])
+                used, at = np.unique(r, return_inverse=True)
+                values = [_to_python(axis[j]) for j in used.tolist()]
+                text = [head + repr(v) + ")" for v in values]
+                at = at.reshape(-1).tolist()
+                cols.append([values[j] for j in at])
+                texts.append([text[j] for j in at])
             cols.reverse()
+            texts.reverse()
         else:
             cols = [arr[start:stop].tolist() if choices is None
                     else [_to_python(choices[j]) for j in arr[start:stop].tolist()]
                     for choices, arr in self._random]
+            texts = [[head + repr(v) + ")" for v in col]
+                     for head, col in zip(heads, cols, strict=True)]
         order = sorted(range(len(names)), key=names.__getitem__)
-        heads = [f"({names[k]!r}, " for k in order]
-        out = []
-        rows = zip(*cols, strict=True) if cols else [()] * (stop - start)
-        for j, vals in enumerate(rows, start=start + self._offset):
-            text = ", ".join([h + repr(vals[k]) + ")" for h, k in zip(heads, order, strict=True)])
-            out.append(Case(index=j, overrides=dict(zip(names, vals, strict=True)),
-                            case_id=f"{j:07d}-{hashlib.sha1(f'[{text}]'.encode()).hexdigest()[:8]}"))
-        return out
+        n, first = stop - start, start + self._offset
+        rows = zip(*cols, strict=True) if cols else [()] * n
+        parts = zip(*[texts[k] for k in order], strict=True) if cols else [()] * n
+        sha1, join = hashlib.sha1, ", ".join
+        # positional Case(...): a frozen dataclass takes keywords at twice the time; each
+        # row has one value per name (made so above)
+        return [Case(j, f"{j:07d}-" + sha1(("[" + join(p) + "]").encode()).hexdigest()[:8],
+                     dict(zip(names, vals, strict=False)))
+                for j, vals, p in zip(range(first, first + n), rows, parts, strict=True)]
 
 
 #: Cases made together when a grid or random design is iterated.
