@@ -214,11 +214,14 @@ def test_point_row_of_urdf_arm_matches_finite_differences():
         assert a @ v == pytest.approx(n @ fd / (2 * h), rel=1e-7, abs=1e-9)
 
 
-def test_placements_fallback_equals_in_place_view(monkeypatch):
-    """With the in-place view of data.oMf unavailable (as on a Pinocchio build with another
-    memory layout), the frame-by-frame copy gives the same rows, single and batched, and
-    the same partition at one configuration (the plan built that way from the start, its
-    packed arrays and short paths included)."""
+@pytest.mark.parametrize("view, attr", [("_placement_view", "_oMf"),
+                                        ("_jacobian_view", "_Jt")])
+def test_placements_fallback_equals_in_place_view(monkeypatch, view, attr):
+    """With the in-place view of data.oMf (or of data.J) unavailable (as on a Pinocchio
+    build with another memory layout), the frame-by-frame copy (the copy of data.J per
+    pass) gives the same rows, single and batched, and the same partition at one
+    configuration (the plan built that way from the start, its packed arrays and short
+    paths included)."""
     from roverimpact.models import _assemble
 
     rng = np.random.default_rng(2)
@@ -227,10 +230,10 @@ def test_placements_fallback_equals_in_place_view(monkeypatch):
     cs = ConstraintSet(mbm, constraints)
     Q = np.array([_random_q(mbm.model, rng) for _ in range(5)])
     M, A = cs.evaluate(Q)
-    assert cs._row_plan()._oMf is not None  # the installed Pinocchio stores them in place
-    monkeypatch.setattr(_assemble, "_placement_view", lambda data, nframes: None)
+    assert getattr(cs._row_plan(), attr) is not None  # the installed Pinocchio: in place
+    monkeypatch.setattr(_assemble, view, lambda data, n: None)
     cs2 = ConstraintSet(mbm, constraints)
-    assert cs2._row_plan()._oMf is None
+    assert getattr(cs2._row_plan(), attr) is None
     M2, A2 = cs2.evaluate(Q)
     np.testing.assert_array_equal(M2, M)
     np.testing.assert_array_equal(A2, A)
