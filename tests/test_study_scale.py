@@ -432,3 +432,36 @@ def test_case_keys_group_cases_that_share_the_setup_and_the_law():
     assert got == [ref(ov) for ov in cases]
     assert got[0][0] != got[2][0]  # u = 1 and u = 1.0: two groups
     assert got[0][0] == got[6][0] and got[0][1] != got[1][1]  # beta apart, k apart
+
+
+def test_automatic_chunks_are_large_where_cases_are_cheap():
+    """Indicator-only cases of tens of microseconds (an angle sweep of one model, a
+    built-in rover's family numbers) come in chunks of at least CHEAP_AUTO_CHUNK; cases
+    built one by one (a rover on a terrain, the rigid body, a function of one's own) in
+    chunks of at least MIN_AUTO_CHUNK, so that the progress bar moves; simulated cases in
+    about 100 chunks; above 20 * CHEAP_AUTO_CHUNK cases, about 20 chunks."""
+    from roverimpact.studies.sweep import CHEAP_AUTO_CHUNK, MIN_AUTO_CHUNK, prepare_study
+
+    rover = {"model": {"name": "rover2d"}, "velocity": {"u": 0.3},
+             "obstacle": {"wheel": "front", "beta_deg": 45.0}}
+    on_terrain = {**rover, "terrain": {"plane": {"normal": [-0.17, 0.0, 0.98]}}}
+    angles = {"obstacle.beta_deg": {"start": 1.0, "stop": 90.0, "num": 3000}}
+    numbers = {"model.params.h": {"start": 0.3, "stop": 0.5, "num": 30},
+               "velocity.u": [0.2, 0.4], **{k: {**v, "num": 50} for k, v in angles.items()}}
+
+    def chunk(base, grid, **kw):
+        return prepare_study({"name": "c", "base": base, "grid": grid, **kw}).chunk_size
+
+    assert chunk(rover, angles) == chunk(on_terrain, angles) == CHEAP_AUTO_CHUNK
+    assert chunk(rover, numbers) == chunk(BASE, angles) == CHEAP_AUTO_CHUNK
+    assert chunk(on_terrain, numbers) == MIN_AUTO_CHUNK  # each case its own terrain pose
+    assert chunk(BASE, {"model.params.mass": [10.0 + i for i in range(3000)]}) == \
+        MIN_AUTO_CHUNK  # the rigid body has no family
+    assert chunk(rover, {"contacts.ground": ["normal", "noslip"],
+                         "obstacle.beta_deg": [10.0, 30.0]}) == MIN_AUTO_CHUNK
+    assert prepare_study({"name": "f", "base": BASE, "grid": angles},
+                         evaluator=EV).chunk_size == MIN_AUTO_CHUNK
+    assert chunk(rover, angles, simulate=True) == 30
+    big = {"obstacle.beta_deg": {"start": 1.0, "stop": 90.0, "num": 100_000}}
+    assert chunk(rover, big) == 5_000
+    assert chunk(on_terrain, {"model.params.h": [0.3, 0.4], **big}) == 10_000

@@ -617,8 +617,8 @@ def studies_counts():
 
 
 @produces("studies.large_table", "studies.sample_rows", "studies.max_chunk",
-          "studies.min_chunk", "studies.n_bins", "studies.n_ybins", "studies.own_block",
-          "studies.head_rows")
+          "studies.min_chunk", "studies.cheap_chunk", "studies.n_bins", "studies.n_ybins",
+          "studies.own_block", "studies.head_rows")
 def studies_scale():
     """Settings of large studies (issue 19): the table size above which the report
     streams, its statistics sample, the smallest and largest automatic chunk, the summary
@@ -626,7 +626,7 @@ def studies_scale():
     from roverimpact.report import summary
     from roverimpact.report.html import MAX_TABLE_ROWS
     from roverimpact.studies.evaluate import _OwnCases
-    from roverimpact.studies.sweep import MAX_AUTO_CHUNK, MIN_AUTO_CHUNK
+    from roverimpact.studies.sweep import CHEAP_AUTO_CHUNK, MAX_AUTO_CHUNK, MIN_AUTO_CHUNK
 
     def n(x: int) -> str:
         return f"{x:,}".replace(",", " ")
@@ -634,6 +634,7 @@ def studies_scale():
     return {"studies.large_table": n(summary.LARGE_TABLE),
             "studies.sample_rows": n(summary.SAMPLE_ROWS),
             "studies.max_chunk": n(MAX_AUTO_CHUNK), "studies.min_chunk": n(MIN_AUTO_CHUNK),
+            "studies.cheap_chunk": n(CHEAP_AUTO_CHUNK),
             "studies.n_bins": n(summary.N_BINS),
             "studies.n_ybins": n(summary.N_YBINS), "studies.own_block": n(_OwnCases.BLOCK),
             "studies.head_rows": n(MAX_TABLE_ROWS)}

@@ -297,6 +297,24 @@ class ScenarioEvaluator:
         sc = scenario_from_dict(dict(scenario))
         return sc.model_dump(mode="json", exclude_none=True)
 
+    def cheap(self, base: Mapping[str, Any], params: Sequence[str]) -> bool:
+        """Whether the indicator-only cases of a study of ``base`` sweeping ``params``
+        cost tens of microseconds each: they share one model and differ in the angle,
+        the contact law or the simulation settings (an angle sweep), or ``base`` is a
+        built-in rover with a model family (:func:`~roverimpact.scenario.block.block_key`)
+        and they differ in its numbers (``model.params``, ``velocity.u``) too. Cases built
+        one by one (robot files, terrains, declared loops) cost milliseconds."""
+        rest = ("contact_law.", "simulation.")
+        if all(p == _BETA or p.startswith(rest) for p in params):
+            return True
+        if not all(p in _FAMILY_NUMBERS or p.startswith(("model.params.", *rest))
+                   for p in params):
+            return False
+        try:
+            return block_key(scenario_from_dict(dict(base))) is not None
+        except InputError:  # (a base the checks refuse: they say why)
+            return False
+
     def check(self, scenario: Mapping[str, Any], *, simulate=False) -> None:
         """Deep check (builds the model): unknown model parameters, bad geometry, law,
         and with ``simulate`` a scenario the simulator cannot run, or a model an engine

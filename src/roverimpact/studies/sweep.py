@@ -180,18 +180,25 @@ class PreparedStudy:
 #: (its cases, its rows), so a study of 1e7 cases runs in 200 chunks, not 20 of 5e5.
 MAX_AUTO_CHUNK = 50_000
 
-#: Smallest automatic chunk of indicator-only cases. A chunk costs a few milliseconds of
-#: its own (its table, its Parquet file; in a grid, a model built and an angle sweep
-#: begun again for each chunk a model's angles are split over), as much as a few hundred
-#: such cases; an indicator case costs 10-100 us, so a chunk of 2 048 takes well under a
-#: second.
-MIN_AUTO_CHUNK = 2048
+#: Smallest automatic chunk of indicator-only cases.
+MIN_AUTO_CHUNK = 256
+
+#: Smallest automatic chunk of indicator-only cases of tens of microseconds each (an
+#: angle sweep of one model, a built-in rover's model family:
+#: :meth:`~.evaluate.ScenarioEvaluator.cheap`). A chunk costs a few milliseconds of its
+#: own (its table, its Parquet file; in a grid, a model built and an angle sweep begun
+#: again for each chunk a model's angles are split over), as much as a few hundred such
+#: cases, and a chunk of 2 048 of them still takes well under a second. Cases built one
+#: by one (robot files, terrains: milliseconds each) keep smaller chunks, so that the
+#: progress bar moves.
+CHEAP_AUTO_CHUNK = 2048
 
 
-def _auto_chunk(n: int, simulate: bool) -> int:
+def _auto_chunk(n: int, simulate: bool, cheap: bool = False) -> int:
     """About 100 chunks of simulated cases (fine-grained resume and load balance; at
     least 8 cases a chunk), about 20 of indicator-only cases (fast: fewer, larger Parquet
-    writes), at least :data:`MIN_AUTO_CHUNK` and at most :data:`MAX_AUTO_CHUNK` cases.
+    writes), at least :data:`MIN_AUTO_CHUNK` (:data:`CHEAP_AUTO_CHUNK` for ``cheap``
+    cases) and at most :data:`MAX_AUTO_CHUNK` cases.
 
     Two workers finish ``c`` chunks of equal cost in ``ceil(c / 2)`` chunk times: 200
     simulated cases in chunks of 16 made 13 chunks, 7 rounds for 6.5 of work (at most
@@ -200,7 +207,8 @@ def _auto_chunk(n: int, simulate: bool) -> int:
     what a chunk adds to its cases (its table, its Parquet file, its task)."""
     if simulate:
         return max(8, math.ceil(n / 100))
-    return min(max(MIN_AUTO_CHUNK, math.ceil(n / 20)), MAX_AUTO_CHUNK)
+    smallest = CHEAP_AUTO_CHUNK if cheap else MIN_AUTO_CHUNK
+    return min(max(smallest, math.ceil(n / 20)), MAX_AUTO_CHUNK)
 
 
 class Chunks(Sequence):
@@ -246,7 +254,10 @@ def prepare_study(study, *, evaluator=None, chunk_size: int | None = None) -> Pr
         check = functools.partial(check, simulate=study.simulate)
     base = validate_scenarios(study, ev.validate, check)
     cases = cases_of(study)
-    cs = chunk_size or study.chunk_size or _auto_chunk(len(cases), study.simulate)
+    cheap = getattr(ev, "cheap", None)
+    cs = chunk_size or study.chunk_size or _auto_chunk(
+        len(cases), study.simulate,
+        cheap is not None and cheap(study.base, study.parameters()))
     return PreparedStudy(study, text, ev, base, cases, int(cs))
 
 
