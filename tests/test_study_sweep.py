@@ -896,6 +896,16 @@ def test_interrupt_while_writing_the_table_is_resumed(tmp_path, monkeypatch):
     pd.testing.assert_frame_equal(res.table, run_study(_study(), tmp_path / "whole").table)
 
 
+#: h = 0.1 with wheel_mass = 40 puts the rigid rover2d's chassis below the ground: each
+#: value alone is fine, that case alone cannot be posed
+_ROVER2D_BAD = {"name": "bad", "base": {
+    "model": {"name": "rover2d", "params": {"suspension": "rigid", "h": 0.35}},
+    "velocity": {"u": 0.5}, "contacts": {"ground": "normal"},
+    "obstacle": {"wheel": "front", "beta_deg": 60.0}},
+    "grid": {"model.params.h": [0.35, 0.2, 0.1],
+             "model.params.wheel_mass": [1.0, 10.0, 40.0]}}
+
+
 def test_a_case_that_cannot_be_posed_is_named_and_the_manifest_says_failed(tmp_path):
     """A combination of parameters that no model has (each value alone is fine, so the
     checks before the work pass): the study stopped with the model's message alone,
@@ -903,16 +913,10 @@ def test_a_case_that_cannot_be_posed_is_named_and_the_manifest_says_failed(tmp_p
     values and what was kept, the manifest says "failed" with the error."""
     from roverimpact.exceptions import InputError
 
-    study = {"name": "bad", "base": {
-        "model": {"name": "rover2d", "params": {"suspension": "rigid", "h": 0.35}},
-        "velocity": {"u": 0.5}, "contacts": {"ground": "normal"},
-        "obstacle": {"wheel": "front", "beta_deg": 60.0}},
-        "grid": {"model.params.h": [0.35, 0.2, 0.1],
-                 "model.params.wheel_mass": [1.0, 10.0, 40.0]}}
     with pytest.raises(InputError, match=r"^case 8 \(model\.params\.h = 0\.1, "
                        r"model\.params\.wheel_mass = 40\.0\): .*too small.* after 8 of 9 "
                        r"cases .*--overwrite"):
-        run_study(study, tmp_path / "r", chunk_size=4)
+        run_study(_ROVER2D_BAD, tmp_path / "r", chunk_size=4)
     manifest = json.loads((tmp_path / "r" / "manifest.json").read_text())
     assert manifest["status"] == "failed" and manifest["n_done"] == 8
     assert "too small" in manifest["error"]
@@ -1265,13 +1269,6 @@ def test_an_evaluators_own_error_class_is_named_too(tmp_path):
 
 
 # -- a case that cannot be posed, recorded (on_error="record") ------------------------------
-
-_ROVER2D_BAD = {"name": "bad", "base": {
-    "model": {"name": "rover2d", "params": {"suspension": "rigid", "h": 0.35}},
-    "velocity": {"u": 0.5}, "contacts": {"ground": "normal"},
-    "obstacle": {"wheel": "front", "beta_deg": 60.0}},
-    "grid": {"model.params.h": [0.35, 0.2, 0.1],
-             "model.params.wheel_mass": [1.0, 10.0, 40.0]}}
 
 
 def test_on_error_record_gives_a_case_that_cannot_be_posed_a_row_and_goes_on(tmp_path):
