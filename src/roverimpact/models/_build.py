@@ -249,7 +249,8 @@ class LinearLoopClosure:
 
     Each row ``k`` is ``sum_i C[k, i] q[joint_i] = 0`` (e.g. the rocker-bogie differential
     ``q_rocker_left + q_rocker_right = 0``). Callable as ``loop_closure(q) -> (phi, J)``
-    where ``J`` (k, nv) is the Jacobian with respect to the velocity ``v``.
+    where ``J`` (k, nv) is the Jacobian with respect to the velocity ``v``; ``q`` may be
+    a batch (..., nq), then ``phi`` is (..., k).
 
     Attributes
     ----------
@@ -288,7 +289,7 @@ class LinearLoopClosure:
     def __call__(self, q) -> tuple[np.ndarray, np.ndarray]:
         q = np.asarray(q, dtype=float)
         C = np.asarray(self.coefficients)
-        phi = C @ q[list(self.idx_q)]
+        phi = q[..., list(self.idx_q)] @ C.T  # (..., k) for configurations (..., nq)
         J = np.zeros((C.shape[0], self.nv))
         J[:, list(self.idx_v)] = C
         return phi, J

@@ -194,10 +194,11 @@ class ConstraintSet:
 
         Parameters
         ----------
-        family : ModelFamily
+        family : ModelFamily or None
             Its model is this set's (:class:`~roverimpact.models.family.ModelFamily`);
             each member's numbers are written into it before its Pinocchio pass, its
-            wheel radii go into its contact rows.
+            wheel radii go into its contact rows. None: every member is this set's model
+            (k configurations of one model, each with its own ``normals``).
         Q : (k, nq) array_like
         normals : dict, optional
             ``{constraint index: (k, 3) normals}``: a contact whose normal differs from
@@ -208,16 +209,20 @@ class ConstraintSet:
         (:attr:`~roverimpact.models._assemble.RowPlan.loops_constant`).
         """
         plan = self._row_plan()
-        if not plan.loops_constant:
+        if family is not None and not plan.loops_constant:
             raise ModelError("evaluate_members needs constant loop-closure rows")
         Q = np.ascontiguousarray(np.asarray(Q, dtype=float))
-        k = Q.shape[0]
-        if Q.shape != (k, self.mbm.model.nq) or family.k != k:
-            raise ModelError(f"Q must have shape ({family.k}, {self.mbm.model.nq}), got "
-                             f"{Q.shape}")
+        k = Q.shape[0] if Q.ndim == 2 else -1
+        if Q.shape != (k, self.mbm.model.nq) or (family is not None and family.k != k):
+            raise ModelError(f"Q must have shape ({k if family is None else family.k}, "
+                             f"{self.mbm.model.nq}), got {Q.shape}")
         cn = np.array(np.broadcast_to(plan.c_normal, (k, *plan.c_normal.shape)))
         for ci, n in (normals or {}).items():
             cn[:, plan.constraint_contact[ci]] = n
+        if family is None:
+            check_configuration(self.mbm.model, Q)
+            with self.lock:
+                return plan.evaluate_many(Q, c_normal=cn)
         wheels = {w.name: j for j, w in enumerate(self.mbm.wheels)}
         cr = np.array(np.broadcast_to(plan.c_radius, (k, *plan.c_radius.shape)))
         for c, w in enumerate(plan.contact_wheel):

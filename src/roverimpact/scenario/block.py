@@ -25,6 +25,7 @@ from .build import (
     base_heading,
     base_slices,
     candidate_constraints,
+    check_states,
     configuration,
     friction_of,
     normal_from_beta,
@@ -33,7 +34,8 @@ from .build import (
 )
 from .schema import Scenario
 
-__all__ = ["ImpactBlock", "block_key", "impact_block", "member_block"]
+__all__ = ["ImpactBlock", "block_key", "impact_block", "member_block", "state_block",
+           "state_key"]
 
 #: The tables of a scenario that make its impact setup (the others: the contact law, the
 #: simulation, the band, do not change M, A, v).
@@ -185,4 +187,96 @@ def member_block(first: Scenario, params: Sequence[Mapping], u: Sequence[float],
                          **friction_of(sc0.contacts))
     return ImpactBlock(M=M, A=A, v=v, q=Q, active=active, labels=labels,
                        obstacle_row=obstacle, total_mass=numbers.total_mass(),
+                       vehicle=kind in ("floating", "planar"))
+
+
+#: The override names whose numbers may differ between the scenarios of a state block: a
+#: 1-DoF joint's value or rate, the speed and the impact angle.
+STATE_PREFIXES = ("configuration.joints.", "velocity.joints.")
+STATE_NUMBERS = ("velocity.u", "obstacle.beta_deg")
+
+
+def state_key(scenario: Scenario) -> str | None:
+    """What the scenarios of a state block share; None if the scenario has none.
+
+    A state block is scenarios of one model (any: a robot file, the rigid body, a built-in
+    rover), without terrain, declared loops or a band, that are the same but for the
+    numbers of their joint values (``configuration.joints``), joint rates
+    (``velocity.joints``), ``velocity.u`` and ``obstacle.beta_deg``
+    (:func:`state_block`). The key is the scenario's setup tables with those numbers
+    left out.
+    """
+    if (scenario.terrain is not None or scenario.contacts.loops
+            or scenario.band is not None):
+        return None
+    data = scenario.model_dump(include=_SETUP_TABLES)
+    for table in ("configuration", "velocity"):
+        joints = data[table]["joints"]
+        data[table]["joints"] = sorted((k, None if is_number(v) else v)
+                                       for k, v in joints.items())
+    data["velocity"]["u"] = None
+    if data["obstacle"]["beta_deg"] is not None:
+        data["obstacle"]["beta_deg"] = None
+    return repr(data)
+
+
+def state_block(first: Scenario, joints: Mapping[str, np.ndarray],
+                rates: Mapping[str, np.ndarray], u, beta_deg=None, *, model=None,
+                base_dir: str | Path | None = None) -> ImpactBlock:
+    """The impact setups of k scenarios that are ``first`` but for numbers: member ``i``
+    has the joint values ``{name: joints[name][i]}`` (in place of ``first``'s values of
+    those joints in ``[configuration.joints]``), the joint rates ``{name:
+    rates[name][i]}``, ``velocity.u = u[i]`` and, unless ``beta_deg`` is None
+    (``first``'s obstacle for all), ``obstacle.beta_deg = beta_deg[i]``.
+
+    One model (``model``: ``first``'s :func:`~roverimpact.scenario.build.scenario_model`,
+    built if None) and one constraint set for all; the configurations, velocities, normals
+    and active rows as arrays over the block, the Pinocchio passes in one batched call.
+    Member ``i`` is what :meth:`~roverimpact.scenario.ImpactSetup.from_scenario` gives for
+    its scenario (the same candidate rows, ``M``, ``A``, ``v`` and active set; tested to
+    1e-12), with the same checks; a member that fails one raises its error.
+    ``first`` must have a :func:`state_key`, the numbers must be finite and ``beta_deg``
+    in [0, 90].
+    """
+    from ..models.kinematics import ConstraintSet
+
+    if state_key(first) is None:
+        raise InputError("state_block: the scenario has terrain, declared loops or a band")
+    u = np.asarray(u, dtype=float).reshape(-1)
+    k = len(u)
+    sc0 = first
+    mbm = scenario_model(sc0, base_dir) if model is None else model
+    values = dict(sc0.configuration.joints)
+    values.update((name, np.asarray(x, dtype=float)) for name, x in joints.items())
+    speeds = dict(sc0.velocity.joints)
+    speeds.update((name, np.asarray(x, dtype=float)) for name, x in rates.items())
+    for name, x in (*joints.items(), *rates.items()):
+        if np.shape(x) != (k,):
+            raise InputError(f"state_block: {name!r} needs {k} numbers, got {np.shape(x)}")
+    Q = configuration(mbm, sc0.configuration, joints=values)
+    if Q.ndim == 1:
+        Q = np.array(np.broadcast_to(Q, (k, Q.shape[0])))
+    kind = base_slices(mbm)[0]
+    q0 = Q[0]
+    heading = base_heading(mbm, q0)  # the joints do not turn the base: one heading
+    V = velocity(mbm, q0, sc0.velocity, u=u, joints=speeds)
+    obs = sc0.obstacle
+    if obs.normal is not None:
+        normal = np.asarray(obs.normal, float)
+        normals = np.array(np.broadcast_to(normal / np.linalg.norm(normal), (k, 3)))
+    else:
+        beta = np.full(k, obs.beta_deg, dtype=float) if beta_deg is None else \
+            np.asarray(beta_deg, dtype=float)
+        normals = normal_from_beta(np.deg2rad(beta), heading)
+    cons = candidate_constraints(mbm, obs, sc0.contacts, normals[0])
+    cs = ConstraintSet(mbm, cons)
+    obstacle = len(cons) - 1
+    M, A = cs.evaluate_members(None, Q, normals={obstacle: normals})
+    labels = tuple(cs.labels)
+    check_states(mbm, sc0, Q, V, A, labels, cs.data)
+    active = active_mask(sc0.constraints, labels, M, A, V, obstacle_row=len(labels) - 1,
+                         **friction_of(sc0.contacts))
+    total = float(sum(Y.mass for Y in mbm.model.inertias))
+    return ImpactBlock(M=M, A=A, v=V, q=Q, active=active, labels=labels,
+                       obstacle_row=len(labels) - 1, total_mass=np.full(k, total),
                        vehicle=kind in ("floating", "planar"))

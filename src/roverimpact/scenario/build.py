@@ -19,7 +19,7 @@ from __future__ import annotations
 import fnmatch
 import functools
 import threading
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -497,6 +497,42 @@ def gap_text(gap: float) -> str:
     return f"{abs(gap):.3g} m {'above' if gap > 0 else 'below'}"
 
 
+def check_states(mbm, scenario: Scenario, Q, V, A, labels, data) -> None:
+    """What :meth:`ImpactSetup.from_scenario` checks of a scenario without terrain at its
+    state, for k states at once (a block of scenarios that differ in joint values, rates,
+    speed and angle: :func:`~roverimpact.scenario.block.state_block`): ``Q`` (k, nq),
+    ``V`` (k, nv) and candidate rows ``A`` (k, m, nv) (``labels``). A contact row that
+    is zero, a built-in loop opened or driven apart raise the error of the first such
+    state; ground wheels off the ground are a
+    :class:`~roverimpact.exceptions.GroundGapWarning` per state. ``data``: a Data of the
+    model. The checks are screened as arrays, and the first state that fails one is
+    checked on its own, which raises its error."""
+    norms = np.linalg.norm(A, axis=-1)  # (k, m)
+    scale = np.maximum(norms.max(axis=-1, initial=0.0), 1e-300)
+    normal = np.array([lab.endswith(":normal") for lab in labels], dtype=bool)
+    dead = np.flatnonzero((normal & ~(norms > 1e-12 * scale[:, None])).any(axis=-1))
+    if dead.size:
+        _check_contact_rows(A[dead[0]], labels)
+    loop = mbm.loop_closure
+    if scenario.contacts.loop_closure and loop is not None:
+        positions = not scenario.contacts.loops
+        bad = None
+        if getattr(loop, "constant_jacobian", False):
+            phi, J = loop(Q)
+            if np.shape(phi) == (len(Q), np.shape(J)[0]):  # a closure that takes batches
+                rate = V @ J.T
+                limit = 1e-6 * np.linalg.norm(J, axis=1) * np.linalg.norm(V, axis=1)[:, None]
+                wrong = (np.abs(rate) > limit + 1e-12).any(axis=1)
+                if positions:
+                    wrong |= (np.abs(phi) > 1e-9).any(axis=1)
+                bad = np.flatnonzero(wrong)
+        for i in range(len(Q)) if bad is None else bad[:1]:
+            _check_loops(mbm, Q[i], V[i], positions=positions)
+    if ground_wheels(mbm, scenario.obstacle, scenario.contacts):
+        for q in Q:
+            _warn_ground_gaps(mbm, q, scenario, data)
+
+
 def _check_loops(mbm, q, v, *, positions: bool) -> None:
     """:func:`check_loop_closed` (if ``positions``) and :func:`_check_loop_rates` on one
     evaluation of the loop-closure residual and rows."""
@@ -543,13 +579,17 @@ def _check_loop_rates(mbm, J, v, rtol: float = 1e-6) -> None:
 
 
 def model_key(scenario: Scenario) -> str:
-    """What :func:`scenario_model` depends on (``[model]``, ``contacts.loops``,
-    ``[configuration]``): scenarios with the same key have the same model."""
+    """What :func:`scenario_model` depends on: scenarios with the same key have the same
+    model. That is ``[model]`` and ``contacts.loops``, and ``[configuration]`` only where
+    there are declared loops (a ``distance`` loop without a length keeps the distance it
+    has there): a configuration sweep of one model file builds its model once."""
     import json
 
+    loops = scenario.contacts.loops
     data = {"model": scenario.model.model_dump(mode="json"),
-            "loops": [lp.model_dump(mode="json") for lp in scenario.contacts.loops],
-            "configuration": scenario.configuration.model_dump(mode="json")}
+            "loops": [lp.model_dump(mode="json") for lp in loops]}
+    if loops:
+        data["configuration"] = scenario.configuration.model_dump(mode="json")
     return json.dumps(data, sort_keys=True)
 
 
@@ -611,13 +651,17 @@ def _set_multi(jm, name: str, values, what: str, kind: str):
     return vals
 
 
-def configuration(mbm, spec: ConfigurationSpec, q_nominal=None) -> np.ndarray:
+def configuration(mbm, spec: ConfigurationSpec, q_nominal=None, *, joints=None
+                  ) -> np.ndarray:
     """The configuration ``q`` of ``[configuration]``: the model's nominal one, the base
     pose, then joint values by name (1-DoF: a number, continuous and mimic joints included;
     free and ball joints: a list in MuJoCo's order).
 
     ``q_nominal`` (k, nq): the nominal configurations of a family of models
     (:class:`~roverimpact.models.family.FamilyNumbers`) in place of the model's; then
+    ``q`` is (k, nq). ``joints``: the joint values in place of ``spec.joints``, where a
+    1-DoF joint's value may be an array (k,) of values, one per configuration (a block of
+    scenarios that differ in them: :func:`~roverimpact.scenario.block.state_block`); then
     ``q`` is (k, nq)."""
     import pinocchio as pin
 
@@ -630,6 +674,10 @@ def configuration(mbm, spec: ConfigurationSpec, q_nominal=None) -> np.ndarray:
         q = np.array(mbm.params.get("q_nominal", pin.neutral(model)), dtype=float)
         if q.shape != (model.nq,):
             q = pin.neutral(model)
+    joints = spec.joints if joints is None else joints
+    k = _members(joints)
+    if k is not None and q.ndim == 1:
+        q = np.array(np.broadcast_to(q, (k, model.nq)))
     kind, iq, _ = base_slices(mbm)
     b = spec.base
     if kind == "planar":
@@ -651,7 +699,7 @@ def configuration(mbm, spec: ConfigurationSpec, q_nominal=None) -> np.ndarray:
     elif b != BaseSpec():
         raise ConfigError("configuration.base: this model has a fixed base; remove [base] or "
                           "declare [model.base] kind = 'floating'")
-    for name, val in spec.joints.items():
+    for name, val in joints.items():
         if isinstance(val, list):
             j = _joint(model, name, "configuration.joints")
             if j.nq == 1 or j.nv == 1:
@@ -662,14 +710,24 @@ def configuration(mbm, spec: ConfigurationSpec, q_nominal=None) -> np.ndarray:
         else:
             q = _as_config_error(set_joint_value, mbm, q, name, val,
                                  what="configuration.joints")
-    _check_kept(mbm, spec.joints, q, "configuration.joints")
+    _check_kept(mbm, joints, q, "configuration.joints")
     return q
+
+
+def _members(values: Mapping) -> int | None:
+    """The number of members of joint values or rates given as arrays (k,) (all of one
+    length), None if every value is a number or a list."""
+    sizes = {len(val) for val in values.values() if isinstance(val, np.ndarray)}
+    if len(sizes) > 1:
+        raise ValueError(f"joint values of different lengths: {sorted(sizes)}")
+    return sizes.pop() if sizes else None
 
 
 def _check_kept(mbm, given: dict, x, what: str) -> None:
     """Refuse joint values (or rates) that a later one changed through a coupling (a
     mimic, a MuJoCo joint equality): ``ja = 0.3`` and ``jb = 0.3`` with ``jb = 0.2 - ja``
-    became ja = -0.1, silently."""
+    became ja = -0.1, silently. A value may be an array (k,) over the rows of ``x``
+    (k, n); the first row changed is named."""
     from ..models.joints import joint_coordinate, joint_value
 
     for name, val in given.items():
@@ -681,9 +739,13 @@ def _check_kept(mbm, given: dict, x, what: str) -> None:
         d = np.asarray(got, dtype=float) - val
         if jc.kind == "continuous" and what.startswith("configuration"):
             d = (d + np.pi) % (2.0 * np.pi) - np.pi
-        if np.any(np.abs(d) > 1e-9 * max(1.0, abs(val))):
+        bad = np.abs(d) > 1e-9 * np.maximum(1.0, np.abs(val))
+        if np.any(bad):
+            i = int(np.flatnonzero(np.ravel(bad))[0])
+            given_i = float(np.ravel(np.broadcast_to(val, np.shape(bad)))[i])
+            got_i = float(np.ravel(np.broadcast_to(got, np.shape(bad)))[i])
             raise ConfigError(
-                f"{what}: {name} = {val:g} was changed to {float(np.ravel(got)[0]):.6g} by "
+                f"{what}: {name} = {given_i:g} was changed to {got_i:.6g} by "
                 "another joint set after it through their coupling (a mimic joint or a "
                 "joint equality): give one joint of a coupling, or values that agree")
 
@@ -750,20 +812,26 @@ def _rolling_signs(mbm) -> dict[str, float]:
     return signs
 
 
-def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None) -> np.ndarray:
+def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None, joints=None
+             ) -> np.ndarray:
     """The velocity ``v`` of ``[velocity]``: the base driving at ``u`` with rolling wheels
     (or ``base_linear``, ``base_angular``), then joint rates by name (1-DoF: a number; free
     and ball joints: a list in MuJoCo's order).
 
-    A batch (a family of models at one base pose ``q``): ``u`` (k,) speeds in place of
-    ``spec.u`` and ``wheel_radius`` (k, n_wheels) radii in place of the wheels'; then
-    ``v`` is (k, nv)."""
+    A batch (a family of models, or k configurations, at one base pose ``q``): ``u`` (k,)
+    speeds in place of ``spec.u``, ``wheel_radius`` (k, n_wheels) radii in place of the
+    wheels', ``joints`` rates in place of ``spec.joints`` where a 1-DoF joint's rate may
+    be an array (k,); then ``v`` is (k, nv)."""
     import pinocchio as pin
 
     from ..models.joints import set_joint_rate
 
     model = mbm.model
+    joints = spec.joints if joints is None else joints
     u = np.asarray(spec.u if u is None else u, dtype=float)
+    k = _members(joints)
+    if k is not None and u.ndim == 0:
+        u = np.full(k, float(u))
     v = np.zeros((*u.shape, model.nv))
     kind, iq, iv = base_slices(mbm)
     heading = base_heading(mbm, q)
@@ -790,7 +858,7 @@ def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None) -> np.nda
                 r = w.radius if wheel_radius is None else wheel_radius[..., k]
                 v = _as_config_error(set_joint_rate, mbm, v, spin, signs[spin] * u / r,
                                      what=f"wheel {w.name!r}")
-    for name, val in spec.joints.items():
+    for name, val in joints.items():
         if isinstance(val, list):
             j = _joint(model, name, "velocity.joints")
             if j.nv == 1:
@@ -804,7 +872,7 @@ def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None) -> np.nda
             v[..., j.idx_v:j.idx_v + j.nv] = rates
         else:
             v = _as_config_error(set_joint_rate, mbm, v, name, val, what="velocity.joints")
-    _check_kept(mbm, spec.joints, v, "velocity.joints")
+    _check_kept(mbm, joints, v, "velocity.joints")
     return v
 
 

@@ -49,6 +49,7 @@ engine's carry its name as a suffix (``F_max_mujoco``, ``contact_whole_window_mu
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, NamedTuple
 
@@ -57,11 +58,20 @@ import numpy as np
 from ..contact import peak_force
 from ..exceptions import InputError, RoverImpactError
 from ..scenario import ImpactSetup, Scenario, scenario_from_dict, sweep_energy
-from ..scenario.block import block_key, is_number, member_block
+from ..scenario.block import (
+    STATE_NUMBERS,
+    STATE_PREFIXES,
+    block_key,
+    is_number,
+    member_block,
+    state_block,
+    state_key,
+)
 from ..scenario.build import (
     jam_total_mass,
     model_key,
     pulling_applies,
+    scenario_model,
     warn_if_pulling,
     warn_jammed,
 )
@@ -300,13 +310,22 @@ class ScenarioEvaluator:
     def cheap(self, base: Mapping[str, Any], params: Sequence[str]) -> bool:
         """Whether the indicator-only cases of a study of ``base`` sweeping ``params``
         cost tens of microseconds each: they share one model and differ in the angle,
-        the contact law or the simulation settings (an angle sweep), or ``base`` is a
-        built-in rover with a model family (:func:`~roverimpact.scenario.block.block_key`)
-        and they differ in its numbers (``model.params``, ``velocity.u``) too. Cases built
-        one by one (robot files, terrains, declared loops) cost milliseconds."""
+        the contact law or the simulation settings (an angle sweep); or ``base`` has a
+        state block (:func:`~roverimpact.scenario.block.state_key`: any model without
+        terrain or declared loops) and they differ in joint values, joint rates and the
+        speed too; or ``base`` is a built-in rover with a model family
+        (:func:`~roverimpact.scenario.block.block_key`) and they differ in its numbers
+        (``model.params``, ``velocity.u``) too. Cases built one by one (terrains,
+        declared loops, a rigid body's or a robot file's own numbers) cost
+        milliseconds."""
         rest = ("contact_law.", "simulation.")
         if all(p == _BETA or p.startswith(rest) for p in params):
             return True
+        if all(p in STATE_NUMBERS or p.startswith((*STATE_PREFIXES, *rest)) for p in params):
+            try:
+                return state_key(scenario_from_dict(dict(base))) is not None
+            except InputError:  # (a base the checks refuse: they say why)
+                return False
         if not all(p in _FAMILY_NUMBERS or p.startswith(("model.params.", *rest))
                    for p in params):
             return False
@@ -327,6 +346,28 @@ class ScenarioEvaluator:
             cfg = SimulationConfig.from_scenario(sc)
             for engine in engines:
                 check_engine(engine, setup.model, cfg, terrain=sc.terrain is not None)
+
+    @staticmethod
+    def _state_block(first: Scenario, part: Sequence[_State], models: dict[str, Any]):
+        """:func:`~roverimpact.scenario.block.state_block` of the cases ``part`` of
+        ``first``'s state block, on the model built in this call; None if it raises (a
+        case that cannot be posed: then each is computed on its own, which raises its own
+        error)."""
+        try:
+            key = model_key(first)
+            model = models.get(key)
+            if model is None:
+                model = scenario_model(first)
+                if len(models) < _MODELS:
+                    models[key] = model
+            names = part[0].joints.keys()
+            joints = {nm: np.array([m.joints[nm] for m in part]) for nm in names}
+            rates = {nm: np.array([m.rates[nm] for m in part]) for nm in part[0].rates}
+            beta = (None if first.obstacle.beta_deg is None
+                    else np.array([m.beta_deg for m in part]))
+            return state_block(first, joints, rates, [m.u for m in part], beta, model=model)
+        except RoverImpactError:
+            return None
 
     @staticmethod
     def _setup(sc: Scenario, models: dict[str, Any]) -> ImpactSetup:
@@ -376,29 +417,59 @@ class ScenarioEvaluator:
         blocks: dict[str, list[_Member]] = {}
         firsts: dict[str, Scenario] = {}
         family: dict[str, tuple[str | None, Scenario]] = {}
+        # cases of one model that differ in numbers of joint values and rates, speed and
+        # angle (a configuration sweep of a robot file): their first case (validated; None
+        # where it has no state block) and their numbers, by _state_group
+        states: dict[str, Scenario | None] = {}
+        state_members: dict[str, list[_State]] = {}
         for idx in groups.values():
             try:
                 ov = overrides[idx[0]]
-                fkey = None
+                fkey = skey = None
                 if len(idx) == 1 and not engines:
                     # a case of its own (a model-changing design): computed with the other
                     # cases of its model family, in blocks; after the first, from its numbers
-                    # (no scenario of its own, unless they need the full validation)
-                    fkey = _family_key(ov)
-                    bkey, first = family.get(fkey, (None, None))
-                    if bkey is not None:
-                        member = _member(idx[0], first, ov)
-                        if member is not None:
-                            blocks[bkey].append(member)
-                            continue
+                    # (no scenario of its own, unless they need the full validation). Cases
+                    # that set joint values or rates: with the other cases of their model
+                    # in a state block (one model), likewise
+                    if _sets_joints(ov):
+                        skey = _state_group(ov)
+                        first = states.get(skey)
+                        if first is not None:
+                            state = _state(idx[0], first, ov)
+                            if state is not None:
+                                state_members[skey].append(state)
+                                continue
+                    else:
+                        fkey = _family_key(ov)
+                        bkey, first = family.get(fkey, (None, None))
+                        if bkey is not None:
+                            member = _member(idx[0], first, ov)
+                            if member is not None:
+                                blocks[bkey].append(member)
+                                continue
+                        skey = _state_group(ov)
+                        first = states.get(skey)
+                        if first is not None:
+                            state = _state(idx[0], first, ov)
+                            if state is not None:
+                                state_members[skey].append(state)
+                                continue
                 sc = scenario_from_dict(apply_overrides(base, ov))
-                if fkey is not None and sc.band is None:
-                    if fkey not in family:
-                        family[fkey] = (block_key(sc), sc)
-                    bkey = family[fkey][0]
-                    if bkey is not None:
-                        firsts.setdefault(bkey, sc)
-                        blocks.setdefault(bkey, []).append(_member_of(idx[0], sc))
+                if skey is not None and sc.band is None:
+                    if fkey is not None:
+                        if fkey not in family:
+                            family[fkey] = (block_key(sc), sc)
+                        bkey = family[fkey][0]
+                        if bkey is not None:
+                            firsts.setdefault(bkey, sc)
+                            blocks.setdefault(bkey, []).append(_member_of(idx[0], sc))
+                            continue
+                    if skey not in states:
+                        states[skey] = sc if state_key(sc) is not None else None
+                    state = _state(idx[0], sc, ov) if states[skey] is not None else None
+                    if state is not None:
+                        state_members.setdefault(skey, []).append(state)
                         continue
                 setup = self._setup(sc, models)
                 m_total[idx] = _total_mass(setup.model)
@@ -443,6 +514,29 @@ class ScenarioEvaluator:
                     part = []
                 # case by case: the error of the case's own build
                 for m in sorted(part + refused, key=lambda m: m.index):
+                    try:
+                        setup = self._setup(scenario_from_dict(
+                            apply_overrides(base, overrides[m.index])), models)
+                    except InputError as exc:
+                        if errors is None:
+                            raise
+                        errors[m.index] = f"{type(exc).__name__}: {exc}"
+                        continue
+                    m_total[m.index] = _total_mass(setup.model)
+                    own.add(m.index, setup)
+        for skey, part_all in state_members.items():
+            first = states[skey]
+            pulling = pulling_applies(first.constraints, first.contacts)
+            for s in range(0, len(part_all), _OwnCases.BLOCK):
+                part = part_all[s:s + _OwnCases.BLOCK]
+                blk = self._state_block(first, part, models)
+                if blk is not None:
+                    idx = [m.index for m in part]
+                    m_total[idx] = blk.total_mass
+                    own.add_block(idx, blk, pulling)
+                    continue
+                # case by case: the error of the case's own build
+                for m in part:
                     try:
                         setup = self._setup(scenario_from_dict(
                             apply_overrides(base, overrides[m.index])), models)
@@ -672,6 +766,66 @@ def _family_key(ov: Mapping[str, Any]) -> str:
 
 
 _FAMILY_NUMBERS = ("velocity.u", _BETA)
+
+
+class _State(NamedTuple):
+    """A case of a state block: its index and the numbers that make it
+    (:func:`~roverimpact.scenario.block.state_block`)."""
+
+    index: int
+    joints: dict[str, float]
+    rates: dict[str, float]
+    u: float
+    beta_deg: float | None
+
+
+def _state_group(ov: Mapping[str, Any]) -> str:
+    """Cases of one call with the same key have the same
+    :func:`~roverimpact.scenario.block.state_key` (they differ in numbers of joint values,
+    joint rates, ``velocity.u`` and ``obstacle.beta_deg`` only; computed for the first of
+    them)."""
+    return repr(sorted((k, None if is_number(v) and (k.startswith(STATE_PREFIXES)
+                                                   or k in STATE_NUMBERS) else v)
+                       for k, v in ov.items()))
+
+
+_CONF, _RATE = STATE_PREFIXES
+
+
+def _sets_joints(ov: Mapping[str, Any]) -> bool:
+    """Whether the case ``ov`` sets a joint value or rate to a number."""
+    return any(k.startswith(STATE_PREFIXES) and is_number(v) for k, v in ov.items())
+
+
+def _state(index: int, first: Scenario, ov: Mapping[str, Any]) -> _State | None:
+    """The numbers of the case ``ov`` of ``first``'s :func:`_state_group`: its joint
+    values and rates that ``ov`` sets (by joint name), its speed and angle; the rest of
+    ``first`` (validated) is the case's. None where the case needs its own validation: a
+    value that is not finite, a ``beta_deg`` outside [0, 90] degrees."""
+    joints, rates = {}, {}
+    for k, v in ov.items():
+        if is_number(v) and k.startswith(STATE_PREFIXES):
+            if not math.isfinite(v):
+                return None
+            if k.startswith(_CONF):
+                joints[k[len(_CONF):]] = float(v)
+            else:
+                rates[k[len(_RATE):]] = float(v)
+    u = ov.get("velocity.u")
+    if is_number(u):
+        if not math.isfinite(u):
+            return None
+        u = float(u)
+    else:
+        u = first.velocity.u
+    beta = ov.get(_BETA)
+    if is_number(beta):
+        if not 0.0 <= beta <= 90.0 or first.obstacle.normal is not None:
+            return None
+        beta = float(beta)
+    else:
+        beta = first.obstacle.beta_deg
+    return _State(index, joints, rates, u, beta)
 
 
 def _columns(rows: Sequence[Mapping[str, Any]], missing: Sequence[int] = ()

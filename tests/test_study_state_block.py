@@ -1,0 +1,197 @@
+"""State blocks (issue #19, sweeps off the grid): the cases of a study that differ in the
+numbers of joint values, joint rates, the speed and the impact angle of one model (a
+robot file's configurations, a rover's suspension settings) are computed together on one
+model (scenario.block.state_block), not built one by one (a robot file was loaded again
+for every case: about 40 cases/s for the Panda).
+
+The reference is a fresh scenario, model and setup per case (evaluate_case, through
+ImpactSetup.from_scenario): the block's outputs must equal it to 1e-12, and a case that
+cannot be posed must get the error it gets on its own.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roverimpact.exceptions import ConfigError
+from roverimpact.studies import ScenarioEvaluator, evaluate_case
+from roverimpact.studies.config import apply_overrides
+
+EX = Path(__file__).resolve().parents[1] / "examples"
+
+COLUMNS = ("T_c_minus", "m_eff", "v_n", "F_pred", "m_total", "m_eff_free", "T_n_total",
+           "T_c_obstacle")
+
+PANDA = {
+    "model": {"file": "erd:panda"},
+    "configuration": {"joints": {"panda_joint2": -0.4, "panda_joint4": -2.0,
+                                 "panda_joint6": 1.6, "panda_joint7": 0.7}},
+    "velocity": {"joints": {"panda_joint1": 0.5, "panda_joint2": 0.8}},
+    "obstacle": {"frame": "panda_hand_tcp", "point": [0.0, 0.0, 0.0],
+                 "normal": [0.0, 0.0, 1.0]},
+    "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8},
+}
+
+ROCKER = {
+    "model": {"name": "rocker_bogie", "preset": "prototype"},
+    "velocity": {"u": 0.3},
+    "obstacle": {"wheel": "left_front", "beta_deg": 60.0},
+}
+
+
+def _builds(monkeypatch) -> list:
+    """Every model built from here on (scenario.build.make_model calls)."""
+    from roverimpact.scenario import build
+
+    built: list = []
+    real = build.make_model
+    monkeypatch.setattr(build, "make_model", lambda *a, **kw: built.append(1) or real(*a, **kw))
+    return built
+
+
+def _assert_one_by_one(base, overrides, got, errors=None):
+    """``got`` (the evaluator's outputs) equal evaluate_case per case to 1e-12; a case
+    whose evaluate_case raises has that error in ``errors`` and missing outputs."""
+    for i, ov in enumerate(overrides):
+        try:
+            ref = evaluate_case(apply_overrides(base, ov))
+        except ConfigError as exc:
+            assert errors is not None and errors[i] == f"ConfigError: {exc}", i
+            assert math.isnan(got["T_c_minus"][i])
+            continue
+        assert errors is None or errors[i] == "", (i, errors[i])
+        for col in COLUMNS:
+            assert got[col][i] == pytest.approx(ref[col], rel=1e-12, abs=1e-15,
+                                                nan_ok=True), (i, col)
+
+
+def test_a_robot_file_s_configurations_are_one_block_on_one_model(monkeypatch):
+    """A random design over two joint values and a joint rate of the Panda (a URDF of
+    example-robot-data, mimic fingers): one model built for all the cases (it was built
+    again for each), the outputs of each case its own build's."""
+    rng = np.random.default_rng(3)
+    overrides = [{"configuration.joints.panda_joint2": float(a),
+                  "configuration.joints.panda_joint4": float(b),
+                  "velocity.joints.panda_joint1": float(c)}
+                 for a, b, c in zip(rng.uniform(-1.0, 1.0, 24), rng.uniform(-2.5, -1.0, 24),
+                                    rng.uniform(0.1, 1.0, 24), strict=True)]
+    built = _builds(monkeypatch)
+    got = ScenarioEvaluator().evaluate(PANDA, overrides)
+    monkeypatch.undo()
+    assert len(built) == 1
+    _assert_one_by_one(PANDA, overrides, got)
+    assert len(set(np.round(got["T_c_minus"], 12))) == len(overrides)  # q did change
+
+
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.GroundGapWarning")
+def test_suspension_settings_of_a_rover_with_a_loop_are_one_block(monkeypatch):
+    """The rocker-bogie's rockers set in [configuration.joints] and given rates (its
+    differential is a built-in loop), at random speeds and angles: one block of one model
+    (they were a model family's blocks of one member each). The cases whose rockers open
+    the loop, or whose rates pull it apart, get the error they get on their own (recorded,
+    or raised without a list of errors); the others their own build's outputs. A block
+    with such a case is computed case by case, on the block's model."""
+    rng = np.random.default_rng(4)
+    overrides = []
+    for i in range(16):
+        a, r = float(rng.uniform(-0.15, 0.15)), float(rng.uniform(-0.5, 0.5))
+        overrides.append({
+            "configuration.joints.rocker_left": a,
+            "configuration.joints.rocker_right": -a if i % 5 != 3 else a + 0.1,
+            "velocity.joints.rocker_left": r,
+            "velocity.joints.rocker_right": -r if i % 7 != 4 else r + 0.2,
+            "velocity.u": float(rng.uniform(0.1, 0.5)),
+            "obstacle.beta_deg": float(rng.uniform(10.0, 90.0))})
+    errors = [""] * len(overrides)
+    built = _builds(monkeypatch)
+    got = ScenarioEvaluator().evaluate(ROCKER, overrides, errors=errors)
+    monkeypatch.undo()
+    assert len(built) == 1  # the block's model, reused by its cases one by one
+    assert sum(map(bool, errors)) == 5  # i = 3, 8, 13 open the loop; 4, 11 pull it apart
+    assert "open the loop 'differential'" in errors[3]
+    assert "joint rates open the loop 'differential'" in errors[4]
+    _assert_one_by_one(ROCKER, overrides, got, errors)
+    with pytest.raises(ConfigError, match="open the loop 'differential'"):
+        ScenarioEvaluator().evaluate(ROCKER, overrides)
+
+
+def test_a_file_rover_s_speeds_and_angles_are_one_block(monkeypatch):
+    """A floating MJCF rover standing on its wheels (ground rows) at random speeds and
+    angles, every case a group of its own: one block, one model (each case was built
+    on its own)."""
+    base = {"model": {"file": str(EX / "mjcf_rover.xml"),
+                      "wheels": {"front": {"frame": "front_tire"},
+                                 "rear": {"frame": "rear_tire"}}},
+            "velocity": {"u": 0.5},
+            "obstacle": {"wheel": "front", "beta_deg": 45.0},
+            "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8}}
+    rng = np.random.default_rng(5)
+    overrides = [{"velocity.u": float(u), "obstacle.beta_deg": float(b)}
+                 for u, b in zip(rng.uniform(0.1, 1.0, 12), rng.uniform(5.0, 90.0, 12),
+                                 strict=True)]
+    built = _builds(monkeypatch)
+    got = ScenarioEvaluator().evaluate(base, overrides)
+    monkeypatch.undo()
+    assert len(built) == 1
+    _assert_one_by_one(base, overrides, got)
+
+
+@pytest.mark.filterwarnings("ignore::roverimpact.exceptions.GroundGapWarning")
+def test_mimic_joints_of_a_plain_urdf_in_a_block(tmp_path):
+    """The rocker-bogie written as a plain URDF, its differential a mimic joint: setting
+    one rocker turns the other (each case as its own build), and cases that set both
+    rockers to values the mimic does not keep are refused as on their own (the check of
+    kept values runs over the block's values as arrays)."""
+    from roverimpact.models import export_plain_urdf, rocker_bogie
+
+    base = {**export_plain_urdf(rocker_bogie(), tmp_path / "rb.urdf"),
+            "velocity": {"u": 0.2}, "obstacle": {"wheel": "left_front", "beta_deg": 30.0}}
+    one = [{"configuration.joints.rocker_left": a} for a in np.linspace(-0.2, 0.2, 7)]
+    _assert_one_by_one(base, one, ScenarioEvaluator().evaluate(base, one))
+    both = [{"configuration.joints.rocker_left": a,
+             "configuration.joints.rocker_right": -a if i != 2 else 0.3}
+            for i, a in enumerate(np.linspace(-0.2, 0.2, 5))]
+    errors = [""] * len(both)
+    got = ScenarioEvaluator().evaluate(base, both, errors=errors)
+    assert [bool(e) for e in errors] == [False, False, True, False, False]
+    assert "was changed to" in errors[2]
+    _assert_one_by_one(base, both, got, errors)
+
+
+def test_joint_sweeps_are_cheap_cases():
+    """A study of joint values, rates, speeds and angles of one model gets the chunks of
+    cheap cases (CHEAP_AUTO_CHUNK); a model on a terrain does not."""
+    from roverimpact.studies.sweep import CHEAP_AUTO_CHUNK, MIN_AUTO_CHUNK, prepare_study
+
+    grid = {"configuration.joints.panda_joint2": {"start": -1.0, "stop": 1.0, "num": 60},
+            "velocity.joints.panda_joint1": {"start": 0.1, "stop": 1.0, "num": 50}}
+    assert prepare_study({"name": "p", "base": PANDA, "grid": grid}).chunk_size == \
+        CHEAP_AUTO_CHUNK
+    terrain = {**ROCKER, "terrain": {"plane": {"normal": [-0.17, 0.0, 0.98]}}}
+    grid = {"configuration.joints.rocker_left": [0.0] * 3000}
+    assert prepare_study({"name": "t", "base": terrain, "grid": grid}).chunk_size == \
+        MIN_AUTO_CHUNK
+
+
+def test_the_model_is_shared_across_configurations_unless_declared_loops_need_them():
+    """Scenarios that differ in [configuration] only have one model (model_key), unless
+    they declare loops ([[contacts.loops]]: a distance loop without a length keeps the
+    distance it has in the configuration)."""
+    from roverimpact.scenario import load_scenario, scenario_from_dict
+    from roverimpact.scenario.build import model_key
+
+    def keys(sc, joints):
+        raw = sc.model_dump(mode="json", exclude_none=True)
+        return {model_key(scenario_from_dict(
+            apply_overrides(raw, {f"configuration.joints.{k}": v for k, v in j.items()})))
+            for j in joints}
+
+    panda = scenario_from_dict(PANDA)
+    assert len(keys(panda, [{"panda_joint2": 0.1}, {"panda_joint2": 0.3}])) == 1
+    sawppy = load_scenario(EX / "sawppy_like_beta.toml")
+    assert sawppy.contacts.loops
+    assert len(keys(sawppy, [{"rocker_left": 0.0}, {"rocker_left": 0.05}])) == 2
