@@ -4,6 +4,7 @@
     python benchmarks/bench_study.py --n-sim 100     # shorter simulated sweep
     python benchmarks/bench_study.py --memory 1e5 1e6 1e7   # peak RSS of sweep + report
     python benchmarks/bench_study.py --model-sweep 2000 20000  # every case changes the model
+    python benchmarks/bench_study.py --joint-sweep 2000 20000  # a robot's configurations
 
 Targets (issue #7): 1e5 configurations of the 3-D rover, T_c^- only, in < 10 s on one
 core; 1000 simulated configurations of the 2-D rover in < 60 s on 2 cores (Dask
@@ -24,6 +25,12 @@ the same run; then the same for the 2-D rover (rocker suspension: COM height h, 
 chassis masses, speed, angle), the papers' own study variable. A study's fixed costs (its
 checks, which build a model for the smallest and largest value of each parameter; the
 results table) weigh on a small N: 2 000 and 20 000 show both.
+
+``--joint-sweep N ...`` (issue #19, sweeps off the grid, for a robot file): for each N, a
+seeded random design of N cases of the Panda arm (the URDF of example-robot-data): two
+joint values and a joint rate, every case a configuration of its own, through
+``run_study`` on one core, against one ``evaluate_case`` per case (a fresh build, which
+loads the URDF).
 """
 
 from __future__ import annotations
@@ -173,6 +180,46 @@ def _model_sweep(n: int, name: str, base: dict, params: dict) -> None:
           f"ratio run_study / that {r_model * per_case:6.2f}x")
 
 
+#: The Panda striking a surface (examples/panda_tool_impact.toml) and the ranges of its
+#: joint design.
+PANDA = {
+    "model": {"file": "erd:panda"},
+    "configuration": {"joints": {"panda_joint2": -0.4, "panda_joint4": -2.0,
+                                 "panda_joint6": 1.6, "panda_joint7": 0.7}},
+    "velocity": {"joints": {"panda_joint1": 0.5, "panda_joint2": 0.8}},
+    "obstacle": {"frame": "panda_hand_tcp", "point": [0.0, 0.0, 0.0],
+                 "normal": [0.0, 0.0, 1.0]},
+    "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8},
+}
+PANDA_JOINTS = {"configuration.joints.panda_joint2": {"low": -1.0, "high": 1.0},
+                "configuration.joints.panda_joint4": {"low": -2.5, "high": -1.0},
+                "velocity.joints.panda_joint1": {"low": 0.1, "high": 1.0}}
+
+
+def joint_sweep(n: int) -> None:
+    study = {"name": "bench joint design", "base": PANDA,
+             "random": {"n": n, "seed": 1, "params": PANDA_JOINTS}}
+    with tempfile.TemporaryDirectory() as tmp:
+        # warm: the compiled kernels and the robot file's first load
+        run_study({**study, "random": {**study["random"], "n": 300, "seed": 2}},
+                  f"{tmp}/warm")
+        t0 = time.perf_counter()
+        run_study(study, f"{tmp}/joints")
+        t_joints = time.perf_counter() - t0
+    sample = expand(prepare_study(study).study)[:50]
+    t0 = time.perf_counter()
+    for c in sample:
+        evaluate_case(apply_overrides(PANDA, c.overrides))
+    per_case = (time.perf_counter() - t0) / len(sample)
+    r = n / t_joints
+    print(f"joint random design, Panda (URDF), {n:,} cases (every case its own "
+          "configuration and rate), 1 core:")
+    print(f"  run_study          {r:9,.0f} cases/s   (target for sweeps off the grid "
+          ">= 5000)")
+    print(f"  one evaluate_case per case (fresh build) {1 / per_case:9,.0f} cases/s   "
+          f"ratio run_study / that {r * per_case:6.0f}x")
+
+
 def _memory_child(n: int, out: str) -> None:
     """Run in a fresh process: the sweep of ``n`` cases, then its report; print JSON."""
     import resource
@@ -232,7 +279,13 @@ def main() -> None:
     ap.add_argument("--memory-child", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--model-sweep", type=int, nargs="+", metavar="N",
                     help="only the model-changing random design, of N cases (each N)")
+    ap.add_argument("--joint-sweep", type=int, nargs="+", metavar="N",
+                    help="only the Panda's joint random design, of N cases (each N)")
     args = ap.parse_args()
+    if args.joint_sweep:
+        for n in args.joint_sweep:
+            joint_sweep(n)
+        return
     if args.model_sweep:
         for n in args.model_sweep:
             model_sweep(n)

@@ -195,3 +195,24 @@ def test_the_model_is_shared_across_configurations_unless_declared_loops_need_th
     sawppy = load_scenario(EX / "sawppy_like_beta.toml")
     assert sawppy.contacts.loops
     assert len(keys(sawppy, [{"rocker_left": 0.0}, {"rocker_left": 0.05}])) == 2
+
+
+def test_the_example_joint_map_runs_as_one_block_per_chunk(tmp_path, monkeypatch):
+    """examples/study_panda_joints.toml (docs/studies.md): 2 000 configurations of the
+    Panda, one model per chunk (a chunk of cheap cases: one chunk here); its T_c^- at
+    both ends of the grid are their scenarios' own."""
+    from roverimpact.studies import run_study
+    from roverimpact.studies.config import load_study
+
+    study, _ = load_study(EX / "study_panda_joints.toml")
+    built = _builds(monkeypatch)
+    res = run_study(study, tmp_path / "out")
+    monkeypatch.undo()
+    table = res.table
+    # the sweep builds one; the study's checks one per end of each swept range and one
+    # for the base (5): not one per case
+    assert len(table) == 2000 and len(built) <= 6
+    for i in (0, len(table) - 1):
+        ov = {k: float(table[k].iloc[i]) for k in study.grid}
+        ref = evaluate_case(apply_overrides(study.base, ov))
+        assert table["T_c_minus"].iloc[i] == pytest.approx(ref["T_c_minus"], rel=1e-12)

@@ -390,7 +390,10 @@ class ScenarioEvaluator:
         cases are computed. In a block of a model family, the members whose numbers the
         family refuses are found by halving the block over
         :func:`~roverimpact.models.family.family_numbers` (no model is built), the others
-        stay one block. A case of a group sharing one model still raises.
+        stay one block; a state block (cases that differ in joint values, joint rates,
+        speed and angle of one model: :func:`~roverimpact.scenario.block.state_block`)
+        with a case that cannot be posed is computed case by case on its model. A case of
+        a group sharing one model still raises.
         """
         engines = engines_of(simulate)
         n = len(overrides)
