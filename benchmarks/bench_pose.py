@@ -1,6 +1,7 @@
 """Speed of the pose on terrain: rocker-bogie and rover2d placed on synthetic Mars terrain.
 
 Run: python benchmarks/bench_pose.py [--quick]
+     python benchmarks/bench_pose.py --function   # a terrain given as a Python function
 Prints, on one core, for random placements (x, y, yaw) on a 20 m x 20 m terrain at 5 cm
 (synthetic_mars, seed 1, rock abundance 0.05, rocks 0.1 to 0.5 m):
 * time per pose of one call per pose, and of one batched call for all placements
@@ -10,6 +11,11 @@ Prints, on one core, for random placements (x, y, yaw) on a 20 m x 20 m terrain 
 * the floor of one step: one wheel_ground_contact call for the rover's wheels;
 * baseline: scipy.optimize.least_squares on the same residual with a finite-difference
   Jacobian (what the analytic Jacobian saves), and its agreement with our poses.
+
+``--function``: the rocker-bogie posed on ``examples/terrain/bumps.py`` (a
+``FunctionTerrain``: a numpy function h(x, y), its derivatives by central differences),
+one call per pose at 100 placements along x: time per pose and calls of the function per
+pose (the derivatives' points stacked into one call since 2026-11-29: 13 calls became 1).
 """
 
 from __future__ import annotations
@@ -115,7 +121,40 @@ def main(quick: bool = False) -> None:
           f"({'met' if rbb < 5 else 'NOT met'})")
 
 
+def function_terrain() -> None:
+    import importlib.util
+    from pathlib import Path
+
+    from roverimpact.models.terrain import FunctionTerrain
+
+    print(reference())
+    path = Path(__file__).resolve().parents[1] / "examples" / "terrain" / "bumps.py"
+    spec = importlib.util.spec_from_file_location("bumps", path)
+    bumps = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bumps)
+    calls = [0]
+
+    def h(x, y):
+        calls[0] += 1
+        return bumps.h(x, y)
+
+    terrain = FunctionTerrain(h)
+    mbm = rocker_bogie()
+    guesses = [place(mbm, x=float(x)) for x in np.linspace(0.0, 4.0, 100)]
+    pose_on_terrain(mbm, terrain, guesses[0])  # warm: compiled kernels
+    calls[0] = 0
+    t = best_of(lambda: [pose_on_terrain(mbm, terrain, g) for g in guesses], repeat=3)
+    print(f"rocker_bogie (prototype) on examples/terrain/bumps.py (FunctionTerrain), "
+          f"{len(guesses)} poses along x, one call each: {1e3 * t / len(guesses):.2f} ms a "
+          f"pose, {calls[0] / (3 * len(guesses)):.0f} calls of the function a pose")
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
-    main(ap.parse_args().quick)
+    ap.add_argument("--function", action="store_true")
+    args = ap.parse_args()
+    if args.function:
+        function_terrain()
+    else:
+        main(args.quick)
