@@ -618,13 +618,15 @@ def studies_counts():
 
 @produces("studies.large_table", "studies.sample_rows", "studies.max_chunk",
           "studies.min_chunk", "studies.cheap_chunk", "studies.n_bins", "studies.n_ybins",
-          "studies.own_block", "studies.head_rows")
+          "studies.own_block", "studies.head_rows", "studies.map_min_values",
+          "studies.map_max_cells")
 def studies_scale():
     """Settings of large studies (issue 19): the table size above which the report
     streams, its statistics sample, the smallest and largest automatic chunk, the summary
-    bins."""
+    bins, the grids drawn as maps."""
     from roverimpact.report import summary
     from roverimpact.report.html import MAX_TABLE_ROWS
+    from roverimpact.report.plots import MAP_MAX_CELLS, MAP_MIN_VALUES
     from roverimpact.studies.evaluate import _OwnCases
     from roverimpact.studies.sweep import CHEAP_AUTO_CHUNK, MAX_AUTO_CHUNK, MIN_AUTO_CHUNK
 
@@ -637,7 +639,8 @@ def studies_scale():
             "studies.cheap_chunk": n(CHEAP_AUTO_CHUNK),
             "studies.n_bins": n(summary.N_BINS),
             "studies.n_ybins": n(summary.N_YBINS), "studies.own_block": n(_OwnCases.BLOCK),
-            "studies.head_rows": n(MAX_TABLE_ROWS)}
+            "studies.head_rows": n(MAX_TABLE_ROWS), "studies.map_min_values": n(MAP_MIN_VALUES),
+            "studies.map_max_cells": n(MAP_MAX_CELLS)}
 
 
 _IND_ORDER = ("T_c_minus", "v_n", "T_n_total", "T_c_obstacle")

@@ -110,7 +110,7 @@ def _stats_json(sections) -> list[dict]:
             "n_whole_window": s.n_whole_window, "whole_window": "excluded",
             "agreement": s.agreement.as_dict() if s.agreement is not None else None,
             "engines": [e.as_dict() for e in s.engines],
-            "note": s.note, "figures": dict(s.figures),
+            "note": s.note, "figures": dict(s.figures), "maps": dict(s.maps),
         })
     return out
 
@@ -263,6 +263,8 @@ def report_cmd(
     _print_stats(sections)
     for s in sections:
         print_paths("figure", s.figures.get("png"))
+        if s.maps:
+            print_paths("map", s.maps.get("png"))
     print_paths("report", path, bold_path=True)
 
 

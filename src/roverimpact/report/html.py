@@ -37,7 +37,15 @@ from ..studies.store import (
     simulated_forces,
     whole_window_cases,
 )
-from .plots import ENGINE_LABELS, force_column, plot_study, plot_study_summary, save_figure
+from .plots import (
+    ENGINE_LABELS,
+    MAP_MAX_CELLS,
+    force_column,
+    plot_study,
+    plot_study_map,
+    plot_study_summary,
+    save_figure,
+)
 from .summary import LARGE_TABLE, results_rows, summarize
 
 __all__ = ["EngineStats", "StudySection", "analyse_folder", "build_report",
@@ -117,6 +125,7 @@ class StudySection:
     engines: list[EngineStats] = field(default_factory=list)
     n_rows: int | None = None
     head: pd.DataFrame | None = None
+    maps: dict[str, Path] = field(default_factory=dict)
 
     @property
     def n_cases(self) -> int:
@@ -267,13 +276,42 @@ def analyse_folder(folder: str | Path, *, n_boot: int = 1000, seed: int = 0) -> 
                          forces=[(e.force, e.label) for e in engines] if len(engines) > 1
                          else None)
     figures = save_figure(fig, folder / "figure")
+    maps = _study_map(folder, table, x, params, name, fcol)
     if agr is not None:
         _write_stats(folder, agr, n_ww, engines)
     text = (folder / STUDY_COPY).read_text() if (folder / STUDY_COPY).is_file() else ""
     return StudySection(folder=folder, name=name, table=table, manifest=manifest,
                         study_text=text, x=x, force=fcol, agreement=agr, figures=figures,
                         note=note, description=study.description if study else "",
-                        n_whole_window=n_ww, engines=engines)
+                        n_whole_window=n_ww, engines=engines, maps=maps)
+
+
+def _study_map(folder: Path, table: pd.DataFrame | None, x: str, params, name: str,
+               force: str | None, *, grid: bool = False) -> dict[str, Path]:
+    """``map.png`` and ``map.svg`` of a study over two numeric parameters whose cases are
+    a grid (:func:`~roverimpact.report.plots.plot_study_map`). ``table`` None (a large
+    study, whose table is not read whole): the columns the map needs are read from the
+    results file if the study is a ``[grid]`` design (``grid``) of at most
+    :data:`~roverimpact.report.plots.MAP_MAX_CELLS` cases. A study that is not such a grid
+    has no map: one left by an earlier report of the folder is removed."""
+    others = [p for p in params if p != x]
+    fig = None
+    if len(others) == 1:
+        if table is None and grid:
+            import pyarrow.parquet as pq
+
+            path = folder / RESULTS
+            names = pq.read_schema(path).names
+            cols = [c for c in (x, others[0], "T_c_minus", force) if c and c in names]
+            if pq.ParquetFile(path).metadata.num_rows <= MAP_MAX_CELLS:
+                table = pq.read_table(path, columns=cols).to_pandas()
+        if table is not None:
+            fig = plot_study_map(table, x, others[0], title=name, force=force)
+    if fig is None:
+        for suffix in (".png", ".svg"):
+            (folder / f"map{suffix}").unlink(missing_ok=True)
+        return {}
+    return save_figure(fig, folder / "map")
 
 
 def _ratios(table: pd.DataFrame, col: str, engine: str, whole) -> list[ForceRatios]:
@@ -373,6 +411,8 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
         fig = plot_study(dots, x, title=name, subtitle=subtitle + f" (random sample of "
                          f"{len(dots):,} of {summ.n:,} cases)")
     figures = save_figure(fig, folder / "figure")
+    maps = _study_map(folder, None, x, params, name, fcol,
+                      grid=study is not None and study.grid is not None)
     if agr is not None:
         _write_stats(folder, agr, n_ww, engines,
                      sample={"n_cases": summ.n, "n_sample": ns, "seed": seed})
@@ -381,7 +421,7 @@ def _analyse_large(folder: Path, *, n_boot: int, seed: int) -> StudySection:
                         study_text=text, x=x, force=fcol, agreement=agr, figures=figures,
                         note=note, description=study.description if study else "",
                         n_whole_window=n_ww, engines=engines, n_rows=summ.n,
-                        head=summ.head)
+                        head=summ.head, maps=maps)
 
 
 #: Dots drawn in the summary figure of a large study (a random subset of the sample).
@@ -523,6 +563,11 @@ def _section_html(s: StudySection, anchor: str) -> str:
         data = base64.b64encode(png.read_bytes()).decode("ascii")
         img = (f"<img class='fig' alt='{html.escape(s.name)}: T_c^- and peak force vs "
                f"{html.escape(s.x)}' src='data:image/png;base64,{data}'>")
+    png = s.maps.get("png")
+    if png and png.is_file():
+        data = base64.b64encode(png.read_bytes()).decode("ascii")
+        img += (f"\n<img class='fig' alt='{html.escape(s.name)}: map of T_c^- over the "
+                f"grid' src='data:image/png;base64,{data}'>")
     outputs = [c for c in ("T_c_minus", "m_eff", "v_n", "F_pred", "F_pred_refined", "F_lo",
                            "F_hi", "not_an_impact", "T_n_total", "T_c_obstacle",
                            "F_max", "contact_duration", WHOLE_WINDOW) if c in s.table]

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-__all__ = ["ENGINE_LABELS", "LABELS", "force_column", "plot_study", "plot_study_summary",
-           "save_figure", "typeset"]
+__all__ = ["ENGINE_LABELS", "LABELS", "MAP_MIN_VALUES", "force_column", "grid_map",
+           "plot_study", "plot_study_map", "plot_study_summary", "save_figure", "typeset"]
 
 #: Axis labels of known columns (units at the user boundary: degrees for angles).
 LABELS = {
@@ -35,7 +35,15 @@ LABELS = {
 
 
 def label(col: str) -> str:
-    return LABELS.get(col, col)
+    """The axis label of a column: :data:`LABELS`, a joint value or rate by its joint's
+    name, else the column's name."""
+    if col in LABELS:
+        return LABELS[col]
+    for prefix, what in (("configuration.joints.", "[rad or m]"),
+                         ("velocity.joints.", "rate [rad/s or m/s]")):
+        if col.startswith(prefix) and len(col) > len(prefix):
+            return f"joint {col[len(prefix):]} {what}"
+    return col
 
 
 #: Plain-text names of the papers' symbols and their mathtext, as in the axis labels.
@@ -186,6 +194,80 @@ def plot_study(table: pd.DataFrame, x: str, *, title: str = "", subtitle: str = 
              for ln in textwrap.wrap(text, 78, break_on_hyphens=False)]
     ax1.set_title("\n".join(lines), fontsize=10 if len(lines) <= 2 else 9)
     fig.tight_layout(rect=(0, 0.03, 1, 1) if ax2 is not None else None)
+    return fig
+
+
+#: A study over two numeric parameters with at least this many values each, whose cases
+#: fill at least half of their grid, is also drawn as a map (:func:`plot_study_map`).
+MAP_MIN_VALUES = 5
+#: ... of at most this many cells (a finer grid is drawn as the summary figure only).
+MAP_MAX_CELLS = 1_000_000
+
+
+def grid_map(table: pd.DataFrame, x: str, y: str, col: str
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(xs, ys, Z)``: column ``col`` of ``table`` on the grid of the numbers of columns
+    ``x`` and ``y`` (``Z[j, i]`` at ``xs[i]``, ``ys[j]``; NaN where the grid has no case,
+    or a case without that output). None unless ``x`` and ``y`` are numbers (finite,
+    not booleans) with at least :data:`MAP_MIN_VALUES` values each and at most
+    :data:`MAP_MAX_CELLS` cells, each pair of values at most once (no third parameter),
+    filling at least half of the grid (a random design over two parameters is no grid).
+    """
+    if x == y or any(c not in table for c in (x, y, col)) or len(table) == 0:
+        return None
+    xy = []
+    for c in (x, y):
+        if (not pd.api.types.is_numeric_dtype(table[c])
+                or pd.api.types.is_bool_dtype(table[c])):
+            return None
+        v = table[c].to_numpy(dtype=float)
+        if not np.isfinite(v).all():
+            return None
+        xy.append(np.unique(v, return_inverse=True))
+    (xs, ix), (ys, iy) = xy
+    nx, ny = len(xs), len(ys)
+    if min(nx, ny) < MAP_MIN_VALUES or nx * ny > MAP_MAX_CELLS:
+        return None
+    cell = iy.reshape(-1) * nx + ix.reshape(-1)
+    if np.unique(cell).size != cell.size or 2 * cell.size < nx * ny:
+        return None
+    Z = np.full(nx * ny, np.nan)
+    Z[cell] = table[col].to_numpy(dtype=float)
+    return xs, ys, Z.reshape(ny, nx)
+
+
+def plot_study_map(table: pd.DataFrame, x: str, y: str, *, title: str = "",
+                   force: str | None = None):
+    """T_c^- (and the peak force ``force``, if the table has it) as maps over the grid of
+    the swept parameters ``x`` and ``y`` (:func:`grid_map`), one panel each, the largest
+    value marked and written; cells without a case (or whose case has no output) are left
+    blank. None if the cases are not such a grid.
+
+    Returns
+    -------
+    matplotlib.figure.Figure or None
+    """
+    from matplotlib.figure import Figure
+
+    panels = [(c, grid_map(table, x, y, c)) for c in ("T_c_minus", force) if c]
+    panels = [(c, g) for c, g in panels if g is not None
+              and np.isfinite(g[2]).any()]
+    if not panels or panels[0][0] != "T_c_minus":
+        return None
+    fig = Figure(figsize=(5.2 * len(panels) + 0.6, 4.4), dpi=110, layout="constrained")
+    axes = fig.subplots(1, len(panels), squeeze=False)[0]
+    for ax, (col, (xs, ys, Z)), cmap in zip(axes, panels, ("viridis", "magma"),
+                                            strict=False):
+        mesh = ax.pcolormesh(xs, ys, np.ma.masked_invalid(Z), shading="nearest", cmap=cmap)
+        fig.colorbar(mesh, ax=ax, label=label(col))
+        j, i = np.unravel_index(int(np.nanargmax(Z)), Z.shape)
+        ax.plot(xs[i], ys[j], "*", ms=13, color="white", mec="k", mew=0.8)
+        ax.set_title(f"largest {Z[j, i]:.4g} at ({xs[i]:.4g}, {ys[j]:.4g})", fontsize=8)
+        ax.set_xlabel(label(x))
+        ax.set_ylabel(label(y))
+    lines = [typeset(ln) for ln in textwrap.wrap(title, 90, break_on_hyphens=False)]
+    if lines:
+        fig.suptitle("\n".join(lines), fontsize=10)
     return fig
 
 
