@@ -42,6 +42,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")  # one core for the indicator sweep
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -50,6 +51,7 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 import numpy as np
 from machine import reference
 
+from roverimpact._io import read_toml
 from roverimpact.studies import run_study
 from roverimpact.studies.config import apply_overrides, expand
 from roverimpact.studies.evaluate import evaluate_case
@@ -139,6 +141,16 @@ MODEL_SWEEPS = (
 )
 
 
+def _per_case(study: dict, k: int) -> float:
+    """Seconds of one ``evaluate_case`` (a fresh scenario, model and setup) per case, over
+    the first ``k`` cases of ``study``."""
+    sample = expand(prepare_study(study).study)[:k]
+    t0 = time.perf_counter()
+    for c in sample:
+        evaluate_case(apply_overrides(study["base"], c.overrides))
+    return (time.perf_counter() - t0) / len(sample)
+
+
 def model_sweep(n: int) -> None:
     for name, base, params in MODEL_SWEEPS:
         _model_sweep(n, name, base, params)
@@ -165,11 +177,7 @@ def _model_sweep(n: int, name: str, base: dict, params: dict) -> None:
         t0 = time.perf_counter()
         run_study(grid, f"{tmp}/grid")
         t_grid = time.perf_counter() - t0
-    sample = expand(prepare_study(study).study)[:200]
-    t0 = time.perf_counter()
-    for c in sample:
-        evaluate_case(apply_overrides(base, c.overrides))
-    per_case = (time.perf_counter() - t0) / len(sample)
+    per_case = _per_case(study, 200)
     r_model, r_grid = n / t_model, 20_000 / t_grid
     print(f"model-changing random design, {name}, {n:,} cases (every case a new "
           "model), 1 core:")
@@ -180,17 +188,11 @@ def _model_sweep(n: int, name: str, base: dict, params: dict) -> None:
           f"ratio run_study / that {r_model * per_case:6.2f}x")
 
 
-#: The Panda striking a surface (examples/panda_tool_impact.toml) and the ranges of its
-#: joint design.
-PANDA = {
-    "model": {"file": "erd:panda"},
-    "configuration": {"joints": {"panda_joint2": -0.4, "panda_joint4": -2.0,
-                                 "panda_joint6": 1.6, "panda_joint7": 0.7}},
-    "velocity": {"joints": {"panda_joint1": 0.5, "panda_joint2": 0.8}},
-    "obstacle": {"frame": "panda_hand_tcp", "point": [0.0, 0.0, 0.0],
-                 "normal": [0.0, 0.0, 1.0]},
-    "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8},
-}
+#: The Panda striking a surface (examples/panda_tool_impact.toml, with a contact law) and
+#: the ranges of its joint design.
+PANDA = {**read_toml(Path(__file__).resolve().parents[1] / "examples"
+                            / "panda_tool_impact.toml"),
+         "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8}}
 PANDA_JOINTS = {"configuration.joints.panda_joint2": {"low": -1.0, "high": 1.0},
                 "configuration.joints.panda_joint4": {"low": -2.5, "high": -1.0},
                 "velocity.joints.panda_joint1": {"low": 0.1, "high": 1.0}}
@@ -206,11 +208,7 @@ def joint_sweep(n: int) -> None:
         t0 = time.perf_counter()
         run_study(study, f"{tmp}/joints")
         t_joints = time.perf_counter() - t0
-    sample = expand(prepare_study(study).study)[:50]
-    t0 = time.perf_counter()
-    for c in sample:
-        evaluate_case(apply_overrides(PANDA, c.overrides))
-    per_case = (time.perf_counter() - t0) / len(sample)
+    per_case = _per_case(study, 50)
     r = n / t_joints
     print(f"joint random design, Panda (URDF), {n:,} cases (every case its own "
           "configuration and rate), 1 core:")

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from roverimpact._io import read_toml
 from roverimpact.exceptions import ConfigError
 from roverimpact.studies import ScenarioEvaluator, evaluate_case
 from roverimpact.studies.config import apply_overrides
@@ -26,15 +27,9 @@ EX = Path(__file__).resolve().parents[1] / "examples"
 COLUMNS = ("T_c_minus", "m_eff", "v_n", "F_pred", "m_total", "m_eff_free", "T_n_total",
            "T_c_obstacle")
 
-PANDA = {
-    "model": {"file": "erd:panda"},
-    "configuration": {"joints": {"panda_joint2": -0.4, "panda_joint4": -2.0,
-                                 "panda_joint6": 1.6, "panda_joint7": 0.7}},
-    "velocity": {"joints": {"panda_joint1": 0.5, "panda_joint2": 0.8}},
-    "obstacle": {"frame": "panda_hand_tcp", "point": [0.0, 0.0, 0.0],
-                 "normal": [0.0, 0.0, 1.0]},
-    "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8},
-}
+#: examples/panda_tool_impact.toml (the Panda's TCP striking a surface) with a contact law
+PANDA = {**read_toml(EX / "panda_tool_impact.toml"),
+         "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8}}
 
 ROCKER = {
     "model": {"name": "rocker_bogie", "preset": "prototype"},

@@ -347,6 +347,22 @@ class ScenarioEvaluator:
             for engine in engines:
                 check_engine(engine, setup.model, cfg, terrain=sc.terrain is not None)
 
+    def _one_by_one(self, base, overrides, indices, models, errors, m_total, own) -> None:
+        """The cases ``indices`` each with its own setup (on the models built in this
+        call, ``models``), into ``own`` and ``m_total``: a case that cannot be posed gets
+        its own error, recorded in ``errors`` (or raised if that is None)."""
+        for i in indices:
+            try:
+                setup = self._setup(scenario_from_dict(apply_overrides(base, overrides[i])),
+                                    models)
+            except InputError as exc:
+                if errors is None:
+                    raise
+                errors[i] = f"{type(exc).__name__}: {exc}"
+                continue
+            m_total[i] = _total_mass(setup.model)
+            own.add(i, setup)
+
     @staticmethod
     def _state_block(first: Scenario, part: Sequence[_State], models: dict[str, Any]):
         """:func:`~roverimpact.scenario.block.state_block` of the cases ``part`` of
@@ -435,15 +451,7 @@ class ScenarioEvaluator:
                     # (no scenario of its own, unless they need the full validation). Cases
                     # that set joint values or rates: with the other cases of their model
                     # in a state block (one model), likewise
-                    if _sets_joints(ov):
-                        skey = _state_group(ov)
-                        first = states.get(skey)
-                        if first is not None:
-                            state = _state(idx[0], first, ov)
-                            if state is not None:
-                                state_members[skey].append(state)
-                                continue
-                    else:
+                    if not _sets_joints(ov):
                         fkey = _family_key(ov)
                         bkey, first = family.get(fkey, (None, None))
                         if bkey is not None:
@@ -451,13 +459,13 @@ class ScenarioEvaluator:
                             if member is not None:
                                 blocks[bkey].append(member)
                                 continue
-                        skey = _state_group(ov)
-                        first = states.get(skey)
-                        if first is not None:
-                            state = _state(idx[0], first, ov)
-                            if state is not None:
-                                state_members[skey].append(state)
-                                continue
+                    skey = _state_group(ov)
+                    first = states.get(skey)
+                    if first is not None:
+                        state = _state(idx[0], first, ov)
+                        if state is not None:
+                            state_members[skey].append(state)
+                            continue
                 sc = scenario_from_dict(apply_overrides(base, ov))
                 if skey is not None and sc.band is None:
                     if fkey is not None:
@@ -516,17 +524,8 @@ class ScenarioEvaluator:
                     own.add_block(idx, blk, pulling)
                     part = []
                 # case by case: the error of the case's own build
-                for m in sorted(part + refused, key=lambda m: m.index):
-                    try:
-                        setup = self._setup(scenario_from_dict(
-                            apply_overrides(base, overrides[m.index])), models)
-                    except InputError as exc:
-                        if errors is None:
-                            raise
-                        errors[m.index] = f"{type(exc).__name__}: {exc}"
-                        continue
-                    m_total[m.index] = _total_mass(setup.model)
-                    own.add(m.index, setup)
+                self._one_by_one(base, overrides, sorted(m.index for m in part + refused),
+                                 models, errors, m_total, own)
         for skey, part_all in state_members.items():
             first = states[skey]
             pulling = pulling_applies(first.constraints, first.contacts)
@@ -539,17 +538,8 @@ class ScenarioEvaluator:
                     own.add_block(idx, blk, pulling)
                     continue
                 # case by case: the error of the case's own build
-                for m in part:
-                    try:
-                        setup = self._setup(scenario_from_dict(
-                            apply_overrides(base, overrides[m.index])), models)
-                    except InputError as exc:
-                        if errors is None:
-                            raise
-                        errors[m.index] = f"{type(exc).__name__}: {exc}"
-                        continue
-                    m_total[m.index] = _total_mass(setup.model)
-                    own.add(m.index, setup)
+                self._one_by_one(base, overrides, [m.index for m in part], models, errors,
+                                 m_total, own)
         own.flush()
         missing = [i for i, e in enumerate(errors) if e] if errors is not None else []
         # the predicted peak force: one vectorized call per contact law over all the cases
@@ -734,8 +724,8 @@ def _member(index: int, first: Scenario, ov: Mapping[str, Any]) -> _Member | Non
     ``obstacle.beta_deg`` only, so the rest of ``first`` (validated) is the case's. The
     values as the schema makes them (a parameter's int stays an int, ``u`` and
     ``beta_deg`` floats; ``tests/test_study_scale.py`` checks the results against a
-    validated scenario per case). None where the case needs its own validation: a
-    ``beta_deg`` outside [0, 90] degrees, which it rejects."""
+    validated scenario per case). None where the case needs its own validation: a speed
+    or angle it would refuse (:func:`_speed_and_angle`)."""
     params = first.model.params
     changed = False
     for k, v in ov.items():
@@ -743,8 +733,21 @@ def _member(index: int, first: Scenario, ov: Mapping[str, Any]) -> _Member | Non
             if not changed:
                 params, changed = dict(params), True
             params[k[_PARAMS:]] = int(v) if isinstance(v, int) else float(v)
+    ub = _speed_and_angle(first, ov)
+    return None if ub is None else _Member(index, params, *ub)
+
+
+def _speed_and_angle(first: Scenario, ov: Mapping[str, Any]) -> tuple[float, float] | None:
+    """``(velocity.u, obstacle.beta_deg)`` of the case ``ov`` of ``first``'s block: its
+    own numbers or ``first``'s; None where the case needs its own validation (a speed that
+    is not finite, an angle outside [0, 90] degrees or beside an obstacle normal)."""
     u = ov.get("velocity.u")
-    u = float(u) if is_number(u) else first.velocity.u
+    if is_number(u):
+        if not math.isfinite(u):
+            return None
+        u = float(u)
+    else:
+        u = first.velocity.u
     beta = ov.get(_BETA)
     if is_number(beta):
         if not 0.0 <= beta <= 90.0 or first.obstacle.normal is not None:
@@ -752,7 +755,7 @@ def _member(index: int, first: Scenario, ov: Mapping[str, Any]) -> _Member | Non
         beta = float(beta)
     else:
         beta = first.obstacle.beta_deg
-    return _Member(index, params, u, beta)
+    return u, beta
 
 
 _PARAMS = len("model.params.")
@@ -804,7 +807,8 @@ def _state(index: int, first: Scenario, ov: Mapping[str, Any]) -> _State | None:
     """The numbers of the case ``ov`` of ``first``'s :func:`_state_group`: its joint
     values and rates that ``ov`` sets (by joint name), its speed and angle; the rest of
     ``first`` (validated) is the case's. None where the case needs its own validation: a
-    value that is not finite, a ``beta_deg`` outside [0, 90] degrees."""
+    joint value or rate that is not finite, a speed or angle it would refuse
+    (:func:`_speed_and_angle`)."""
     joints, rates = {}, {}
     for k, v in ov.items():
         if is_number(v) and k.startswith(STATE_PREFIXES):
@@ -814,21 +818,8 @@ def _state(index: int, first: Scenario, ov: Mapping[str, Any]) -> _State | None:
                 joints[k[len(_CONF):]] = float(v)
             else:
                 rates[k[len(_RATE):]] = float(v)
-    u = ov.get("velocity.u")
-    if is_number(u):
-        if not math.isfinite(u):
-            return None
-        u = float(u)
-    else:
-        u = first.velocity.u
-    beta = ov.get(_BETA)
-    if is_number(beta):
-        if not 0.0 <= beta <= 90.0 or first.obstacle.normal is not None:
-            return None
-        beta = float(beta)
-    else:
-        beta = first.obstacle.beta_deg
-    return _State(index, joints, rates, u, beta)
+    ub = _speed_and_angle(first, ov)
+    return None if ub is None else _State(index, joints, rates, *ub)
 
 
 def _columns(rows: Sequence[Mapping[str, Any]], missing: Sequence[int] = ()
