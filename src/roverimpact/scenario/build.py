@@ -518,7 +518,10 @@ def check_states(mbm, scenario: Scenario, Q, V, A, labels, data) -> None:
         positions = not scenario.contacts.loops
         bad = None
         if getattr(loop, "constant_jacobian", False):
-            phi, J = loop(Q)
+            try:  # the built-in closures take a batch; another is checked state by state
+                phi, J = loop(Q)
+            except (TypeError, ValueError, IndexError):
+                phi, J = None, np.zeros((0, 0))
             if np.shape(phi) == (len(Q), np.shape(J)[0]):  # a closure that takes batches
                 rate = V @ J.T
                 limit = 1e-6 * np.linalg.norm(J, axis=1) * np.linalg.norm(V, axis=1)[:, None]
@@ -675,9 +678,9 @@ def configuration(mbm, spec: ConfigurationSpec, q_nominal=None, *, joints=None
         if q.shape != (model.nq,):
             q = pin.neutral(model)
     joints = spec.joints if joints is None else joints
-    k = _members(joints)
-    if k is not None and q.ndim == 1:
-        q = np.array(np.broadcast_to(q, (k, model.nq)))
+    members = _members(joints)
+    if members is not None and q.ndim == 1:
+        q = np.array(np.broadcast_to(q, (members, model.nq)))
     kind, iq, _ = base_slices(mbm)
     b = spec.base
     if kind == "planar":
@@ -829,9 +832,9 @@ def velocity(mbm, q, spec: VelocitySpec, *, u=None, wheel_radius=None, joints=No
     model = mbm.model
     joints = spec.joints if joints is None else joints
     u = np.asarray(spec.u if u is None else u, dtype=float)
-    k = _members(joints)
-    if k is not None and u.ndim == 0:
-        u = np.full(k, float(u))
+    members = _members(joints)
+    if members is not None and u.ndim == 0:
+        u = np.full(members, float(u))
     v = np.zeros((*u.shape, model.nv))
     kind, iq, iv = base_slices(mbm)
     heading = base_heading(mbm, q)
