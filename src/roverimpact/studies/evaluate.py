@@ -334,13 +334,19 @@ class ScenarioEvaluator:
         except InputError:  # (a base the checks refuse: they say why)
             return False
 
-    def check(self, scenario: Mapping[str, Any], *, simulate=False) -> None:
+    def check(self, scenario: Mapping[str, Any], *, simulate=False,
+              models: dict[str, Any] | None = None) -> None:
         """Deep check (builds the model): unknown model parameters, bad geometry, law,
         and with ``simulate`` a scenario the simulator cannot run, or a model an engine
-        cannot take (:func:`roverimpact.simulate.engines.check_engine`)."""
+        cannot take (:func:`roverimpact.simulate.engines.check_engine`).
+
+        ``models``: a dict that the checks of one study share (:func:`prepare_study`
+        passes one): a model built by an earlier check with the same
+        :func:`~roverimpact.scenario.build.model_key` is reused, so that the checks of a
+        study of joint values, speeds or angles of a robot file load it once."""
         engines = engines_of(simulate)
         sc = scenario_from_dict(dict(scenario))
-        setup = ImpactSetup.from_scenario(sc)
+        setup = ImpactSetup.from_scenario(sc) if models is None else self._setup(sc, models)
         _law_of(sc)
         if engines:
             cfg = SimulationConfig.from_scenario(sc)

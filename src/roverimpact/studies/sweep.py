@@ -33,7 +33,7 @@ from .config import (
     study_from_dict,
     validate_scenarios,
 )
-from .evaluate import get_evaluator
+from .evaluate import ScenarioEvaluator, get_evaluator
 from .executors import (
     ChunkFile,
     LazyCluster,
@@ -251,7 +251,9 @@ def prepare_study(study, *, evaluator=None, chunk_size: int | None = None) -> Pr
     ev = get_evaluator(evaluator)
     check = getattr(ev, "check", None)
     if check is not None:
-        check = functools.partial(check, simulate=study.simulate)
+        # the built-in evaluator's checks share the models they build (one per model_key)
+        shared = {"models": {}} if isinstance(ev, ScenarioEvaluator) else {}
+        check = functools.partial(check, simulate=study.simulate, **shared)
     base = validate_scenarios(study, ev.validate, check)
     cases = cases_of(study)
     cheap = getattr(ev, "cheap", None)
