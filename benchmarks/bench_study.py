@@ -23,8 +23,9 @@ the model (COM height, chassis mass, speed, angle), through ``run_study`` on one
 against an angle grid (one model, 20 000 angles) and one ``evaluate_case`` per case, in
 the same run; then the same for the 2-D rover (rocker suspension: COM height h, wheel and
 chassis masses, speed, angle), the papers' own study variable. A study's fixed costs (its
-checks, which build a model for the smallest and largest value of each parameter; the
-results table) weigh on a small N: 2 000 and 20 000 show both.
+checks, which build a model for the smallest and largest value of each model parameter,
+the speed's and angle's sharing the base's; the results table) weigh on a small N: 2 000
+and 20 000 show both.
 
 ``--joint-sweep N ...`` (issue #19, sweeps off the grid, for a robot file): for each N, a
 seeded random design of N cases of the Panda arm (the URDF of example-robot-data): two
