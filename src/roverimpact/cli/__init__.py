@@ -7,6 +7,7 @@ becomes one line on stderr and exit code 2, never a traceback.
 
 from __future__ import annotations
 
+import _thread
 import atexit
 import contextlib
 import functools
@@ -14,6 +15,7 @@ import os
 import signal
 import sys
 import threading
+import time
 
 import typer
 from rich.text import Text
@@ -75,6 +77,11 @@ def _print_interrupted(word: str, exc: BaseException | None) -> None:
                       highlight=False)
 
 
+#: Delay [s] before a KeyboardInterrupt that Python could not raise is delivered again
+#: (:func:`_signals_noted`): long enough for the finalizer and the hook to have returned.
+REDELIVER_S = 0.01
+
+
 @contextlib.contextmanager
 def _signals_noted(seen: list):
     """Note every Ctrl-C (SIGINT) and SIGTERM in ``seen``, and turn both into
@@ -90,7 +97,9 @@ def _signals_noted(seen: list):
     A Ctrl-C that arrives while numba's compiler is in a C callback is noted too: Python
     reports that KeyboardInterrupt as "Exception ignored" and numba then fails with "no
     compiled object yet" (a RuntimeError traceback at 10-16 s of a first run). Such a
-    failure after a Ctrl-C is the interruption (exit 130)."""
+    failure after a Ctrl-C is the interruption (exit 130). A KeyboardInterrupt that Python
+    cannot raise where it lands (that C callback, a finalizer) is delivered again
+    (``_thread.interrupt_main``), so that it stops the command at its next Python line."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -105,9 +114,28 @@ def _signals_noted(seen: list):
         seen.append(signal.Signals(signum).name)
         raise KeyboardInterrupt
 
+    lock = threading.Lock()
+    state = {"live": True, "fired": False}
+    timers: list[threading.Timer] = []
+
+    def again():
+        with lock:
+            if state["live"]:
+                state["fired"] = True
+                _thread.interrupt_main()
+
     def unraisable(u):
         if isinstance(u.exc_value, KeyboardInterrupt):
             seen.append("SIGINT")  # reported as the command's interruption below
+            # raised where it cannot propagate (a finalizer: Dask's Future.__del__ as a
+            # study drops a finished chunk's future; a C callback of numba's compiler), it
+            # is delivered again, a moment later (here, in the hook, it would be lost too),
+            # where the main thread then runs Python code: the command went on to its end
+            # and exited 0 (a study given SIGINT after its first chunk)
+            timer = threading.Timer(REDELIVER_S, again)
+            timer.daemon = True
+            timers.append(timer)
+            timer.start()
         else:
             hook(u)
 
@@ -122,6 +150,16 @@ def _signals_noted(seen: list):
     try:
         yield
     finally:
+        try:  # nothing delivered again once the command has ended; one under way is taken
+            with lock:
+                state["live"] = False
+            for timer in timers:
+                timer.cancel()
+            if state["fired"]:
+                for _ in range(3):
+                    time.sleep(0.001)
+        except KeyboardInterrupt:
+            pass
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         sys.unraisablehook = hook
@@ -133,6 +171,9 @@ def main(argv: list[str] | None = None) -> int:
     with _signals_noted(_SEEN):
         try:
             code = _main(argv)
+        except KeyboardInterrupt:  # delivered again (_signals_noted) where _main had ended
+            _print_interrupted("interrupted", None)
+            return _stopped()[1]
         except Exception:
             if _SEEN:  # numba's compiler failing after a Ctrl-C it did not pass on
                 _print_interrupted("interrupted", None)

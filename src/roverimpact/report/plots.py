@@ -200,8 +200,9 @@ def plot_study(table: pd.DataFrame, x: str, *, title: str = "", subtitle: str = 
 #: A study over two numeric parameters with at least this many values each, whose cases
 #: fill at least half of their grid, is also drawn as a map (:func:`plot_study_map`).
 MAP_MIN_VALUES = 5
-#: ... of at most this many cells (a finer grid is drawn as the summary figure only).
-MAP_MAX_CELLS = 1_000_000
+#: ... of at most this many cells (a finer grid is drawn as the summary figure only: it
+#: has more cells than a panel of the map has pixels, and takes seconds to draw).
+MAP_MAX_CELLS = 250_000
 
 
 def grid_map(table: pd.DataFrame, x: str, y: str, col: str
@@ -258,7 +259,9 @@ def plot_study_map(table: pd.DataFrame, x: str, y: str, *, title: str = "",
     axes = fig.subplots(1, len(panels), squeeze=False)[0]
     for ax, (col, (xs, ys, Z)), cmap in zip(axes, panels, ("viridis", "magma"),
                                             strict=False):
-        mesh = ax.pcolormesh(xs, ys, np.ma.masked_invalid(Z), shading="nearest", cmap=cmap)
+        # rasterized: a vector quad per cell made the SVG of a fine grid tens of MB
+        mesh = ax.pcolormesh(xs, ys, np.ma.masked_invalid(Z), shading="nearest", cmap=cmap,
+                             rasterized=True)
         fig.colorbar(mesh, ax=ax, label=label(col))
         j, i = np.unravel_index(int(np.nanargmax(Z)), Z.shape)
         ax.plot(xs[i], ys[j], "*", ms=13, color="white", mec="k", mew=0.8)
