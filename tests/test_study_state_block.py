@@ -212,3 +212,44 @@ def test_the_example_joint_map_runs_as_one_block_per_chunk(tmp_path, monkeypatch
         ov = {k: float(table[k].iloc[i]) for k in study.grid}
         ref = evaluate_case(apply_overrides(study.base, ov))
         assert table["T_c_minus"].iloc[i] == pytest.approx(ref["T_c_minus"], rel=1e-12)
+
+
+def test_the_checks_of_k_states_are_those_of_the_first_that_fails():
+    """check_loop_closed, the loop-rate check and the zero-contact-row check take k states
+    at once (a state block's screen): they raise what the first failing state raises on
+    its own, and nothing where every state passes."""
+    from roverimpact.models import rocker_bogie
+    from roverimpact.models.joints import set_joint_rate, set_joint_value
+    from roverimpact.scenario.build import (
+        _check_contact_rows,
+        _check_loop_rates,
+        check_loop_closed,
+    )
+
+    mbm = rocker_bogie()
+    q0 = np.array(mbm.params["q_nominal"], dtype=float)
+    Q = np.array([set_joint_value(mbm, q0, "rocker_left", a) for a in (0.0, 0.1, 0.0, 0.2)])
+    Q[[0, 2]] = [set_joint_value(mbm, q, "rocker_right", 0.0) for q in Q[[0, 2]]]
+    Q[1] = set_joint_value(mbm, Q[1], "rocker_right", -0.1)  # closed; 3 is open
+    phi, J = mbm.loop_closure(Q)
+    with pytest.raises(ConfigError) as batch:
+        check_loop_closed(mbm, phi, J)
+    with pytest.raises(ConfigError) as own:
+        check_loop_closed(mbm, *mbm.loop_closure(Q[3]))
+    assert str(batch.value) == str(own.value)
+    check_loop_closed(mbm, phi[:3], J)  # the first three are closed
+    V = np.zeros((3, mbm.model.nv))
+    V[2] = set_joint_rate(mbm, V[2], "rocker_left", 0.5)  # pulls the loop apart
+    with pytest.raises(ConfigError) as batch:
+        _check_loop_rates(mbm, J, V)
+    with pytest.raises(ConfigError) as own:
+        _check_loop_rates(mbm, J, V[2])
+    assert str(batch.value) == str(own.value)
+    _check_loop_rates(mbm, J, V[:2])
+    labels = ["ground:a:normal", "obstacle:b:normal", "loop:c"]
+    A = np.ones((3, 3, 4))
+    A[1, 1] = 0.0
+    A[2, 2] = 0.0  # not a contact row: never refused
+    with pytest.raises(ConfigError, match=r"\['obstacle:b:normal'\] are zero"):
+        _check_contact_rows(A, labels)
+    _check_contact_rows(A[[0, 2]], labels)

@@ -428,12 +428,16 @@ def _check_contact_rows(A, labels) -> None:
     """One ConfigError naming the contacts whose normal row is zero: the point cannot move
     along the normal at all (a body fixed to the world, a normal out of a planar model's
     plane), so there is no impact to analyse there (the partition said "unilateral row 1
-    is all zeros" without naming it)."""
+    is all zeros" without naming it). ``A`` (m, n), or (k, m, n) for k states: those of
+    the first state that has such rows."""
     norms = np.linalg.norm(A, axis=-1)
-    scale = max(float(norms.max(initial=0.0)), 1e-300)
-    dead = [lab for lab, nrm in zip(labels, norms, strict=True)
-            if lab.endswith(":normal") and not nrm > 1e-12 * scale]
-    if dead:
+    norms = norms.reshape(-1, norms.shape[-1]) if norms.ndim > 1 else norms[None]
+    scale = np.maximum(norms.max(axis=-1, initial=0.0), 1e-300)
+    normal = np.array([lab.endswith(":normal") for lab in labels], dtype=bool)
+    zero = normal & ~(norms > 1e-12 * scale[:, None])
+    states = np.flatnonzero(zero.any(axis=-1))
+    if states.size:
+        dead = [lab for lab, z in zip(labels, zero[states[0]], strict=True) if z]
         raise ConfigError(
             f"the contact rows {dead} are zero: the point cannot move along its normal at "
             "all (a body fixed to the world, or a normal out of the plane of a planar "
@@ -502,35 +506,29 @@ def check_states(mbm, scenario: Scenario, Q, V, A, labels, data) -> None:
     state, for k states at once (a block of scenarios that differ in joint values, rates,
     speed and angle: :func:`~roverimpact.scenario.block.state_block`): ``Q`` (k, nq),
     ``V`` (k, nv) and candidate rows ``A`` (k, m, nv) (``labels``). A contact row that
-    is zero, a built-in loop opened or driven apart raise the error of the first such
-    state; ground wheels off the ground are a
-    :class:`~roverimpact.exceptions.GroundGapWarning` per state. ``data``: a Data of the
-    model. The checks are screened as arrays, and the first state that fails one is
-    checked on its own, which raises its error."""
-    norms = np.linalg.norm(A, axis=-1)  # (k, m)
-    scale = np.maximum(norms.max(axis=-1, initial=0.0), 1e-300)
-    normal = np.array([lab.endswith(":normal") for lab in labels], dtype=bool)
-    dead = np.flatnonzero((normal & ~(norms > 1e-12 * scale[:, None])).any(axis=-1))
-    if dead.size:
-        _check_contact_rows(A[dead[0]], labels)
+    is zero, a built-in loop opened or driven apart raise the error of the first state
+    that has it (the same checks as one state's, over the arrays); ground wheels off the
+    ground are a :class:`~roverimpact.exceptions.GroundGapWarning` per state. ``data``: a
+    Data of the model."""
+    _check_contact_rows(A, labels)
     loop = mbm.loop_closure
     if scenario.contacts.loop_closure and loop is not None:
         positions = not scenario.contacts.loops
-        bad = None
+        phi, J = None, None
         if getattr(loop, "constant_jacobian", False):
             try:  # the built-in closures take a batch; another is checked state by state
                 phi, J = loop(Q)
             except (TypeError, ValueError, IndexError):
-                phi, J = None, np.zeros((0, 0))
-            if np.shape(phi) == (len(Q), np.shape(J)[0]):  # a closure that takes batches
-                rate = V @ J.T
-                limit = 1e-6 * np.linalg.norm(J, axis=1) * np.linalg.norm(V, axis=1)[:, None]
-                wrong = (np.abs(rate) > limit + 1e-12).any(axis=1)
-                if positions:
-                    wrong |= (np.abs(phi) > 1e-9).any(axis=1)
-                bad = np.flatnonzero(wrong)
-        for i in range(len(Q)) if bad is None else bad[:1]:
-            _check_loops(mbm, Q[i], V[i], positions=positions)
+                phi = None
+            if phi is not None and np.shape(phi) != (len(Q), np.shape(J)[0]):
+                phi = None
+        if phi is None:
+            for q, v in zip(Q, V, strict=True):
+                _check_loops(mbm, q, v, positions=positions)
+        else:
+            if positions:
+                check_loop_closed(mbm, phi, J)
+            _check_loop_rates(mbm, J, V)
     if ground_wheels(mbm, scenario.obstacle, scenario.contacts):
         for q in Q:
             _warn_ground_gaps(mbm, q, scenario, data)
@@ -549,10 +547,15 @@ def check_loop_closed(mbm, phi, J, atol: float = 1e-9) -> None:
     """Refuse a configuration whose joint values open a built-in closed loop (the
     rocker-bogie's differential: one rocker turned, the other not), named by loop row;
     the loop-closure rows would otherwise hold a mechanism that cannot be assembled.
-    ``phi, J``: the loop closure's residual and rows at that configuration."""
-    bad = np.flatnonzero(np.abs(phi) > atol)
-    if bad.size:
-        i = int(bad[0])
+    ``phi, J``: the loop closure's residual and rows at that configuration; ``phi`` (k, r)
+    for k configurations of constant rows ``J`` (r, nv): the first that opens a loop."""
+    phi = np.asarray(phi, dtype=float)
+    phi = phi.reshape(-1, phi.shape[-1]) if phi.ndim > 1 else phi[None]
+    bad = np.abs(phi) > atol
+    states = np.flatnonzero(bad.any(axis=-1))
+    if states.size:
+        phi = phi[states[0]]
+        i = int(np.flatnonzero(bad[states[0]])[0])
         name = mbm.loop_names[i]
         hint = ("a mimic joint's value is its leader's times the multiplier, plus the offset"
                 if name.startswith("mimic:") else
@@ -569,12 +572,16 @@ def check_loop_closed(mbm, phi, J, atol: float = 1e-9) -> None:
 def _check_loop_rates(mbm, J, v, rtol: float = 1e-6) -> None:
     """Refuse joint rates that pull a closed loop apart (``J_loop v`` not 0, ``J`` the
     loop-closure rows): the state of a mechanism other than the one declared. Named by
-    loop row."""
-    rate = J @ v
-    scale = np.linalg.norm(J, axis=1) * np.linalg.norm(v)
-    bad = np.flatnonzero(np.abs(rate) > rtol * scale + 1e-12)
-    if bad.size:
-        i = int(bad[0])
+    loop row. ``v`` (nv,), or (k, nv) for k states: the first that does."""
+    v = np.asarray(v, dtype=float)
+    v = v.reshape(-1, v.shape[-1]) if v.ndim > 1 else v[None]
+    rates = v @ J.T
+    scale = np.linalg.norm(J, axis=1) * np.linalg.norm(v, axis=1)[:, None]
+    bad = np.abs(rates) > rtol * scale + 1e-12
+    states = np.flatnonzero(bad.any(axis=-1))
+    if states.size:
+        rate = rates[states[0]]
+        i = int(np.flatnonzero(bad[states[0]])[0])
         raise ConfigError(
             f"velocity: the joint rates open the loop {mbm.loop_names[i]!r} at "
             f"{abs(rate[i]):.3g} m/s; the rates of a closed loop must move it as one "
