@@ -30,6 +30,7 @@ from .build import (
     friction_of,
     normal_from_beta,
     scenario_model,
+    total_mass,
     velocity,
 )
 from .schema import Scenario
@@ -153,7 +154,6 @@ def member_block(first: Scenario, params: Sequence[Mapping], u: Sequence[float],
     the model refuses raises as :func:`impact_block` does.
     """
     from ..models.family import ModelFamily, family_numbers
-    from ..models.kinematics import ConstraintSet
 
     sc0 = first
     numbers = family_numbers(sc0.model.name, sc0.model.preset, params)
@@ -166,27 +166,45 @@ def member_block(first: Scenario, params: Sequence[Mapping], u: Sequence[float],
         if not (rot == rot[:1]).all():  # pragma: no cover - configuration() sets it
             raise InputError("impact_block: the members' base orientations differ")
     q0 = Q[0]
-    heading = base_heading(mbm, q0)
     u = np.array(u, dtype=float)
     v = velocity(mbm, q0, sc0.velocity, u=u, wheel_radius=numbers.wheel_radius)
-    obs = sc0.obstacle
-    if beta_deg is None:
-        if obs.normal is not None:
-            normal = np.asarray(obs.normal, float)
-            normals = np.broadcast_to(normal / np.linalg.norm(normal), (len(u), 3))
-        else:
-            normals = normal_from_beta(np.full(len(u), np.deg2rad(obs.beta_deg)), heading)
-    else:
-        normals = normal_from_beta(np.deg2rad(np.array(beta_deg, dtype=float)), heading)
-    cons = candidate_constraints(mbm, obs, sc0.contacts, normals[0])
+    normals = _normals(sc0.obstacle, base_heading(mbm, q0), len(u), beta_deg)
+    cs, M, A = _rows(mbm, sc0, family, Q, normals)
+    return _block(sc0, cs, M, A, v, Q, numbers.total_mass(), kind)
+
+
+def _normals(obs, heading, k: int, beta_deg) -> np.ndarray:
+    """The obstacle normals (k, 3) of a block's members: ``obs.normal`` for all, or the
+    face at ``beta_deg[i]`` (``obs.beta_deg`` for all if None) ahead of ``heading``."""
+    if obs.normal is not None:
+        normal = np.asarray(obs.normal, float)
+        return np.broadcast_to(normal / np.linalg.norm(normal), (k, 3))
+    beta = np.full(k, obs.beta_deg, dtype=float) if beta_deg is None else \
+        np.asarray(beta_deg, dtype=float)
+    return normal_from_beta(np.deg2rad(beta), heading)
+
+
+def _rows(mbm, sc0: Scenario, family, Q, normals):
+    """``(constraint set, M (k, nv, nv), A (k, m, nv))`` of a block's members: ``sc0``'s
+    candidate rows, the obstacle's with each member's normal, at ``Q[i]`` (of the
+    family's member ``i``, or of ``mbm`` itself for ``family`` None)."""
+    from ..models.kinematics import ConstraintSet
+
+    cons = candidate_constraints(mbm, sc0.obstacle, sc0.contacts, normals[0])
     cs = ConstraintSet(mbm, cons)
     M, A = cs.evaluate_members(family, Q, normals={len(cons) - 1: normals})
+    return cs, M, A
+
+
+def _block(sc0: Scenario, cs, M, A, v, Q, total_mass, kind: str) -> ImpactBlock:
+    """The :class:`ImpactBlock` of the rows ``M``, ``A`` of ``cs``: their active rows as
+    ``sc0`` chooses them (the obstacle row last)."""
     labels = tuple(cs.labels)
     obstacle = len(labels) - 1
     active = active_mask(sc0.constraints, labels, M, A, v, obstacle_row=obstacle,
                          **friction_of(sc0.contacts))
     return ImpactBlock(M=M, A=A, v=v, q=Q, active=active, labels=labels,
-                       obstacle_row=obstacle, total_mass=numbers.total_mass(),
+                       obstacle_row=obstacle, total_mass=total_mass,
                        vehicle=kind in ("floating", "planar"))
 
 
@@ -238,8 +256,6 @@ def state_block(first: Scenario, joints: Mapping[str, np.ndarray],
     ``first`` must have a :func:`state_key`, the numbers must be finite and ``beta_deg``
     in [0, 90].
     """
-    from ..models.kinematics import ConstraintSet
-
     if state_key(first) is None:
         raise InputError("state_block: the scenario has terrain, declared loops or a band")
     u = np.asarray(u, dtype=float).reshape(-1)
@@ -256,27 +272,10 @@ def state_block(first: Scenario, joints: Mapping[str, np.ndarray],
     Q = configuration(mbm, sc0.configuration, joints=values)
     if Q.ndim == 1:
         Q = np.array(np.broadcast_to(Q, (k, Q.shape[0])))
-    kind = base_slices(mbm)[0]
     q0 = Q[0]
-    heading = base_heading(mbm, q0)  # the joints do not turn the base: one heading
     V = velocity(mbm, q0, sc0.velocity, u=u, joints=speeds)
-    obs = sc0.obstacle
-    if obs.normal is not None:
-        normal = np.asarray(obs.normal, float)
-        normals = np.array(np.broadcast_to(normal / np.linalg.norm(normal), (k, 3)))
-    else:
-        beta = np.full(k, obs.beta_deg, dtype=float) if beta_deg is None else \
-            np.asarray(beta_deg, dtype=float)
-        normals = normal_from_beta(np.deg2rad(beta), heading)
-    cons = candidate_constraints(mbm, obs, sc0.contacts, normals[0])
-    cs = ConstraintSet(mbm, cons)
-    obstacle = len(cons) - 1
-    M, A = cs.evaluate_members(None, Q, normals={obstacle: normals})
-    labels = tuple(cs.labels)
-    check_states(mbm, sc0, Q, V, A, labels, cs.data)
-    active = active_mask(sc0.constraints, labels, M, A, V, obstacle_row=len(labels) - 1,
-                         **friction_of(sc0.contacts))
-    total = float(sum(Y.mass for Y in mbm.model.inertias))
-    return ImpactBlock(M=M, A=A, v=V, q=Q, active=active, labels=labels,
-                       obstacle_row=len(labels) - 1, total_mass=np.full(k, total),
-                       vehicle=kind in ("floating", "planar"))
+    # the joints do not turn the base: one heading
+    normals = _normals(sc0.obstacle, base_heading(mbm, q0), k, beta_deg)
+    cs, M, A = _rows(mbm, sc0, None, Q, normals)
+    check_states(mbm, sc0, Q, V, A, tuple(cs.labels), cs.data)
+    return _block(sc0, cs, M, A, V, Q, np.full(k, total_mass(mbm)), base_slices(mbm)[0])

@@ -1208,6 +1208,12 @@ def warn_if_jammed(mbm, m_eff, labels, obstacle_row: int) -> None:
         warn_jammed(float(np.max(m_eff)), total, labels, obstacle_row, stacklevel=4)
 
 
+def total_mass(mbm) -> float:
+    """Mass of the whole model [kg] (every body of the Pinocchio model): a study's
+    ``m_total``."""
+    return float(sum(Y.mass for Y in mbm.model.inertias))
+
+
 def jam_total_mass(mbm) -> float | None:
     """Total mass of a vehicle (floating or planar base) that :func:`warn_if_jammed`
     compares ``m_eff`` with; None for a fixed base (never warned)."""

@@ -72,6 +72,7 @@ from ..scenario.build import (
     model_key,
     pulling_applies,
     scenario_model,
+    total_mass,
     warn_if_pulling,
     warn_jammed,
 )
@@ -127,11 +128,6 @@ def _baselines(v_n, m_total, m_eff_free) -> dict[str, np.ndarray]:
     v = np.maximum(np.asarray(v_n, float), 0.0)
     return {"T_n_total": 0.5 * np.asarray(m_total, float) * v * v,
             "T_c_obstacle": 0.5 * np.asarray(m_eff_free, float) * v * v}
-
-
-def _total_mass(mbm) -> float:
-    """Mass of the whole model [kg] (every body of the Pinocchio model)."""
-    return float(sum(Y.mass for Y in mbm.model.inertias))
 
 
 def _law_of(sc: Scenario):
@@ -267,7 +263,7 @@ def evaluate_case(scenario: Mapping[str, Any], *, simulate=False) -> dict[str, A
     sc = scenario_from_dict(dict(scenario))
     setup = ImpactSetup.from_scenario(sc)
     en = setup.partition()
-    m_total = _total_mass(setup.model)
+    m_total = total_mass(setup.model)
     out: dict[str, Any] = {
         "T_c_minus": float(en.T_c_minus),
         "m_eff": float(en.m_eff),
@@ -366,7 +362,7 @@ class ScenarioEvaluator:
                     raise
                 errors[i] = f"{type(exc).__name__}: {exc}"
                 continue
-            m_total[i] = _total_mass(setup.model)
+            m_total[i] = total_mass(setup.model)
             own.add(i, setup)
 
     @staticmethod
@@ -489,7 +485,7 @@ class ScenarioEvaluator:
                         state_members.setdefault(skey, []).append(state)
                         continue
                 setup = self._setup(sc, models)
-                m_total[idx] = _total_mass(setup.model)
+                m_total[idx] = total_mass(setup.model)
                 if engines or sc.band is not None:
                     pending.append((idx, setup))
                 if len(idx) == 1:
