@@ -326,12 +326,11 @@ def test_model_changing_cases_match_a_fresh_build_per_case(monkeypatch):
     # the same model at other speeds and angles: groups of their own, one built model
     overrides += [shared | {"velocity.u": u, "obstacle.beta_deg": b}
                   for u, b in ((0.15, 20.0), (0.45, 70.0), (0.3, 33.0))]
-    from roverimpact.scenario import block, build
+    from roverimpact.scenario import build
 
-    built = []
-    real = build.scenario_model
-    for mod in (build, block):
-        monkeypatch.setattr(mod, "scenario_model", lambda *a: built.append(1) or real(*a))
+    built = []  # every model built goes through make_model
+    real = build.make_model
+    monkeypatch.setattr(build, "make_model", lambda *a, **k: built.append(1) or real(*a, **k))
     got = ScenarioEvaluator().evaluate(ROVER, overrides)
     monkeypatch.undo()
     assert len(built) == 2  # one model for the block, one for the beta sweep

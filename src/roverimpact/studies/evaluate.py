@@ -317,18 +317,17 @@ class ScenarioEvaluator:
         rest = ("contact_law.", "simulation.")
         if all(p == _BETA or p.startswith(rest) for p in params):
             return True
-        if all(p in STATE_NUMBERS or p.startswith((*STATE_PREFIXES, *rest)) for p in params):
-            try:
-                return state_key(scenario_from_dict(dict(base))) is not None
-            except InputError:  # (a base the checks refuse: they say why)
-                return False
-        if not all(p in _FAMILY_NUMBERS or p.startswith(("model.params.", *rest))
-                   for p in params):
+        states = all(p in STATE_NUMBERS or p.startswith((*STATE_PREFIXES, *rest))
+                     for p in params)
+        family = all(p in _FAMILY_NUMBERS or p.startswith(("model.params.", *rest))
+                     for p in params)
+        if not (states or family):
             return False
         try:
-            return block_key(scenario_from_dict(dict(base))) is not None
+            sc = scenario_from_dict(dict(base))
         except InputError:  # (a base the checks refuse: they say why)
             return False
+        return (state_key(sc) if states else block_key(sc)) is not None
 
     def check(self, scenario: Mapping[str, Any], *, simulate=False,
               models: dict[str, Any] | None = None) -> None:
@@ -372,12 +371,7 @@ class ScenarioEvaluator:
         case that cannot be posed: then each is computed on its own, which raises its own
         error)."""
         try:
-            key = model_key(first)
-            model = models.get(key)
-            if model is None:
-                model = scenario_model(first)
-                if len(models) < _MODELS:
-                    models[key] = model
+            model = _model_of(first, models)
             names = part[0].joints.keys()
             joints = {nm: np.array([m.joints[nm] for m in part]) for nm in names}
             rates = {nm: np.array([m.rates[nm] for m in part]) for nm in part[0].rates}
@@ -391,11 +385,7 @@ class ScenarioEvaluator:
     def _setup(sc: Scenario, models: dict[str, Any]) -> ImpactSetup:
         """The setup of one scenario, reusing a model built in this call (``models``, by
         :func:`~roverimpact.scenario.build.model_key`)."""
-        key = model_key(sc)
-        setup = ImpactSetup.from_scenario(sc, model=models.get(key))
-        if len(models) < _MODELS:
-            models.setdefault(key, setup.model)
-        return setup
+        return ImpactSetup.from_scenario(sc, model=_model_of(sc, models))
 
     def evaluate(self, base, overrides, *, simulate=False,
                  errors: list[str] | None = None) -> dict[str, np.ndarray]:
@@ -774,6 +764,20 @@ def _family_key(ov: Mapping[str, Any]) -> str:
 
 
 _FAMILY_NUMBERS = ("velocity.u", _BETA)
+
+
+def _model_of(sc: Scenario, models: dict[str, Any]):
+    """The model of ``sc`` (:func:`~roverimpact.scenario.build.scenario_model`): one built
+    earlier in this call or check (``models``, by
+    :func:`~roverimpact.scenario.build.model_key`), else built and kept there (at most
+    ``_MODELS`` of them)."""
+    key = model_key(sc)
+    model = models.get(key)
+    if model is None:
+        model = scenario_model(sc)
+        if len(models) < _MODELS:
+            models[key] = model
+    return model
 
 
 class _State(NamedTuple):
