@@ -556,18 +556,17 @@ def _sgn(v: float) -> str:
     return "n/a" if v is None or not math.isfinite(v) else f"{v:+.3f}"
 
 
+def img_tag(png: Path, alt: str) -> str:
+    """An ``<img>`` of a report holding the PNG file ``png`` itself (the study and the
+    traverse reports)."""
+    data = base64.b64encode(png.read_bytes()).decode("ascii")
+    return f"<img class='fig' alt='{html.escape(alt)}' src='data:image/png;base64,{data}'>"
+
+
 def _section_html(s: StudySection, anchor: str) -> str:
-    png = s.figures.get("png")
-    img = ""
-    if png and png.is_file():
-        data = base64.b64encode(png.read_bytes()).decode("ascii")
-        img = (f"<img class='fig' alt='{html.escape(s.name)}: T_c^- and peak force vs "
-               f"{html.escape(s.x)}' src='data:image/png;base64,{data}'>")
-    png = s.maps.get("png")
-    if png and png.is_file():
-        data = base64.b64encode(png.read_bytes()).decode("ascii")
-        img += (f"\n<img class='fig' alt='{html.escape(s.name)}: map of T_c^- over the "
-                f"grid' src='data:image/png;base64,{data}'>")
+    img = "\n".join(img_tag(png, f"{s.name}: {what}") for png, what in (
+        (s.figures.get("png"), f"T_c^- and peak force vs {s.x}"),
+        (s.maps.get("png"), "map of T_c^- over the grid")) if png and png.is_file())
     outputs = [c for c in ("T_c_minus", "m_eff", "v_n", "F_pred", "F_pred_refined", "F_lo",
                            "F_hi", "not_an_impact", "T_n_total", "T_c_obstacle",
                            "F_max", "contact_duration", WHOLE_WINDOW) if c in s.table]

@@ -14,7 +14,6 @@ Matplotlib's object-oriented API only (``matplotlib.figure.Figure``), as report/
 
 from __future__ import annotations
 
-import base64
 import html
 import json
 import math
@@ -25,7 +24,7 @@ import pandas as pd
 
 from .._io import atomic_write, check_writable
 from ..exceptions import ConfigError
-from .html import REPORT_CSS
+from .html import REPORT_CSS, img_tag
 from .plots import save_figure
 
 __all__ = ["load_traverse_results", "plot_map", "plot_speed", "risk_column", "statistics",
@@ -231,11 +230,6 @@ def plot_speed(poses: pd.DataFrame, segments: pd.DataFrame, wheels: pd.DataFrame
     return fig
 
 
-def _img(path: Path, alt: str) -> str:
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    return f"<img class='fig' alt='{html.escape(alt)}' src='data:image/png;base64,{data}'>"
-
-
 #: How an infinite speed limit (no impact limits the speed, and no ``drive.v_max``) is
 #: shown in the report's tables and the command's summary
 NO_LIMIT = "no limit"
@@ -432,11 +426,11 @@ def traverse_report(folder: str | Path, *, terrain=None, config=None,
     parts.append("<h2>Summary</h2>" + _table(summary(poses, wheels, config)))
     for name, m, s in figs:
         parts.append(f"<h2>{html.escape(name)}</h2>")
-        parts.append(_img(m["png"], f"{name}: map"))
+        parts.append(img_tag(m["png"], f"{name}: map"))
         parts.append("<p class='small'>Hillshaded terrain; the path coloured by the worst "
                      "wheel's risk at each station (log scale); circles: the strongest "
                      "impacts, numbered by rank (table below).</p>")
-        parts.append(_img(s["png"], f"{name}: speed limit"))
+        parts.append(img_tag(s["png"], f"{name}: speed limit"))
     parts.append("<h2>Strongest impacts</h2>" + _table(worst))
     seg_cols = [c for c in segments.columns if c != "setting_note" or
                 segments["setting_note"].astype(str).str.len().any()]
