@@ -22,10 +22,11 @@ for each N, a seeded random design of N cases of the 3-D rover where every case 
 the model (COM height, chassis mass, speed, angle), through ``run_study`` on one core,
 against an angle grid (one model, 20 000 angles) and one ``evaluate_case`` per case, in
 the same run; then the same for the 2-D rover (rocker suspension: COM height h, wheel and
-chassis masses, speed, angle), the papers' own study variable. A study's fixed costs (its
-checks, which build a model for the smallest and largest value of each model parameter,
-the speed's and angle's sharing the base's; the results table) weigh on a small N: 2 000
-and 20 000 show both.
+chassis masses, speed, angle), the papers' own study variable, and the rigid body of
+``examples/study_rigid_body.toml`` (every one of its parameters, speed, angle). A study's
+fixed costs (its checks, which build a model for the smallest and largest value of each
+model parameter, the speed's and angle's sharing the base's; the results table) weigh on
+a small N: 2 000 and 20 000 show both.
 
 ``--joint-sweep N ...`` (issue #19, sweeps off the grid, for a robot file): for each N, a
 seeded random design of N cases of the Panda arm (the URDF of example-robot-data): two
@@ -139,6 +140,13 @@ MODEL_SWEEPS = (
         "model.params.h": {"low": 0.25, "high": 0.6},
         "model.params.wheel_mass": {"low": 1.0, "high": 4.0},
         "model.params.chassis_mass": {"low": 12.0, "high": 30.0}}),
+    ("rigid body", {**read_toml(Path(__file__).resolve().parents[1] / "examples"
+                                / "study_rigid_body.toml")["base"],
+                    "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8}}, {
+        "model.params.mass": {"low": 5.0, "high": 50.0},
+        "model.params.inertia": {"low": 0.2, "high": 3.0},
+        "model.params.com_height": {"low": 0.1, "high": 0.5},
+        "model.params.lever": {"low": 0.1, "high": 0.5}}),
 )
 
 

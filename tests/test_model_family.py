@@ -155,8 +155,9 @@ def test_block_key():
         return block_key(scenario_from_dict(apply_overrides(ROVER, ov)))
 
     k = key(**{"model.params.chassis_mass": 12.0})
-    assert k is not None and has_family("rocker_bogie") and has_family("rover2d")
-    assert not has_family("rigid_body")
+    assert k is not None and all(has_family(n) for n in ("rocker_bogie", "rover2d",
+                                                          "rigid_body"))
+    assert not has_family(None)  # a robot file's model
     assert key(**{"model.params.chassis_mass": 15, "velocity.u": 0.1,
                   "obstacle.beta_deg": 20.0}) == k
     for ov in ({"model.params.com_x": 0.0}, {"obstacle.wheel": "right_front"},
@@ -168,8 +169,15 @@ def test_block_key():
     assert rover2d is not None and rover2d != k
     assert key(**{"model": {"name": "rover2d", "params": {"suspension": "rocker"}},
                   "obstacle.wheel": "front"}) != rover2d
-    assert key(**{"model": {"name": "rigid_body"}, "obstacle": {"frame": "contact",
-                                                                "beta_deg": 30.0}}) is None
+    rigid = key(**{"model": {"name": "rigid_body"}, "obstacle": {"frame": "contact",
+                                                                 "beta_deg": 30.0}})
+    assert rigid is not None and rigid not in (k, rover2d)
+    from pathlib import Path
+
+    from roverimpact.scenario import load_scenario
+
+    mjcf = Path(__file__).resolve().parents[1] / "examples" / "mjcf_rover_beta.toml"
+    assert block_key(load_scenario(mjcf)) is None
 
 
 SETUPS = [
@@ -237,10 +245,9 @@ def test_impact_block_refuses_scenarios_of_two_blocks():
 
     with pytest.raises(InputError):
         impact_block([a, b])
-    with pytest.raises(InputError):
-        impact_block([scenario_from_dict({**ROVER, "model": {"name": "rigid_body"},
-                                          "obstacle": {"frame": "contact",
-                                                       "beta_deg": 30.0}})])
+    with pytest.raises(InputError):  # a scenario with declared loops has no block
+        impact_block([scenario_from_dict(apply_overrides(ROVER, {"contacts.loops": [
+            {"kind": "distance", "a": "left_rocker", "b": "right_rocker"}]}))])
 
 
 @pytest.mark.filterwarnings("ignore::roverimpact.exceptions.PullingContactWarning")  # noslip
@@ -457,3 +464,86 @@ def test_each_family_of_one_call_has_its_own_pulling_check():
     with pytest.warns(PullingContactWarning, match=r"ground:right_front"):
         out = ScenarioEvaluator().evaluate(base, overrides)
     assert np.isfinite(out["T_c_minus"]).all()
+
+
+RIGID = {
+    "model": {"name": "rigid_body"},
+    "velocity": {"u": 0.5},
+    "obstacle": {"frame": "contact", "beta_deg": 90.0},
+    "contact_law": {"name": "hunt-crossley", "k": 1.0e7, "e": 0.8},
+}
+
+
+def _random_params_rigid(rng, k):
+    out = [{"mass": float(rng.uniform(2.0, 50.0)), "inertia": float(rng.uniform(0.1, 3.0)),
+            "com_height": float(rng.uniform(-0.2, 0.6)), "lever": float(rng.uniform(-0.5, 0.5))}
+           for _ in range(k)]
+    out[1] = {"com_height": 0.25}  # a member that sets one number only
+    out[2] = {}
+    return out
+
+
+def test_rigid_body_rewritten_model_gives_the_fresh_models_M_A_v():
+    """The rigid body's family: its mass, inertia and contact corner (a frame whose
+    placement is a parameter) written member by member into one model give the M, A, v,
+    nominal q and total mass of a model built for each member."""
+    from roverimpact.models import rigid_body
+
+    assert has_family("rigid_body")
+    rng = np.random.default_rng(21)
+    params = _random_params_rigid(rng, 9)
+    _assert_members_are_fresh_builds(rigid_body, family_numbers("rigid_body", None, params),
+                                     params, scenario_from_dict(RIGID), rng)
+
+
+@pytest.mark.parametrize("bad", [{"mass": -1.0}, {"inertia": float("nan")},
+                                 {"lever": float("inf")}, {"no_such": 1.0},
+                                 {"com_height": "low"}, {"mass": True}])
+def test_rigid_body_family_numbers_refuse_what_the_builder_refuses(bad):
+    from roverimpact.models import rigid_body
+
+    with pytest.raises(ModelError) as ref:
+        rigid_body(**bad)
+    with pytest.raises(ModelError) as got:
+        family_numbers("rigid_body", None, [{"mass": 12.0}, bad])
+    assert str(got.value) == str(ref.value)
+    with pytest.raises(ModelError, match="no presets"):
+        family_numbers("rigid_body", "heavy", [{}])
+
+
+def test_rigid_body_family_takes_the_numbers_the_builder_takes():
+    """numpy numbers, which the family's fast path does not read, are read from the
+    checked parameter sets."""
+    from roverimpact.models import rigid_body
+
+    params = [{"mass": np.int64(3), "lever": np.float32(0.25)}, {"com_height": 0.5},
+              *({"mass": float(m), "inertia": np.int64(2)} for m in range(4, 9))]
+    rng = np.random.default_rng(2)
+    _assert_members_are_fresh_builds(rigid_body, family_numbers("rigid_body", None, params),
+                                     params, scenario_from_dict(RIGID), rng)
+
+
+def test_rigid_body_design_matches_the_closed_form_and_evaluate_case():
+    """A random design of every rigid-body parameter, the speed and the angle (every case
+    another model, one block): T_c^- and m_eff are the textbook closed form of the body
+    hitting at its corner (roverimpact.models.rigid_body's docstring),
+    1/m_eff = 1/m + (h sin(beta) - l cos(beta))^2 / I, T_c^- = m_eff (u sin(beta))^2 / 2,
+    and equal one evaluate_case per case."""
+    rng = np.random.default_rng(5)
+    overrides = []
+    for _ in range(40):
+        p = _random_params_rigid(rng, 3)[0]
+        overrides.append({**{f"model.params.{k}": v for k, v in p.items()},
+                          "obstacle.beta_deg": float(rng.uniform(5.0, 90.0)),
+                          "velocity.u": float(rng.uniform(0.1, 1.0))})
+    got = ScenarioEvaluator().evaluate(RIGID, overrides)
+    for i, ov in enumerate(overrides):
+        m, inertia = ov["model.params.mass"], ov["model.params.inertia"]
+        h, lever = ov["model.params.com_height"], ov["model.params.lever"]
+        beta, u = np.deg2rad(ov["obstacle.beta_deg"]), ov["velocity.u"]
+        m_eff = 1.0 / (1.0 / m + (h * np.sin(beta) - lever * np.cos(beta)) ** 2 / inertia)
+        assert got["m_eff"][i] == pytest.approx(m_eff, rel=1e-12)
+        assert got["T_c_minus"][i] == pytest.approx(0.5 * m_eff * (u * np.sin(beta)) ** 2,
+                                                    rel=1e-12)
+        assert got["m_total"][i] == m
+    _assert_evaluator_is_evaluate_case(RIGID, overrides[:12])

@@ -435,8 +435,8 @@ def test_case_keys_group_cases_that_share_the_setup_and_the_law():
 
 def test_automatic_chunks_are_large_where_cases_are_cheap():
     """Indicator-only cases of tens of microseconds (an angle sweep of one model, a
-    built-in rover's family numbers) come in chunks of at least CHEAP_AUTO_CHUNK; cases
-    built one by one (a rover on a terrain, the rigid body, a function of one's own) in
+    built-in model's family numbers) come in chunks of at least CHEAP_AUTO_CHUNK; cases
+    built one by one (a rover on a terrain, a function of one's own) in
     chunks of at least MIN_AUTO_CHUNK, so that the progress bar moves; simulated cases in
     about 100 chunks; above 20 * CHEAP_AUTO_CHUNK cases, about 20 chunks."""
     from roverimpact.studies.sweep import CHEAP_AUTO_CHUNK, MIN_AUTO_CHUNK, prepare_study
@@ -455,7 +455,7 @@ def test_automatic_chunks_are_large_where_cases_are_cheap():
     assert chunk(rover, numbers) == chunk(BASE, angles) == CHEAP_AUTO_CHUNK
     assert chunk(on_terrain, numbers) == MIN_AUTO_CHUNK  # each case its own terrain pose
     assert chunk(BASE, {"model.params.mass": [10.0 + i for i in range(3000)]}) == \
-        MIN_AUTO_CHUNK  # the rigid body has no family
+        CHEAP_AUTO_CHUNK  # the rigid body's family numbers
     assert chunk(rover, {"contacts.ground": ["normal", "noslip"],
                          "obstacle.beta_deg": [10.0, 30.0]}) == MIN_AUTO_CHUNK
     assert prepare_study({"name": "f", "base": BASE, "grid": angles},

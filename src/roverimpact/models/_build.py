@@ -8,7 +8,7 @@ map (see :mod:`roverimpact.models.robot`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -201,6 +201,10 @@ class FamilyNumbers:
         Nominal configurations.
     wheel_radius : (k, nw) ndarray
         Radii of the model's wheels, in the order of ``MultibodyModel.wheels`` [m].
+    frames : dict of str to (k, 3) ndarray
+        Translations of the named frames in their joints' frames [m], for frames whose
+        placement is a parameter (the rigid body's contact corner); the others, and the
+        frames' rotations, stay as the model was built.
     """
 
     mass: np.ndarray
@@ -209,10 +213,13 @@ class FamilyNumbers:
     translation: np.ndarray
     q_nominal: np.ndarray
     wheel_radius: np.ndarray
+    frames: dict[str, np.ndarray] = field(default_factory=dict)
 
     @classmethod
-    def of_layout(cls, bodies, k: int, q_nominal, wheel_radius) -> FamilyNumbers:
-        """The numbers of a layout whose entries are numbers or (k,) arrays."""
+    def of_layout(cls, bodies, k: int, q_nominal, wheel_radius, frames=None
+                  ) -> FamilyNumbers:
+        """The numbers of a layout whose entries are numbers or (k,) arrays (``frames``:
+        ``{name: (x, y, z)}``, each a number or a (k,) array)."""
         def each(x, shape=()):
             return np.broadcast_to(np.asarray(x, dtype=float), (k, *shape))
 
@@ -227,8 +234,10 @@ class FamilyNumbers:
             if b.inertia is not None:
                 inertia[:, i] = each(b.inertia, (3, 3))
         translation = np.stack([vec(b.xyz) for b in bodies], axis=1)
+        radius = (np.stack([each(r) for r in wheel_radius], axis=1) if len(wheel_radius)
+                  else np.zeros((k, 0)))
         return cls(mass, lever, inertia, translation, np.asarray(q_nominal, dtype=float),
-                   np.stack([each(r) for r in wheel_radius], axis=1))
+                   radius, {name: vec(xyz) for name, xyz in (frames or {}).items()})
 
     @property
     def k(self) -> int:

@@ -1,10 +1,11 @@
 """Models of one family: the same joints, bodies, frames and wheels, other numbers.
 
-A study that changes a built-in rover's parameters from case to case (COM height, masses,
+A study that changes a built-in model's parameters from case to case (COM height, masses,
 lengths) changes numbers only, never the structure of the model. Instead of building a
 Pinocchio model per case, :func:`family_numbers` computes the numbers of a whole block of
 parameter sets at once (body masses, centres of mass, inertias, joint placements, nominal
-configurations, wheel radii: one array each, over the block) and :class:`ModelFamily`
+configurations, wheel radii, the placements of frames that are parameters such as the
+rigid body's contact corner: one array each, over the block) and :class:`ModelFamily`
 writes one member's numbers into one Pinocchio model of the family before its kinematics
 and dynamics are evaluated (the Pinocchio functions read the model's inertias and joint
 placements at each call). Tested against a freshly built model per member (M, A, v to
@@ -20,6 +21,7 @@ import pinocchio as pin
 
 from ._build import FamilyNumbers
 from .base import MultibodyModel
+from .rigid_body import rigid_body_numbers
 from .rocker_bogie import rocker_bogie_numbers
 from .rover2d import rover2d_numbers
 
@@ -28,19 +30,20 @@ __all__ = ["FamilyNumbers", "ModelFamily", "family_numbers", "has_family"]
 #: The builders whose numbers :func:`family_numbers` computes without building:
 #: ``(preset, [params, ...]) -> FamilyNumbers``.
 _NUMBERS: dict[str, Callable[[str | None, Sequence[Mapping]], FamilyNumbers]] = {
+    "rigid_body": rigid_body_numbers,
     "rocker_bogie": rocker_bogie_numbers,
     "rover2d": rover2d_numbers,
 }
 
 
 def has_family(name: str | None) -> bool:
-    """Whether the built-in rover ``name`` has :func:`family_numbers`."""
+    """Whether the built-in model ``name`` has :func:`family_numbers`."""
     return name in _NUMBERS
 
 
 def family_numbers(name: str, preset: str | None, params: Sequence[Mapping]
                    ) -> FamilyNumbers:
-    """The numbers of the built-in rovers ``name`` (``preset``) with parameters
+    """The numbers of the built-in models ``name`` (``preset``) with parameters
     ``params[i]``, each checked as the builder checks it.
 
     Parameter sets that change the model's structure have no place in one family; the
@@ -74,7 +77,8 @@ class ModelFamily:
     built with is written too (a block of a study's cases that keeps a parameter at
     another value than the family's first case had: that body was once left as built).
     The wheels and ``params`` of ``mbm`` stay those it was built with: the members' wheel
-    radii and nominal configurations are in :attr:`numbers`.
+    radii and nominal configurations are in :attr:`numbers`. Frames whose placements are
+    numbers of the family (:attr:`FamilyNumbers.frames`) keep their rotations.
     """
 
     def __init__(self, mbm: MultibodyModel, numbers: FamilyNumbers):
@@ -90,6 +94,15 @@ class ModelFamily:
         def varies(x):
             return {b for b in range(nb) if not (x[:, b] == x[:1, b]).all()}
 
+        frames = []
+        for name, t in n.frames.items():
+            if not model.existFrame(name) or t.shape != (n.k, 3):
+                raise ValueError("the numbers are not those of this model's family")
+            fid = model.getFrameId(name)
+            placement = model.frames[fid].placement
+            if not (t == placement.translation).all():
+                frames.append((fid, placement.rotation.copy(), t))
+        self._frames = frames
         inert = varies(n.mass) | varies(n.lever) | varies(n.inertia)
         self._inertias = sorted(inert | {b for b in range(nb)
                                          if b not in inert and not self._as_built(b)})
@@ -120,12 +133,15 @@ class ModelFamily:
         return self.numbers.k
 
     def write(self, i: int) -> None:
-        """Make the Pinocchio model that of member ``i`` (inertias, joint placements)."""
+        """Make the Pinocchio model that of member ``i`` (inertias, joint placements, the
+        placements of the frames in :attr:`FamilyNumbers.frames`)."""
         model, n = self.mbm.model, self.numbers
         for b in self._inertias:
             model.inertias[b + 1] = self._inertia(i, b)
         for b in self._placements:
             model.jointPlacements[b + 1] = pin.SE3(_EYE, n.translation[i, b])
+        for fid, rotation, t in self._frames:
+            model.frames[fid].placement = pin.SE3(rotation, t[i])
 
 
 _EYE = np.eye(3)

@@ -21,16 +21,29 @@ tests compare the scenario path with this closed form.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
+from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelError
-from ._build import add_body, check_finite, check_positive
+from ._build import (
+    Body,
+    FamilyNumbers,
+    add_bodies,
+    check_finite,
+    check_positive,
+    family_columns,
+    numbers_ok,
+)
 from .base import MultibodyModel
 
-__all__ = ["RigidBodyParams", "rigid_body"]
+__all__ = ["RigidBodyParams", "rigid_body", "rigid_body_numbers"]
+
+_POSITIVE = ("mass", "inertia")
+_FINITE = ("com_height", "lever")
 
 
 @dataclass(frozen=True)
@@ -55,8 +68,35 @@ class RigidBodyParams:
     lever: float = 0.4
 
     def __post_init__(self):
-        check_positive(self, ("mass", "inertia"))
-        check_finite(self, ("com_height", "lever"))
+        check_positive(self, _POSITIVE)
+        check_finite(self, _FINITE)
+
+
+def _params(params: RigidBodyParams, overrides: Mapping) -> RigidBodyParams:
+    """``params`` with ``overrides``, checked."""
+    if not overrides:
+        return params
+    known = set(RigidBodyParams.__dataclass_fields__)
+    bad = sorted(set(overrides) - known)
+    if bad:
+        raise ModelError(f"unknown rigid_body parameter(s) {bad}; known: {sorted(known)}")
+    return RigidBodyParams(**{**asdict(params), **overrides})
+
+
+def _layout(p) -> list[Body]:
+    """The bodies of the rigid body of parameters ``p`` (numbers or (k,) arrays): two
+    massless sliders and the body on a pitch joint."""
+    inertia = np.multiply.outer(np.asarray(p.inertia, dtype=float), np.eye(3))
+    return [
+        Body(-1, "PX", (0, 0, 0), "base_x", "base_x_link", 0.0),
+        Body(0, "PZ", (0, 0, 0), "base_z", "base_z_link", 0.0),
+        Body(1, "RY", (0, 0, 0), "base_pitch", "body", p.mass, inertia=inertia),
+    ]
+
+
+def _corner(p) -> tuple:
+    """The contact corner C in the body's joint frame."""
+    return (p.lever, 0.0, -p.com_height)
 
 
 def rigid_body(params: RigidBodyParams | None = None, **overrides) -> MultibodyModel:
@@ -75,27 +115,44 @@ def rigid_body(params: RigidBodyParams | None = None, **overrides) -> MultibodyM
     >>> rb.model.nv, rb.model.existFrame("contact")
     (3, True)
     """
-    if params is None:
-        params = RigidBodyParams()
-    if overrides:
-        known = set(RigidBodyParams.__dataclass_fields__)
-        bad = sorted(set(overrides) - known)
-        if bad:
-            raise ModelError(f"unknown rigid_body parameter(s) {bad}; known: {sorted(known)}")
-        params = RigidBodyParams(**{**asdict(params), **overrides})
-    p = params
+    p = _params(RigidBodyParams() if params is None else params, overrides)
     model = pin.Model()
     model.name = "rigid_body"
-    jx = add_body(model, 0, pin.JointModelPX(), (0, 0, 0), "base_x", "base_x_link", 0.0)
-    jz = add_body(model, jx, pin.JointModelPZ(), (0, 0, 0), "base_z", "base_z_link", 0.0)
-    I3 = np.diag([p.inertia, p.inertia, p.inertia])
-    jb = add_body(model, jz, pin.JointModelRY(), (0, 0, 0), "base_pitch", "body", p.mass,
-                  inertia=I3)
+    jb = add_bodies(model, _layout(p))[-1]
     body = model.getFrameId("body")
     model.addFrame(pin.Frame("contact", jb, body,
-                             pin.SE3(np.eye(3), np.array([p.lever, 0.0, -p.com_height])),
+                             pin.SE3(np.eye(3), np.array(_corner(p), dtype=float)),
                              pin.FrameType.OP_FRAME))
     q_nominal = np.array([0.0, p.com_height, 0.0])
     info = asdict(p) | {"planar": True, "total_mass": p.mass, "q_nominal": q_nominal.tolist(),
                         "builder": "rigid_body"}
     return MultibodyModel(model=model, name="rigid_body", params=info)
+
+
+def rigid_body_numbers(preset: str | None, params: Sequence[Mapping]) -> FamilyNumbers:
+    """The numbers of the rigid bodies ``rigid_body(**params[i])`` without building them
+    (:class:`~roverimpact.models.family.ModelFamily` writes them into one model: the body's
+    inertia and the contact corner's placement), each parameter set checked as
+    :func:`rigid_body` checks it.
+
+    Raises
+    ------
+    ModelError
+        As :func:`rigid_body`, for the first bad parameter set; a preset (the rigid body
+        has none).
+    """
+    if preset is not None:
+        raise ModelError(f"rigid_body has no presets, got {preset!r}")
+    base = asdict(RigidBodyParams())
+    params = list(params)
+    p = family_columns(base, params)
+    if p is None or not numbers_ok(p, _POSITIVE, _FINITE):
+        # the first bad set raises as the builder does; numbers of other types that the
+        # builder takes (numpy integers) are read from the checked sets
+        checked = [_params(RigidBodyParams(), ov) for ov in params]
+        p = SimpleNamespace(**{name: np.array([float(getattr(c, name)) for c in checked])
+                               for name in base})
+    q_nominal = np.zeros((len(params), 3))
+    q_nominal[:, 1] = p.com_height
+    return FamilyNumbers.of_layout(_layout(p), len(params), q_nominal, [],
+                                   frames={"contact": _corner(p)})

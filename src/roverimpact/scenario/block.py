@@ -1,6 +1,6 @@
 """Many scenarios of one model family at once: M, A, v and the active rows of a block.
 
-A study whose cases change a built-in rover's parameters (COM height, masses, lengths),
+A study whose cases change a built-in model's parameters (COM height, masses, lengths),
 the speed and the impact angle builds, case by case, models that differ in numbers only.
 Scenarios with the same :func:`block_key` are such a block: :func:`impact_block` builds
 one model of the family and its constraint set, writes each member's numbers into that
@@ -46,7 +46,7 @@ _SETUP_TABLES = {"model", "configuration", "velocity", "contacts", "obstacle", "
 def block_key(scenario: Scenario) -> str | None:
     """What a block's scenarios share; None if the scenario has no block.
 
-    A block is scenarios of a built-in rover with family numbers
+    A block is scenarios of a built-in model with family numbers
     (:func:`roverimpact.models.family.has_family`), without terrain or declared loops,
     that are the same but for the numbers of ``model.params`` (which parameters are set
     is part of the key, their values are not when they are numbers), ``velocity.u`` and

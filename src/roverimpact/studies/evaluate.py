@@ -309,11 +309,10 @@ class ScenarioEvaluator:
         the contact law or the simulation settings (an angle sweep); or ``base`` has a
         state block (:func:`~roverimpact.scenario.block.state_key`: any model without
         terrain or declared loops) and they differ in joint values, joint rates and the
-        speed too; or ``base`` is a built-in rover with a model family
-        (:func:`~roverimpact.scenario.block.block_key`) and they differ in its numbers
-        (``model.params``, ``velocity.u``) too. Cases built one by one (terrains,
-        declared loops, a rigid body's or a robot file's own numbers) cost
-        milliseconds."""
+        speed too; or ``base`` is a built-in model with a model family (the rovers, the
+        rigid body: :func:`~roverimpact.scenario.block.block_key`) and they differ in its
+        numbers (``model.params``, ``velocity.u``) too. Cases built one by one (terrains,
+        declared loops, a robot file's own numbers) cost milliseconds."""
         rest = ("contact_law.", "simulation.")
         if all(p == _BETA or p.startswith(rest) for p in params):
             return True
