@@ -276,3 +276,54 @@ def test_a_copied_or_pickled_system_reads_the_wheel_centres_of_its_own_data():
         assert np.array_equal(other.applied_force(q, np.zeros(sys_.nv)).gap,
                               sys_.gaps_of_centres(centres(q)))
         assert np.array_equal(sys_.wheel_centres(q), centres(q))
+
+
+def _kkt_acceleration(sys_, q, v, tau):
+    """The constrained acceleration from the KKT system, written here (``J`` of the
+    closure, which the cases below have constant: no bias term)."""
+    model = sys_.model
+    data = model.createData()
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    h = pin.nonLinearEffects(model, data, q, v)
+    phi, Jl = sys_.loop_closure(q)
+    phi, Jl = np.atleast_1d(phi), np.atleast_2d(Jl)
+    alpha = sys_.baumgarte
+    gamma = -2 * alpha * (Jl @ v) - alpha ** 2 * phi
+    m = Jl.shape[0]
+    K = np.block([[M, Jl.T], [Jl, np.zeros((m, m))]])
+    return np.linalg.lstsq(K, np.concatenate([tau - h, gamma]), rcond=None)[0][:model.nv]
+
+
+@pytest.mark.parametrize("case", ["differential", "differential + both rockers locked",
+                                  "2-D rocker locked"])
+def test_constant_loop_rows_give_the_kkt_acceleration(case):
+    """A loop closure whose Jacobian is constant (the rocker-bogie's differential, joints
+    held by contacts.locked) is solved on its independent rows, found once: the
+    acceleration equals the KKT system's, with the rows as they are (locking both rockers
+    as well makes the three rows dependent: rank 2), at configurations and velocities off
+    the constraint (phi != 0, J v != 0: the Baumgarte terms count)."""
+    from roverimpact.models import rocker_bogie, rover2d
+
+    rng = np.random.default_rng(3)
+    if case.startswith("2-D"):
+        mbm = rover2d(suspension="rocker")
+        locked = ["rocker"]
+    else:
+        mbm = rocker_bogie()
+        locked = ["rocker_left", "rocker_right"] if "locked" in case else []
+    cfg = SimulationConfig(contacts={"locked": locked})
+    q0, _ = initial_state(mbm, cfg)
+    sys_ = build_system(mbm, cfg, q_ref=q0)
+    assert getattr(sys_.loop_closure, "constant_jacobian", False)
+    k = np.atleast_2d(sys_.loop_closure(q0)[1]).shape[0]
+    for _ in range(4):
+        q = pin.integrate(sys_.model, q0, 0.05 * rng.standard_normal(sys_.nv))
+        v = rng.standard_normal(sys_.nv)
+        tau = 10.0 * rng.standard_normal(sys_.nv)
+        a = sys_.acceleration(q, v, tau)
+        ref = _kkt_acceleration(sys_, q, v, tau)
+        np.testing.assert_allclose(a, ref, rtol=0.0, atol=1e-9 * np.max(np.abs(ref)))
+    B, Jr = sys_._rows  # r independent rows: orthonormal combinations of the k rows
+    assert Jr.shape[0] == {"differential": 1, "2-D rocker locked": 1}.get(case, 2) <= k
+    np.testing.assert_allclose(B @ B.T, np.eye(len(B)), atol=1e-12)

@@ -8,6 +8,7 @@ map (see :mod:`roverimpact.models.robot`).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -295,12 +296,19 @@ class LinearLoopClosure:
         C = tuple(tuple(float(c) for c in row) for row in coefficients)
         return cls(tuple(joints), C, tuple(iq), tuple(iv), int(model.nv))
 
-    def __call__(self, q) -> tuple[np.ndarray, np.ndarray]:
-        q = np.asarray(q, dtype=float)
+    @functools.cached_property
+    def _arrays(self) -> tuple[np.ndarray, list[int], np.ndarray]:
+        """``C``, the coordinates' indices and ``J`` (read-only), made once: building them
+        on every call was a third of the simulator's constrained acceleration."""
         C = np.asarray(self.coefficients)
-        phi = q[..., list(self.idx_q)] @ C.T  # (..., k) for configurations (..., nq)
         J = np.zeros((C.shape[0], self.nv))
         J[:, list(self.idx_v)] = C
+        J.flags.writeable = False
+        return C, list(self.idx_q), J
+
+    def __call__(self, q) -> tuple[np.ndarray, np.ndarray]:
+        C, iq, J = self._arrays
+        phi = np.asarray(q, dtype=float)[..., iq] @ C.T  # (..., k) for (..., nq)
         return phi, J
 
 

@@ -28,6 +28,10 @@ from ..exceptions import ModelError
 from ..models.constraints import loop_jdot_v
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+#: Singular values of a constant loop Jacobian ``J`` below this times the largest mark
+#: dependent rows: the least-squares solve of the general path drops those of
+#: ``J M^-1 J^T`` below 1e-12 times the largest, about the square of this
+_LOOP_RCOND = 1e-6
 _EUCLIDEAN_JOINTS = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelPX",
                      "JointModelPY", "JointModelPZ", "JointModelRevoluteUnaligned",
                      "JointModelPrismaticUnaligned", "JointModelTranslation"}
@@ -155,6 +159,7 @@ class ContactSystem:
             self.axes = np.asarray(self.axes, dtype=float)
             self.axes = self.axes / np.linalg.norm(self.axes, axis=1)[:, None]
         self._lower = np.tril_indices(self.nv, -1)
+        self._rows = None  # (B, Jr) of a constant loop Jacobian, made at the first use
         self._centre_views = _FrameTranslations()
         self.euclidean = self.nq == self.nv and all(
             j.shortname() in _EUCLIDEAN_JOINTS for j in list(self.model.joints)[1:])
@@ -433,12 +438,33 @@ class ContactSystem:
         return np.atleast_1d(np.asarray(phi, float)), np.atleast_2d(np.asarray(Jl, float))
 
     def acceleration(self, q, v, tau) -> np.ndarray:
-        """Generalized acceleration under the applied generalized force ``tau``."""
+        """Generalized acceleration under the applied generalized force ``tau``.
+
+        With a loop closure, ``a = a0 + M^-1 J^T lam`` where ``a0`` is the unconstrained
+        acceleration and ``J M^-1 J^T lam = gamma - J a0`` (``gamma``: the Baumgarte
+        stabilised bias), solved in the least-squares sense (dependent rows: a joint both
+        locked and in a loop). A closure whose ``J`` is constant (linear loops, locked
+        joints) has its independent rows found once (:meth:`_constant_rows`), so that
+        system is solved directly: the same acceleration to rounding."""
         if self.loop_closure is None:
             return pin.aba(self.model, self.data, q, v, tau)
         a0 = pin.aba(self.model, self.data, q, v, tau)          # unconstrained
         Minv = pin.computeMinverse(self.model, self.data, q)
         Minv[self._lower] = Minv.T[self._lower]                 # the upper triangle is set
+        rows = self._rows
+        if rows is None and getattr(self.loop_closure, "constant_jacobian", False):
+            rows = self._rows = self._constant_rows(q)
+        if rows is not None:
+            B, Jr = rows
+            if not len(Jr):
+                return a0
+            phi = B @ np.atleast_1d(np.asarray(self.loop_closure(q)[0], dtype=float))
+            a = self.baumgarte
+            MinvJT = Minv @ Jr.T
+            G = Jr @ MinvJT                                      # SPD: Jr of full rank
+            r = -2 * a * (Jr @ v) - a * a * phi - Jr @ a0
+            lam = r / G[0, 0] if len(r) == 1 else np.linalg.solve(G, r)
+            return a0 + MinvJT @ lam
         phi, Jl = self.loop(q)
         Jdv = loop_jdot_v(self.loop_closure, self.model, q, v, phi.shape[0])
         a = self.baumgarte
@@ -447,6 +473,19 @@ class ContactSystem:
         G = Jl @ MinvJT                                          # J M^-1 J^T
         lam = np.linalg.lstsq(G, gamma - Jl @ a0, rcond=1e-12)[0]
         return a0 + MinvJT @ lam
+
+    def _constant_rows(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """``(B, Jr)`` of a loop closure whose ``J`` (k, nv) is constant: ``Jr = B J``
+        (r, nv) spans its rows with r independent ones (``B`` (r, k) orthonormal rows: the
+        left singular vectors of ``J`` whose singular values are above ``_LOOP_RCOND``
+        times the largest). The constrained acceleration of ``J`` is that of ``Jr`` with
+        the residual ``B phi``: the least-squares solution of the dependent system
+        restricted to the range of ``J``, where it lies."""
+        J = np.atleast_2d(np.asarray(self.loop_closure(q)[1], dtype=float))
+        U, S, _ = np.linalg.svd(J, full_matrices=False)
+        r = int(np.count_nonzero(S > _LOOP_RCOND * S[0])) if S.size and S[0] > 0 else 0
+        B = np.ascontiguousarray(U[:, :r].T)
+        return B, B @ J
 
     def generalized_forces(self, q, v, v_i=None):
         cs = self.contacts(q, v, v_i)
