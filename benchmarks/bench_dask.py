@@ -20,6 +20,9 @@ and the speed-up cannot exceed ``cores - load``. With forked workers (Linux, the
 :func:`roverimpact.studies.executors.worker_start_method`) the script also times every
 chunk's computation and prints the mean per chunk serially and on the running cluster:
 their ratio is what two processes computing at once cost each other on this machine.
+Then, for a chunk of each workload, the same without Dask (plain forked processes
+computing at once) and in a cluster with and without ``CLUSTER_CONFIG``: the plain line
+bounds what any cluster can reach on this machine.
 """
 
 from __future__ import annotations
@@ -167,8 +170,8 @@ def _cpu(who) -> float:
 
 
 def _chunk_costs(k: int) -> tuple[float, float, float]:
-    """Chunk ``k`` of the 1e6-case indicator sweep computed and encoded here: wall time,
-    CPU of this thread, CPU of the process's other threads meanwhile."""
+    """Chunk ``k`` of the study of :func:`background_work` computed and encoded here: wall
+    time, CPU of this thread, CPU of the process's other threads meanwhile."""
     import resource
 
     from roverimpact.studies.executors import compute_chunk_file
@@ -176,7 +179,7 @@ def _chunk_costs(k: int) -> tuple[float, float, float]:
     prep, args, params = _BACKGROUND
     s0, t0, w = _cpu(resource.RUSAGE_SELF), _cpu(resource.RUSAGE_THREAD), time.perf_counter()
     compute_chunk_file(*args, prep.cases.view(k * prep.chunk_size, (k + 1) * prep.chunk_size),
-                       params, False)
+                       params, prep.study.simulate)
     w = time.perf_counter() - w
     s1, t1 = _cpu(resource.RUSAGE_SELF), _cpu(resource.RUSAGE_THREAD)
     return w, t1 - t0, (s1 - s0) - (t1 - t0)
@@ -189,12 +192,14 @@ def _plain_worker(ks, queue) -> None:
     queue.put([_chunk_costs(k) for k in ks])
 
 
-def background_work(workers: int, n_chunks: int = 8) -> None:
-    """What a chunk costs alone, in plain forked processes computing at once, and in the
-    workers of a local cluster with Dask's default background work and with
+def background_work(workers: int, study: dict, what: str, n_chunks: int = 8) -> None:
+    """What a chunk of ``study`` costs alone, in plain forked processes computing at once,
+    and in the workers of a local cluster with Dask's default background work and with
     :data:`roverimpact.studies.executors.CLUSTER_CONFIG`: the chunk's wall time, the
     CPU of the worker's other threads, and the command's CPU (scheduler, nannies,
-    client) while the chunks run."""
+    client) while the chunks run. The plain processes' line is what the machine allows:
+    two processes computing at once that slow each other (shared caches and memory, a
+    virtual machine's cores) bound any cluster's speed-up below the number of workers."""
     global _BACKGROUND
     import multiprocessing as mp
     import resource
@@ -204,14 +209,13 @@ def background_work(workers: int, n_chunks: int = 8) -> None:
     import roverimpact.studies.executors as ex
     from roverimpact.studies.sweep import prepare_study
 
-    prep = prepare_study(indicator_study(1_000_000))
+    prep = prepare_study(study)
     grid = list(prep.study.grid) if prep.study.grid else []
     _BACKGROUND = (prep, (prep.evaluator, prep.study.base, prep.base), grid)
     _chunk_costs(0)                                   # loads what the workers inherit
     ks = list(range(1, n_chunks + 1))
     alone = np.array([_chunk_costs(k) for k in ks]).mean(0)
-    print(f"a chunk of {prep.chunk_size:,} indicator cases (mean of {n_chunks}), "
-          f"{workers} at once:")
+    print(f"a chunk of {prep.chunk_size:,} {what} (mean of {n_chunks}), {workers} at once:")
     print(f"  alone in this process          {alone[0]:.3f} s")
     ctx = mp.get_context("fork")
     queue = ctx.Queue()
@@ -288,7 +292,9 @@ def main() -> None:
                     simulated_study(args.n_sim), args.workers, address)
     cluster_start(args.workers)
     if args.n_indicator:
-        background_work(args.workers)
+        background_work(args.workers, indicator_study(1_000_000), "indicator cases")
+    if args.n_sim:
+        background_work(args.workers, simulated_study(args.n_sim), "simulated cases")
     parquet_encoding()
 
 
