@@ -15,7 +15,10 @@ Prints, on one core, for random placements (x, y, yaw) on a 20 m x 20 m terrain 
 ``--function``: the rocker-bogie posed on ``examples/terrain/bumps.py`` (a
 ``FunctionTerrain``: a numpy function h(x, y), its derivatives by central differences),
 one call per pose at 100 placements along x: time per pose and calls of the function per
-pose (the derivatives' points stacked into one call since 2026-11-29: 13 calls became 1).
+pose (the derivatives' points stacked into one call since 2026-11-29: 13 calls became 1);
+then one case of ``examples/rocker_bogie_on_bumps.toml`` through ``evaluate_case`` (its
+pose, the driving velocity from two more poses, solved together since 2026-11-29, the
+rows), time per case.
 """
 
 from __future__ import annotations
@@ -147,6 +150,17 @@ def function_terrain() -> None:
     print(f"rocker_bogie (prototype) on examples/terrain/bumps.py (FunctionTerrain), "
           f"{len(guesses)} poses along x, one call each: {1e3 * t / len(guesses):.2f} ms a "
           f"pose, {calls[0] / (3 * len(guesses)):.0f} calls of the function a pose")
+    # a whole case on that terrain: the pose, the driving velocity (the pose moved back and
+    # forth along the slope and placed again) and the rows
+    from roverimpact._io import read_toml
+    from roverimpact.studies import evaluate_case
+
+    scenario = path.parents[1] / "rocker_bogie_on_bumps.toml"
+    base = {**read_toml(scenario), "terrain": {"function": f"{path}:h"}}
+    evaluate_case(base)
+    t = best_of(lambda: [evaluate_case(base) for _ in range(10)], repeat=5)
+    print(f"evaluate_case of {scenario.name} (pose, driving velocity, rows): "
+          f"{1e3 * t / 10:.2f} ms a case")
 
 
 if __name__ == "__main__":

@@ -166,15 +166,16 @@ def driving_velocity(mbm, terrain, q, v, u: float, spec: TerrainSpec,
     heading = _heading_of(mbm, q, info, js)
     t = heading - (heading @ nbar) * nbar
     t /= np.linalg.norm(t)
-    ends = []
-    for sgn in (-1.0, 1.0):
-        qm = np.array(q, dtype=float)
+    moved = np.array([q, q], dtype=float)  # back and forth by h
+    for qm, sgn in zip(moved, (-1.0, 1.0), strict=True):
         if info.kind == "floating":
             qm[js[0].idx_q:js[0].idx_q + 3] += sgn * h * t
         else:
             qm[js[0].idx_q] += sgn * h * t[0]
             qm[js[1].idx_q] += sgn * h * t[2]
-        ends.append(pose_scenario(mbm, terrain, qm, spec))
+    # both placed in one solve: one terrain query per step for the two (the terrain's
+    # contact search is most of a pose's cost)
+    ends = pose_scenario(mbm, terrain, moved, spec)
     v_geo = pin.difference(model, ends[0], ends[1]) / (2.0 * h)   # per metre of travel
     if info.kind == "floating":
         lin = slice(js[0].idx_v, js[0].idx_v + 3)
