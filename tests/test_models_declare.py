@@ -430,3 +430,18 @@ def test_frame_loops_of_a_shared_model_take_turns_on_their_data(monkeypatch):
         for phi, J in got[i]:
             np.testing.assert_array_equal(phi, expected[i][0])
             np.testing.assert_array_equal(J, expected[i][1])
+
+
+def test_the_detected_base_follows_the_model_and_its_declaration():
+    """base_info detects a model's base once, for the Pinocchio model it was asked about:
+    a model put in its place is detected again, and a declared base still decides."""
+    from roverimpact.models import rigid_body, rocker_bogie
+    from roverimpact.models.declare import base_info, declare_base, detect_base
+
+    mbm = rigid_body()
+    first = base_info(mbm)
+    assert first.kind == "planar" and base_info(mbm) is first
+    mbm.model = rocker_bogie().model
+    assert base_info(mbm) == detect_base(mbm.model) and base_info(mbm).kind == "floating"
+    declare_base(mbm, "fixed")
+    assert base_info(mbm).kind == "fixed"

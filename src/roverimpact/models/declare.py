@@ -135,11 +135,18 @@ def detect_base(model) -> BaseInfo:
 
 
 def base_info(mbm: MultibodyModel) -> BaseInfo:
-    """The base the model was declared with (``params["base"]``), else :func:`detect_base`."""
+    """The base the model was declared with (``params["base"]``), else :func:`detect_base`
+    (found once per Pinocchio model of ``mbm``: a case of a study asks five times, and a
+    planar root took 0.1-0.2 ms to recognise)."""
     b = (mbm.params or {}).get("base")
     if isinstance(b, dict) and "kind" in b:
         return BaseInfo(str(b["kind"]), tuple(b.get("joints") or ()))
-    return detect_base(mbm.model)
+    found = mbm.__dict__.get("_detected_base")
+    if found is not None and found[0] is mbm.model:
+        return found[1]
+    info = detect_base(mbm.model)
+    mbm.__dict__["_detected_base"] = (mbm.model, info)
+    return info
 
 
 def declare_base(mbm: MultibodyModel, kind: str, joints: Sequence[str] | None = None) -> None:
