@@ -324,6 +324,13 @@ def test_constant_loop_rows_give_the_kkt_acceleration(case):
         a = sys_.acceleration(q, v, tau)
         ref = _kkt_acceleration(sys_, q, v, tau)
         np.testing.assert_allclose(a, ref, rtol=0.0, atol=1e-9 * np.max(np.abs(ref)))
-    B, Jr = sys_._rows  # r independent rows: orthonormal combinations of the k rows
+    _, B, Jr = sys_._rows  # r independent rows: orthonormal combinations of the k rows
     assert Jr.shape[0] == {"differential": 1, "2-D rocker locked": 1}.get(case, 2) <= k
     np.testing.assert_allclose(B @ B.T, np.eye(len(B)), atol=1e-12)
+    if case == "differential":  # a closure put in its place: solved with its own rows
+        locked = SimulationConfig(contacts={"locked": ["rocker_left"]})
+        sys_.loop_closure = build_system(mbm, locked, q_ref=q0).loop_closure
+        np.testing.assert_allclose(sys_.acceleration(q, v, tau),
+                                   _kkt_acceleration(sys_, q, v, tau), rtol=0.0,
+                                   atol=1e-9 * np.max(np.abs(ref)))
+        assert sys_._rows[2].shape[0] == 2

@@ -159,7 +159,8 @@ class ContactSystem:
             self.axes = np.asarray(self.axes, dtype=float)
             self.axes = self.axes / np.linalg.norm(self.axes, axis=1)[:, None]
         self._lower = np.tril_indices(self.nv, -1)
-        self._rows = None  # (B, Jr) of a constant loop Jacobian, made at the first use
+        # (closure, B, Jr) of a closure with a constant Jacobian, made at its first use
+        self._rows = None
         self._centre_views = _FrameTranslations()
         self.euclidean = self.nq == self.nv and all(
             j.shortname() in _EUCLIDEAN_JOINTS for j in list(self.model.joints)[1:])
@@ -452,10 +453,12 @@ class ContactSystem:
         Minv = pin.computeMinverse(self.model, self.data, q)
         Minv[self._lower] = Minv.T[self._lower]                 # the upper triangle is set
         rows = self._rows
+        if rows is not None and rows[0] is not self.loop_closure:  # another closure set
+            rows = self._rows = None
         if rows is None and getattr(self.loop_closure, "constant_jacobian", False):
-            rows = self._rows = self._constant_rows(q)
+            rows = self._rows = (self.loop_closure, *self._constant_rows(q))
         if rows is not None:
-            B, Jr = rows
+            _, B, Jr = rows
             if not len(Jr):
                 return a0
             phi = B @ np.atleast_1d(np.asarray(self.loop_closure(q)[0], dtype=float))
