@@ -234,3 +234,39 @@ def test_given_pose_velocity_is_the_admissible_part_scaled_to_u():
                                         "pitch_deg": float(np.degrees(q[2]))}}}
     flat = {**RV, "obstacle": {**RV["obstacle"], "beta_deg": 35.0}}
     assert _T(given) == pytest.approx(_T(flat), rel=1e-9)
+
+
+def test_a_driven_pose_that_fails_is_named_as_a_pose_of_its_own(monkeypatch):
+    """The driving velocity places its two moved poses in one solve; when that solve
+    fails, the pose is named as on its own (the message of one pose, no "pose 1 of 2"
+    of an internal batch), and a batch that fails where each pose alone succeeds still
+    gives the velocity."""
+    import roverimpact.models.pose as pose_mod
+    from roverimpact.models.pose import PoseError
+
+    sloped = {**RB, "terrain": {"plane": {"normal": UP}}}
+    want = ri.ImpactSetup.from_scenario(ri.Scenario.model_validate(sloped)).v
+    real = pose_mod.pose_on_terrain
+
+    def batch_fails(mbm, terrain, q_guess=None, **kw):
+        if np.ndim(q_guess) == 2:
+            raise PoseError("pose 1 of 2 (1 failed; check=False returns them all): no", None)
+        return real(mbm, terrain, q_guess, **kw)
+
+    monkeypatch.setattr(pose_mod, "pose_on_terrain", batch_fails)
+    got = ri.ImpactSetup.from_scenario(ri.Scenario.model_validate(sloped)).v
+    np.testing.assert_array_equal(got, want)
+
+    calls = []
+
+    def second_fails(mbm, terrain, q_guess=None, **kw):
+        calls.append(np.ndim(q_guess))
+        if np.ndim(q_guess) == 2 or len(calls) == 4:  # the pose, the batch, then one by one
+            raise PoseError("pose 1 of 2 (1 failed; check=False returns them all): no"
+                            if np.ndim(q_guess) == 2 else "the wheels cannot all touch", None)
+        return real(mbm, terrain, q_guess, **kw)
+
+    monkeypatch.setattr(pose_mod, "pose_on_terrain", second_fails)
+    with pytest.raises(ConfigError, match="cannot be placed") as err:
+        ri.ImpactSetup.from_scenario(ri.Scenario.model_validate(sloped))
+    assert "pose 1 of 2" not in str(err.value) and "cannot all touch" in str(err.value)

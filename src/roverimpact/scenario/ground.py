@@ -175,7 +175,10 @@ def driving_velocity(mbm, terrain, q, v, u: float, spec: TerrainSpec,
             qm[js[1].idx_q] += sgn * h * t[2]
     # both placed in one solve: one terrain query per step for the two (the terrain's
     # contact search is most of a pose's cost)
-    ends = pose_scenario(mbm, terrain, moved, spec)
+    try:
+        ends = pose_scenario(mbm, terrain, moved, spec)
+    except ConfigError:  # one that fails says so as a pose of its own (not "pose 1 of 2")
+        ends = [pose_scenario(mbm, terrain, qm, spec) for qm in moved]
     v_geo = pin.difference(model, ends[0], ends[1]) / (2.0 * h)   # per metre of travel
     if info.kind == "floating":
         lin = slice(js[0].idx_v, js[0].idx_v + 3)
