@@ -140,10 +140,16 @@ def _other_numbers():
                                  {"bogie_pivot_height": 0.3}, {"wheel_radius": float("nan")},
                                  {"no_such": 1.0}, {"track": "wide"}])
 def test_family_numbers_refuse_what_the_builder_refuses(bad):
+    _assert_refused_as_by_the_builder(lambda **p: rocker_bogie("prototype", **p),
+                                      "rocker_bogie", "prototype", bad, {"chassis_mass": 12.0})
+
+
+def _assert_refused_as_by_the_builder(build, name, preset, bad, good):
+    """family_numbers of ``[good, bad]`` raises the builder's own error for ``bad``."""
     with pytest.raises(ModelError) as ref:
-        rocker_bogie("prototype", **bad)
+        build(**bad)
     with pytest.raises(ModelError) as got:
-        family_numbers("rocker_bogie", "prototype", [{"chassis_mass": 12.0}, bad])
+        family_numbers(name, preset, [good, bad])
     assert str(got.value) == str(ref.value)
 
 
@@ -369,11 +375,7 @@ def test_rover2d_rewritten_model_gives_the_fresh_models_M_A_v(structure):
 def test_rover2d_family_numbers_refuse_what_the_builder_refuses(bad):
     from roverimpact.models import rover2d
 
-    with pytest.raises(ModelError) as ref:
-        rover2d(**bad)
-    with pytest.raises(ModelError) as got:
-        family_numbers("rover2d", None, [{"chassis_mass": 12.0}, bad])
-    assert str(got.value) == str(ref.value)
+    _assert_refused_as_by_the_builder(rover2d, "rover2d", None, bad, {"chassis_mass": 12.0})
 
 
 def test_rover2d_family_numbers_are_of_one_structure():
@@ -502,11 +504,7 @@ def test_rigid_body_rewritten_model_gives_the_fresh_models_M_A_v():
 def test_rigid_body_family_numbers_refuse_what_the_builder_refuses(bad):
     from roverimpact.models import rigid_body
 
-    with pytest.raises(ModelError) as ref:
-        rigid_body(**bad)
-    with pytest.raises(ModelError) as got:
-        family_numbers("rigid_body", None, [{"mass": 12.0}, bad])
-    assert str(got.value) == str(ref.value)
+    _assert_refused_as_by_the_builder(rigid_body, "rigid_body", None, bad, {"mass": 12.0})
     with pytest.raises(ModelError, match="no presets"):
         family_numbers("rigid_body", "heavy", [{}])
 
