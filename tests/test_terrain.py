@@ -585,6 +585,37 @@ def test_wheel_ground_contact_equals_plane_rule():
             np.testing.assert_allclose(wc.normal, n, atol=1e-7)
 
 
+def test_only_local_minima_of_the_scan_are_refined(monkeypatch):
+    """On a plane the clearance along the half rim has one local minimum: the numpy
+    contact refines it and no second basin (g_start inf, as the compiled twin refines
+    only local minima; the lowest sample that is none was refined to max_iter by
+    bisection, half the rows of a rover's contact query), and the contact is the plane's
+    rule (test above)."""
+    import roverimpact.models.terrain as tm
+
+    seen = []
+    real = tm._refine
+
+    def spy(terrain, phis, k, g_start, *args):
+        seen.append(g_start.copy())
+        return real(terrain, phis, k, g_start, *args)
+
+    monkeypatch.setattr(tm, "_refine", spy)
+    n = np.array([-0.2, -0.05, 1.0]) / np.linalg.norm([-0.2, -0.05, 1.0])
+    pl = PlaneTerrain((0.0, 0.0, 0.0), n)
+    fn = FunctionTerrain(lambda x, y: pl.height(x, y))
+    c = np.array([[0.0, 0.0, 0.3], [1.0, 2.0, 0.5], [-1.0, 0.5, 0.1]])
+    a = np.array([[0.0, 1.0, 0.0], [0.1, 1.0, 0.0], [-0.3, 1.0, 0.2]])
+    wc = wheel_ground_contact(fn, c, a, 0.2)
+    g0 = seen[0].reshape(3, 2)
+    assert np.isfinite(g0[:, 0]).all() and np.isinf(g0[:, 1]).all()
+    for w in range(3):
+        data = SimpleNamespace(oMf=[pin.SE3(np.eye(3), c[w])])
+        ax = a[w] / np.linalg.norm(a[w])
+        ref = wheel_contact_point(data, 0, Wheel("w", "f", 0.2, axis=tuple(ax)), n)
+        np.testing.assert_allclose(wc.point[w], ref, atol=1e-9)
+
+
 @pytest.mark.parametrize("y_off", [0.0, 0.3])
 def test_wheel_ground_contact_on_sphere(y_off):
     """Wheel touching a spherical hill z = sqrt(R^2 - rho^2) - R: the contact lies on the

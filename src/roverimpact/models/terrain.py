@@ -1208,7 +1208,11 @@ def _numpy_contact(terrain, c, r, e, f, n_scan, max_iter, batch) -> WheelContact
         k = ranked[:, :N_BASINS].reshape(-1)                    # (n * N_BASINS,)
         rows = np.repeat(np.arange(n), N_BASINS)
         g0 = g[rows, k]
-        g0 = np.where(np.isfinite(g0) | (np.arange(k.size) % N_BASINS == 0), g0, np.inf)
+        # a row without a second local minimum ranks a sample that is none (its masked
+        # value inf) second: not refined, as the compiled twin refines only local minima
+        # (it was, to max_iter, by bisection towards the slope of the first)
+        g0 = np.where((local[rows, k] & np.isfinite(g0)) | (np.arange(k.size) % N_BASINS == 0),
+                      g0, np.inf)
         phi_b, g_b = _refine(terrain, phis, k, g0, c[rows], r[rows], e[rows], f[rows],
                              int(max_iter))
         pick = np.argmin(g_b.reshape(n, N_BASINS), axis=1)
