@@ -461,7 +461,7 @@ class ContactSystem:
             _, B, Jr = rows
             if not len(Jr):
                 return a0
-            phi = B @ np.atleast_1d(np.asarray(self.loop_closure(q)[0], dtype=float))
+            phi = B @ self.loop(q)[0]
             a = self.baumgarte
             MinvJT = Minv @ Jr.T
             G = Jr @ MinvJT                                      # SPD: Jr of full rank
@@ -484,7 +484,7 @@ class ContactSystem:
         times the largest). The constrained acceleration of ``J`` is that of ``Jr`` with
         the residual ``B phi``: the least-squares solution of the dependent system
         restricted to the range of ``J``, where it lies."""
-        J = np.atleast_2d(np.asarray(self.loop_closure(q)[1], dtype=float))
+        J = self.loop(q)[1]
         U, S, _ = np.linalg.svd(J, full_matrices=False)
         r = int(np.count_nonzero(S > _LOOP_RCOND * S[0])) if S.size and S[0] > 0 else 0
         B = np.ascontiguousarray(U[:, :r].T)
