@@ -13,9 +13,10 @@ Cholesky of M, W = L^-1 A^T, G = W^T W, T_c = 1/2 (A v)^T G^-1 (A v) by a second
 ``partition`` checks its inputs, handles dependent rows and returns v_c, v_a and the
 ranks; the figure is what that costs per call.
 
-The 1e5 and 1e6 batches are timed in turns (best of 7 rounds), over 1e6 items each, as
-``partition`` and as the lane kernel writing into output arrays made once (the
-computation alone). A
+The 1e5 and 1e6 batches are timed in turns (best of 7 rounds, 3 for numpy), over 1e6
+items each, as ``partition``, as the lane kernel writing into output arrays made once
+(the computation alone), and as what a user writes in numpy with results of the size of
+v_c and v_a (``np.linalg.solve(M, v)`` twice: about as much fresh memory a call). A
 ``partition`` call of 1e6 items returns 320 MB of new arrays, above glibc's threshold for
 reusing freed memory: ``MALLOC_MMAP_MAX_=0 MALLOC_TRIM_THRESHOLD_=100000000000`` in the
 environment makes glibc reuse it at every size, as it does at 1e5 (docs/theory.md).
@@ -282,16 +283,26 @@ def main() -> None:
     outs = [outputs(k) for k in sizes]
     alone = in_turns(ten_times(kernel_only, *inputs[0], outs[0]),
                      lambda: kernel_only(*inputs[1], outs[1]), rounds=7, reps=1)
-    for what, times in (("partition", full), ("lane kernel alone", alone)):
+    # what a user writes in numpy, with results of the size of v_c and v_a: two new (k, n)
+    # arrays a call. Its own 1e6 / 1e5 ratio is what fresh pages cost numpy's batched
+    # calls on this machine (machine.py prints how memory is handed out)
+    def solve_twice(Mk, _Ak, vk):
+        return np.linalg.solve(Mk, vk[..., None]), np.linalg.solve(Mk, vk[..., None])
+
+    numpy_solve = in_turns(ten_times(solve_twice, *inputs[0]),
+                           lambda: solve_twice(*inputs[1]), rounds=3, reps=1)  # (slow)
+    for what, times in (("partition", full), ("lane kernel alone", alone),
+                        ("numpy solve twice", numpy_solve)):
         r = [1_000_000 / t for t in times]
         print(f"  {what:<18} 1e5 items {r[0]:9.3g}/s, 1e6 items {r[1]:9.3g}/s, "
               f"1e6 / 1e5 rate {r[1] / r[0]:.2f}")
     print("  (targets: >= 1.5e6 items/s; no slower at 1e6)")
     fresh, reused = fresh_pages(1_000_000 * (5 + 2 * n) * 8)
     print(f"  this machine's fresh memory, the size of 1e6 items' results: "
-          f"{1e3 * fresh:.0f} ms to write it new, {1e3 * reused:.0f} ms to write it again "
-          f"({1e3 * (fresh - reused):.0f} ns an item that a 1e6-item partition pays and a "
-          "1e5-item one, reusing freed memory, does not)")
+          f"{1e3 * fresh:.0f} ms to write it new in one pass, {1e3 * reused:.0f} ms to write "
+          f"it again ({1e3 * (fresh - reused):.0f} ns an item; a 1e5-item call reuses freed "
+          "memory instead; first touches spread over a long call, as partition's, can cost "
+          "more on a virtual machine whose balloon reports free pages: machine line above)")
 
 
 def fresh_pages(nbytes: int, rounds: int = 5) -> tuple[float, float]:
