@@ -9,12 +9,22 @@ evaluation of M and the constraint rows (``effective_energy``), and the partitio
 batch of 10 000 (how a study evaluates T_c^-).
 
     python benchmarks/bench_simulate.py [--repeat 5]
+    python benchmarks/bench_simulate.py --settle-once [--rounds 3]
+
+``--settle-once``: the two built-in angle studies (DETC2014 Fig. 2, 2-D rover; DETC2015
+Fig. 2, 3-D rocker-bogie; 17 angles, own engine and MuJoCo) through the study evaluator,
+with its cases settling once per engine (``reuse_settled_states``, as shipped) and each
+on its own (the context replaced by a no-op), in turns in one process: wall time and
+whether the results are the same to the bit.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import statistics
 import time
+from pathlib import Path
 
 import numpy as np
 from machine import reference
@@ -73,11 +83,51 @@ def case(name, mbm, cfg, repeat):
     print(f"  T_c^- batched (per item) {1e6 * t_b:8.2f} us   ratio {t_sim / t_b:9.0f}x")
 
 
+def settle_once(rounds: int) -> None:
+    """The built-in angle studies with their cases settling once and each on its own."""
+    import roverimpact.studies.evaluate as evaluate
+    from roverimpact._io import read_toml
+
+    shipped = evaluate.reuse_settled_states
+    studies = Path(ri.__file__).parent / "data" / "studies"
+    for name in ("detc2014_fig2_beta", "detc2015_fig2_beta"):
+        d = read_toml(studies / f"{name}.toml")
+        g = d["grid"]["obstacle.beta_deg"]
+        overrides = [{"obstacle.beta_deg": float(b)}
+                     for b in np.linspace(g["start"], g["stop"], g["num"])]
+        ev = evaluate.ScenarioEvaluator()
+        ev.evaluate(d["base"], overrides[:2], simulate=d["simulate"])  # warm
+        times: dict[bool, list[float]] = {True: [], False: []}
+        out = {}
+        try:
+            for _ in range(rounds):
+                for once in (False, True):
+                    evaluate.reuse_settled_states = shipped if once else contextlib.nullcontext
+                    t = time.perf_counter()
+                    out[once] = ev.evaluate(d["base"], overrides, simulate=d["simulate"])
+                    times[once].append(time.perf_counter() - t)
+        finally:
+            evaluate.reuse_settled_states = shipped
+        same = all(np.array_equal(out[True][c], out[False][c], equal_nan=True)
+                   for c in out[True] if np.asarray(out[True][c]).dtype.kind == "f")
+        each, once = times[False], times[True]
+        print(f"{name}: {len(overrides)} cases x {len(d['simulate'])} engines, best / median "
+              f"of {rounds}: settling each case {min(each):.2f} / {statistics.median(each):.2f}"
+              f" s, settling once {min(once):.2f} / {statistics.median(once):.2f} s "
+              f"({min(each) / min(once):.2f}x); results the same to the bit: {same}")
+
+
 def main():
     print(reference())  # how fast this machine is right now (machine.py)
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--settle-once", action="store_true",
+                    help="the built-in angle studies settling once per engine and per case")
+    ap.add_argument("--rounds", type=int, default=3)
     a = ap.parse_args()
+    if a.settle_once:
+        settle_once(a.rounds)
+        return
     base = dict(speed=0.3, obstacle={"k": 1e7, "e": 0.5}, t_after=0.1)
     case("2-D rover (rocker)", rover2d(suspension="rocker"),
          SimulationConfig(**base, springs={"rocker": {"k": 50.0, "c": 2.0}}), a.repeat)

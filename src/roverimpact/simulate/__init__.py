@@ -16,6 +16,7 @@ from .run import (
     build_system,
     effective_energy,
     initial_state,
+    reuse_settled_states,
     simulate_impact,
 )
 from .system import ContactForces, ContactSystem, Plane
@@ -33,6 +34,7 @@ __all__ = [
     "build_system",
     "effective_energy",
     "initial_state",
+    "reuse_settled_states",
     "simulate_impact",
     "simulate_scenario",
 ]

@@ -15,6 +15,8 @@ re-anchors (free-flyer rotations stay far from the chart's singularity at pi).
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 
 import numpy as np
@@ -30,7 +32,7 @@ from .result import SimulationResult
 from .system import ContactSystem, Plane
 
 __all__ = ["build_system", "effective_energy", "first_contact_wheel", "initial_state",
-           "simulate_impact"]
+           "reuse_settled_states", "simulate_impact"]
 
 _CHART_LIMIT = 0.5
 _MAX_EVALS = 400_000
@@ -423,7 +425,8 @@ def initial_state(mbm, config: SimulationConfig | dict | None = None, *, q0=None
 
     Settle once and pass the result as ``q0=, v0=`` to :func:`simulate_impact` to run many
     impacts (e.g. a sweep over beta) from the same state without settling again (with the
-    same ``terrain``). With a ``terrain``: see :func:`simulate_impact`.
+    same ``terrain``), or run them within :func:`reuse_settled_states`. With a
+    ``terrain``: see :func:`simulate_impact`.
     """
     config = as_config(config)
     q = np.asarray(reference_configuration(mbm) if q0 is None else q0, dtype=float).copy()
@@ -433,8 +436,67 @@ def initial_state(mbm, config: SimulationConfig | dict | None = None, *, q0=None
         raise InputError(f"q0 must have shape ({sys.nq},), got {q.shape}")
     if terrain is not None:
         return _start_on_terrain(sys, mbm, config, q, terrain, pose, pose_wheels)
+    return _start_on_ground(sys, mbm, config, q, "initial_state", ground_law is None)
+
+
+#: settled configurations of this context (:func:`reuse_settled_states`), or None
+_SETTLED: contextvars.ContextVar[dict | None] = contextvars.ContextVar(
+    "roverimpact_settled_states", default=None)
+
+#: fields of a :class:`SimulationConfig` that settling on the ground does not read (they
+#: set the driving speed, place the obstacle and run the impact): cases that differ in
+#: them only settle to one configuration. The obstacle's law stays in the key: it decides
+#: how the contact forces of all planes are evaluated (one Hunt-Crossley family or law by
+#: law)
+_NOT_IN_SETTLE = frozenset({"speed", "beta_deg", "distance", "obstacle_x", "t_max",
+                            "t_after", "integrator", "constraints"})
+
+#: settled configurations kept in one context, the newest (each keeps its model alive)
+_SETTLED_KEPT = 16
+
+
+@contextlib.contextmanager
+def reuse_settled_states():
+    """Within this context, a run that settles on the ground plane (no ``v0``, no terrain)
+    as an earlier run did takes that run's settled configuration instead of settling
+    again: the same model object, the same ``q0`` and configuration except the fields
+    settling does not read (``speed``, ``beta_deg``, ``distance``, ``obstacle_x``,
+    ``t_max``, ``t_after``, ``integrator``, ``constraints``). It is the configuration the
+    run would compute (the same function of the same numbers), so the results are the
+    same to the bit; an angle or speed sweep settles once per engine (the driving velocity
+    is computed for each run). Kept for the context only: the model must not be changed in
+    place within it (a study's evaluator keeps its models for a chunk). Contexts nest; an
+    inner one starts empty."""
+    token = _SETTLED.set({})
+    try:
+        yield
+    finally:
+        _SETTLED.reset(token)
+
+
+def _start_on_ground(sys: ContactSystem, mbm, config: SimulationConfig, q, path: str,
+                     reusable: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``(q, v)`` at t = 0 on the ground plane: settled (``config.settle``) and driving at
+    ``config.speed``. The settled configuration comes from :func:`reuse_settled_states`'s
+    store when a run of the same ``path`` (the function asking: the two build their
+    systems differently) has settled the same model from the same ``q`` with the same
+    configuration. ``reusable``: the system's laws are the configuration's (no law objects
+    given beside it, which the key cannot tell)."""
     if config.settle and config.ground:
-        q = _settled_on_ground(sys, mbm, config, q)
+        store = _SETTLED.get()
+        if store is None or not reusable:
+            q = _settled_on_ground(sys, mbm, config, q)
+        else:
+            key = (path, id(mbm), q.tobytes(),
+                   repr(sorted(config.model_dump(exclude=set(_NOT_IN_SETTLE)).items())))
+            hit = store.get(key)
+            if hit is not None and hit[0] is mbm:  # (the model is kept: its id is its own)
+                q = hit[1].copy()
+            else:
+                q = _settled_on_ground(sys, mbm, config, q)
+                if len(store) >= _SETTLED_KEPT:  # the oldest goes (a model-changing design)
+                    del store[next(iter(store))]
+                store[key] = (mbm, q.copy())
     return q, _driving_velocity(sys, mbm, q, config.speed)
 
 
@@ -547,7 +609,8 @@ def simulate_impact(mbm, config: SimulationConfig | dict | None = None, *, q0=No
     q_ref = reference_configuration(mbm) if q0 is None else np.asarray(q0, dtype=float)
     sys = build_system(mbm, config, law=law, ground_law=ground_law, q_ref=q_ref,
                        terrain=terrain)
-    q, v = _start_state(sys, mbm, config, q0, v0, terrain, pose, pose_wheels)
+    q, v = _start_state(sys, mbm, config, q0, v0, terrain, pose, pose_wheels,
+                        reusable=law is None and ground_law is None)
     gaps = _place_obstacle(sys, mbm, config, q)
 
     counter = [0]
@@ -598,17 +661,16 @@ def simulate_impact(mbm, config: SimulationConfig | dict | None = None, *, q0=No
 
 
 def _start_state(sys: ContactSystem, mbm, config: SimulationConfig, q0, v0, terrain=None,
-                 pose=True, pose_wheels=None):
-    """``(q, v)`` at t = 0: settled on the ground and driving, or as given."""
+                 pose=True, pose_wheels=None, *, reusable=False):
+    """``(q, v)`` at t = 0: settled on the ground and driving, or as given. ``reusable``:
+    the system's laws are the configuration's (:func:`_start_on_ground`)."""
     q = np.asarray(reference_configuration(mbm) if q0 is None else q0, dtype=float).copy()
     if q.shape != (sys.nq,):
         raise InputError(f"q0 must have shape ({sys.nq},), got {q.shape}")
     if v0 is None and terrain is not None:
         q, v = _start_on_terrain(sys, mbm, config, q, terrain, pose, pose_wheels)
     elif v0 is None:  # as initial_state
-        if config.settle and config.ground:
-            q = _settled_on_ground(sys, mbm, config, q)
-        v = _driving_velocity(sys, mbm, q, config.speed)
+        q, v = _start_on_ground(sys, mbm, config, q, "simulate_impact", reusable)
     else:
         v = np.asarray(v0, dtype=float).copy()
         if v.shape != (sys.nv,):

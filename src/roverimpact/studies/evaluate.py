@@ -76,7 +76,7 @@ from ..scenario.build import (
     warn_if_pulling,
     warn_jammed,
 )
-from ..simulate import SimulationConfig, simulate_scenario
+from ..simulate import SimulationConfig, reuse_settled_states, simulate_scenario
 from ..simulate.engines import check_engine
 from .config import apply_overrides
 
@@ -538,15 +538,18 @@ class ScenarioEvaluator:
             sc_i = scenario_from_dict(apply_overrides(base, overrides[members[0]]))
             F_pred[members] = _peak_force(T[members], v_n[members], _law_of(sc_i))
         F_pred[missing] = np.nan
-        # the refined prediction (needs m_eff) and the simulations, case by case
-        for idx, setup in pending:
-            for i in idx:
-                sc_i = scenario_from_dict(apply_overrides(base, overrides[i]))
-                if engines or sc_i.band is not None:
-                    refined[i] = _refined(sc_i, setup, float(m_eff[i]), engines)
-                if engines:
-                    sims[i] = _simulate_all(sc_i, setup.model, engines)
-                sims[i] = _not_an_impact(refined[i] | sims[i])
+        # the refined prediction (needs m_eff) and the simulations, case by case; the
+        # cases of one model that start from one state on the ground (an angle sweep)
+        # settle once per engine (reuse_settled_states: the same state, the same bits)
+        with reuse_settled_states():
+            for idx, setup in pending:
+                for i in idx:
+                    sc_i = scenario_from_dict(apply_overrides(base, overrides[i]))
+                    if engines or sc_i.band is not None:
+                        refined[i] = _refined(sc_i, setup, float(m_eff[i]), engines)
+                    if engines:
+                        sims[i] = _simulate_all(sc_i, setup.model, engines)
+                    sims[i] = _not_an_impact(refined[i] | sims[i])
         out = {"T_c_minus": T, "m_eff": m_eff, "v_n": v_n, "F_pred": F_pred,
                "m_total": m_total, "m_eff_free": m_eff_free,
                **_baselines(v_n, m_total, m_eff_free)}
