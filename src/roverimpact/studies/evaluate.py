@@ -539,8 +539,8 @@ class ScenarioEvaluator:
             F_pred[members] = _peak_force(T[members], v_n[members], _law_of(sc_i))
         F_pred[missing] = np.nan
         # the refined prediction (needs m_eff) and the simulations, case by case; the
-        # cases of one model that start from one state on the ground (an angle sweep)
-        # settle once per engine (reuse_settled_states: the same state, the same bits)
+        # cases of one model that settle alike (an angle or speed sweep) settle once per
+        # engine (reuse_settled_states: the same configuration, the same bits)
         with reuse_settled_states():
             for idx, setup in pending:
                 for i in idx:
