@@ -489,8 +489,9 @@ def _start_on_ground(sys: ContactSystem, mbm, config: SimulationConfig, q, path:
         else:
             key = (path, id(mbm), q.tobytes(),
                    repr(sorted(config.model_dump(exclude=set(_NOT_IN_SETTLE)).items())))
+            # an entry (mbm, q) keeps its model alive: the id in its key stays that model's
             hit = store.get(key)
-            if hit is not None and hit[0] is mbm:  # (the model is kept: its id is its own)
+            if hit is not None:
                 q = hit[1].copy()
             else:
                 q = _settled_on_ground(sys, mbm, config, q)
