@@ -5,7 +5,10 @@ Times whole processes and prints each against bare Python measured in the same r
 
 - warm (numba's cache filled by a first run): ``roverimpact --version`` and ``--help``
   (issue target: within 0.3 s of bare Python), ``roverimpact energy
-  examples/rover2d_beta45.toml`` (target: under 1 s), ``roverimpact reproduce --quick``;
+  examples/rover2d_beta45.toml`` (target: under 1 s; also with its kernels loaded from
+  the cache, ``ROVERIMPACT_KERNELS=compiled``, the behaviour before 2026-11-30, whose
+  first load sets up numba's compiler: see
+  ``roverimpact._kernels._jit.declare_small_work``), ``roverimpact reproduce --quick``;
 - cold (``NUMBA_CACHE_DIR`` an empty folder, as on a fresh install, which compiles every
   kernel the command uses): ``energy`` (target: under 3 s; also with the background
   compile of the partition kernel forced and switched off, see
@@ -226,6 +229,9 @@ def main() -> None:
                            ("energy rover2d_beta45 (warm cache)", energy),
                            ("reproduce --quick (warm cache)", quick)):
             _row(label, _warm(cmd, args.n, cache), base)
+            if cmd is energy:  # the kernels loaded at once: numba's compiler set up
+                _row("  same, kernels loaded (before 2026-11-30)",
+                     [_run(cmd, _env(cache) | {KM: "compiled"}) for _ in range(args.n)], base)
         for label, cmd, env in (
                 ("energy rover2d_beta45 (cold: empty cache)", energy, {}),
                 ("  same, background compile forced", energy, {BG: "1"}),

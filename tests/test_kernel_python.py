@@ -278,6 +278,135 @@ def test_no_python_when_cached_asked_compiled_or_large(cold_kernel, monkeypatch)
     assert k3.compiled and sent == []
 
 
+@pytest.fixture
+def warm_kernel(monkeypatch):
+    """A kernel in numba's cache, in a process where numba has not set up its compiler
+    (no compiled kernel loaded yet); nothing may go to the background."""
+    from roverimpact import _kernels
+
+    k = _jit.Kernel(_twice, types.void(types.float64, _jit.rw(_jit.f8, 1)), cache=False)
+    monkeypatch.setattr(k, "cached", lambda: True)
+    monkeypatch.setattr(_jit, "numba_set_up", lambda: False)
+    monkeypatch.setattr(_kernels, "small_work", False)
+    monkeypatch.setattr(_jit, "PYTHON_ITEMS", 50)
+
+    def nothing_sent(*ks):
+        raise AssertionError(f"{[x.__name__ for x in ks]} sent to the background")
+
+    monkeypatch.setattr(_jit, "compile_in_background", nothing_sent)
+    monkeypatch.setenv("ROVERIMPACT_KERNELS", "auto")
+    return k
+
+
+def test_a_cached_kernel_loads_at_once_unless_the_work_is_declared_small(warm_kernel):
+    """A library call (no declared small work) loads the cached kernel on its first call,
+    as before: its results are the compiled kernel's from the first call on."""
+    warm_kernel.get(1)
+    assert warm_kernel.compiled and warm_kernel.python_items == 0
+
+
+def test_small_work_runs_a_cached_kernel_s_python_until_its_warm_budget(warm_kernel,
+                                                                        monkeypatch):
+    """A small command (``energy``) would load its cached kernels only to set up numba's
+    compiler (about 0.25 s) for items of a millisecond: it runs their Python code for
+    ``PYTHON_ITEMS // WARM_SHARE`` items (5 here), then loads them."""
+    _jit.declare_small_work()
+    k = warm_kernel
+    out = np.zeros(1)
+    k.get(3)(1.5, out)
+    assert out[0] == 3.0 and not k.compiled and k.python_items == 3
+    assert k.get(2) is k.python() and k.python_items == 5
+    k.get(1)(2.5, out)  # past 50 // 10 items: loaded
+    assert k.compiled and out[0] == 5.0 and k.get(1) is k.get()
+
+
+def test_small_work_loads_a_cached_kernel_once_numba_is_set_up(warm_kernel, monkeypatch):
+    """Once one kernel has been loaded (numba's compiler set up), another loads in
+    milliseconds: no Python code for it."""
+    _jit.declare_small_work()
+    monkeypatch.setattr(_jit, "numba_set_up", lambda: True)
+    warm_kernel.get(1)
+    assert warm_kernel.compiled and warm_kernel.python_items == 0
+
+
+def test_small_work_loads_a_cached_integrator_at_once(warm_kernel):
+    """No Python budget (the integrators): loaded at once, small work or not."""
+    _jit.declare_small_work()
+    warm_kernel.python_budget = 0
+    warm_kernel.get(1)
+    assert warm_kernel.compiled and warm_kernel.python_items == 0
+
+
+def test_a_command_s_small_work_ends_with_the_command(monkeypatch):
+    """``compile_ahead(small=True)`` declares small work for the command that calls it
+    only: the command wrapper restores the flag (commands run in one process, as here, do
+    not inherit it), and Dask workers forked for the work (``workers``) never have it."""
+    from typer.testing import CliRunner
+
+    from roverimpact import _kernels
+    from roverimpact.cli import app
+    from roverimpact.cli._app import compile_ahead
+
+    monkeypatch.setattr(_kernels, "small_work", False)
+    monkeypatch.setattr(_jit, "compile_in_background", lambda *ks: [])
+    compile_ahead(small=True, workers=True)
+    assert not _kernels.small_work
+    seen = []
+    monkeypatch.setattr(_jit, "declare_small_work",
+                        lambda: seen.append(1) or setattr(_kernels, "small_work", True))
+    res = CliRunner().invoke(app, ["energy", "examples/rover2d_beta45.toml", "--json"])
+    assert res.exit_code == 0, res.output
+    assert seen == [1] and not _kernels.small_work
+
+
+_WARM_ENERGY = """
+import json, sys
+from roverimpact._kernels import _jit
+from roverimpact._kernels.partition import partition_kernel
+from roverimpact.models._assemble import _evaluate_one
+assert partition_kernel.cached() and _evaluate_one.cached(), "the cache is not warm"
+assert not _jit.numba_set_up()
+from roverimpact.cli import main
+sys.argv = ["roverimpact", "energy", "examples/rover2d_beta45.toml", "--json"]
+code = main()
+print(json.dumps([code, _jit.numba_set_up(), partition_kernel.compiled,
+                  _evaluate_one.compiled]))
+partition_kernel.get()
+print(json.dumps(_jit.numba_set_up()))
+"""
+
+
+def test_a_warm_energy_command_loads_no_compiled_kernel():
+    """``roverimpact energy`` in a fresh process with its kernels in numba's cache: no
+    compiled kernel is loaded (numba's compiler never set up: a warm ``energy`` took
+    0.82 s, 0.57 s without it, ``benchmarks/bench_startup.py``, 2026-11-30), its numbers
+    are the compiled kernels' to rounding, and :func:`_jit.numba_set_up` does tell a
+    process that has loaded one."""
+    import os
+    import subprocess
+    import sys
+
+    from typer.testing import CliRunner
+
+    from roverimpact._kernels.partition import partition_kernel
+    from roverimpact.cli import app
+    from roverimpact.models._assemble import _evaluate_one
+
+    partition_kernel.get(), _evaluate_one.get()  # both in numba's cache (compiled here)
+    ref = json.loads(CliRunner().invoke(
+        app, ["energy", "examples/rover2d_beta45.toml", "--json"]).stdout)
+    env = {**os.environ, "ROVERIMPACT_KERNELS": "auto", "ROVERIMPACT_BACKGROUND_COMPILE": "0"}
+    res = subprocess.run([sys.executable, "-c", _WARM_ENERGY], capture_output=True, text=True,
+                         env=env, timeout=120)
+    assert res.returncode == 0, res.stderr
+    lines = res.stdout.strip().splitlines()
+    assert json.loads(lines[-2]) == [0, False, False, False]
+    assert json.loads(lines[-1]) is True  # loading a kernel sets numba up
+    got = json.loads("\n".join(lines[:-2]))
+    for key in ("T", "T_c_minus", "T_a", "m_eff", "peak_force"):
+        assert got[key] == pytest.approx(ref[key], rel=1e-12)
+
+
 def test_an_unknown_kernel_mode_is_refused(monkeypatch):
     monkeypatch.setenv("ROVERIMPACT_KERNELS", "jit")
     with pytest.raises(ConfigError, match="ROVERIMPACT_KERNELS='jit' is not one of auto"):

@@ -15,3 +15,8 @@
 #: the command line sets one that says what is compiling (``cli._app.compile_notice``).
 #: Here, not in :mod:`._jit`, so that setting it imports no numba. None: nothing is shown.
 compile_notice = None
+
+#: Whether this process's work is small (``._jit.declare_small_work``, which the command
+#: line's small commands call; its command wrapper restores the previous value when the
+#: command ends, so that commands run in one process, as in the tests, do not inherit it).
+small_work = False

@@ -35,6 +35,12 @@ reorders floating-point operations). ``ROVERIMPACT_KERNELS=compiled`` always com
 (the test suite's setting, so that its results do not depend on the cache's state),
 ``=python`` always runs the Python code (slow; to debug a kernel).
 
+A kernel in the cache loads in milliseconds, except the first of a process: that load sets
+up numba's compiler (about 0.25 s). A process whose work is small
+(:func:`declare_small_work`: the command line's ``energy``, ``simulate``, a small
+``sweep``) therefore runs a cached kernel's Python code too, for a tenth of its budget,
+until a kernel has been loaded.
+
 Every compiled function of the package takes :data:`NJIT_OPTIONS`. numba caches a function
 beside its source, else in ``NUMBA_CACHE_DIR``, else in the user's cache folder, and with
 ``cache=True`` refuses to compile one when none of them can be written (a read-only install
@@ -213,8 +219,11 @@ class Kernel:
         same arguments and results, to rounding) until :data:`PYTHON_ITEMS` items have run
         through it in this process; the compile is sent to a background process
         (:func:`compile_in_background`) if none is under way, and the compiled kernel is
-        loaded once that process has finished. Not given: compiled (hot paths of large
-        batches, and callers that need numba's argument checks).
+        loaded once that process has finished. In a process whose work is declared small
+        (:func:`declare_small_work`), a kernel the cache holds also runs its Python code,
+        for ``PYTHON_ITEMS // WARM_SHARE`` items, while numba has not set up its compiler.
+        Not given: compiled (hot paths of large batches, and callers that need numba's
+        argument checks).
 
         A compile that numba's cache cannot serve runs inside
         ``roverimpact._kernels.compile_notice(self)`` when one is set (the command line's
@@ -290,8 +299,13 @@ class Kernel:
             else:
                 if self._cold is None:
                     self._cold = not self.cached()
-                if not self._cold:
-                    return False  # in the cache: loads in milliseconds
+                if not self._cold:  # in the cache: loads in milliseconds, once numba is set up
+                    warm_budget = budget // WARM_SHARE
+                    if not (_kernels.small_work and self.python_items + items <= warm_budget
+                            and not numba_set_up()):
+                        return False
+                    self.python_items += items
+                    return True
                 if os.environ.get("ROVERIMPACT_BACKGROUND_COMPILE") == "0":
                     return False  # compiled here, as asked
                 compile_in_background(self)
@@ -346,6 +360,43 @@ class Kernel:
 #: milliseconds an item; past it the process compiles the kernel or waits for the
 #: background process (which has then had that long).
 PYTHON_ITEMS = 1000
+
+#: In a process whose work is small, the share of a kernel's Python budget it runs although
+#: numba's cache holds the kernel, until numba has set up its compiler in the process
+#: (:func:`numba_set_up`): 100 items of about a millisecond against the set-up's
+#: about 0.25 s (:func:`declare_small_work`).
+WARM_SHARE = 10
+
+
+def declare_small_work() -> None:
+    """Say that this process's work is small: one scenario, or a few hundred items (the
+    command line's ``energy``, ``simulate``, a small ``sweep``; ``cli._app.compile_ahead``
+    with ``small``).
+
+    Then a kernel that numba's cache holds also runs its Python code for its first
+    ``budget // WARM_SHARE`` items (100; none for the integrators) while no compiled
+    kernel has been loaded in this process: numba's first load in a process sets up its
+    compiler (its registries of implementations, about 0.25 s on 2 cores), and an item of a
+    kernel's Python code costs about a millisecond. A warm ``roverimpact energy`` paid
+    that set-up for two kernels loaded in milliseconds each; it now runs as a cold one
+    (``benchmarks/bench_startup.py``), with the same results as a cold one: the Python
+    code's, equal to the compiled kernel's to rounding. Once a kernel is loaded (past its
+    items, or a kernel with no Python budget), every kernel loads from the cache.
+    """
+    _kernels.small_work = True
+
+
+def numba_set_up() -> bool:
+    """Whether numba has set up its compiler in this process (its CPU target's
+    registries of implementations, loaded by the first compile or cache load). Any doubt
+    (a numba without these internals) counts as set up."""
+    try:
+        from numba.core.registry import cpu_target
+
+        return bool(cpu_target.target_context._registries)
+    except Exception:  # pragma: no cover - a numba without these internals
+        return True
+
 
 #: ``ROVERIMPACT_KERNELS`` values: ``auto`` (default; Python code for small work while a
 #: kernel is not in numba's cache), ``compiled``, ``python``.

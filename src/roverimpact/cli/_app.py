@@ -104,12 +104,17 @@ class _Typer(typer.Typer):
             def wrapper(*a, **kw):
                 import warnings
 
+                from .. import _kernels
+
+                small = _kernels.small_work  # a command may declare its work small
                 try:
                     with warnings.catch_warnings():
                         warnings.showwarning = _show_once()
                         return fn(*a, **kw)
                 except KeyboardInterrupt as exc:
                     raise CommandInterrupted(str(exc)) from None
+                finally:
+                    _kernels.small_work = small
 
             register(wrapper)
             return fn
@@ -195,10 +200,16 @@ def compile_ahead(*later, now=(), small: bool = False, workers: bool = False) ->
     ``benchmarks/bench_startup.py`` that may have overlapped an earlier run's compile).
     Large work compiles ``now`` here as before: with every kernel in the second process,
     a first ``roverimpact traverse examples/traverse_rocky.toml`` waited for them in turn
-    and took 72-94 s against 41-44 s.
+    and took 72-94 s against 41-44 s. ``small`` also declares the command's work small
+    (:func:`roverimpact._kernels._jit.declare_small_work`, not for ``workers``): with a
+    warm cache its first items run the Python code as well, where loading the first
+    kernel would set up numba's compiler (a warm ``energy`` from 0.82 to 0.57 s,
+    ``benchmarks/bench_startup.py``, 2026-11-30).
     """
-    from .._kernels._jit import compile_in_background, kernel_mode
+    from .._kernels._jit import compile_in_background, declare_small_work, kernel_mode
 
+    if small and not workers:
+        declare_small_work()
     if now and small and not workers and kernel_mode() == "auto":
         later = (*later, *(k for k in now if k.python_budget is None))
         now = tuple(k for k in now if k.python_budget is not None)
