@@ -23,7 +23,7 @@ PKG = SRC / "roverimpact"
 LAYERS = [
     "exceptions", "_version", "_validation", "_kernels",        # checks and kernels
     "energy", "impulse", "unilateral", "frictional",            # the core: numbers in, out
-    "_io", "_schema",                                           # files, config schemas
+    "_io", "_schema", "_engines",                               # files, config schemas, names
     "contact",
     "models",
     "scenario",
@@ -189,6 +189,39 @@ def test_light_imports(module, forbidden):
                          check=True).stdout.split()
     loaded = sorted(set(forbidden) & set(out))
     assert not loaded, f"import {module} loads {loaded}"
+
+
+_REPORT_MODULES = """
+import sys
+from roverimpact.report import build_report
+build_report(sys.argv[1], n_boot=0)
+print(' '.join(sorted(sys.modules)))
+"""
+
+
+def test_a_report_loads_neither_the_evaluator_nor_the_simulators(tmp_path):
+    """``roverimpact report`` of saved results reads tables and draws: it imports neither
+    the study evaluator (the scenario layer, Pinocchio, numba's kernels) nor the
+    simulators, which took half a second of its start (``roverimpact.studies`` loads its
+    names on first use; the engines' names are :mod:`roverimpact._engines`)."""
+    from roverimpact.studies import run_study
+
+    run_study(ROOT / "examples" / "study_rigid_body.toml", tmp_path / "rb")
+    out = subprocess.run([sys.executable, "-c", _REPORT_MODULES, str(tmp_path / "rb")],
+                         capture_output=True, text=True, check=True).stdout.split()
+    assert (tmp_path / "rb" / "report.html").is_file()
+    loaded = [m for m in out if m.split(".")[0] in ("pinocchio", "numba", "mujoco")
+              or m.startswith(("roverimpact.studies.evaluate", "roverimpact.studies.sweep",
+                               "roverimpact.simulate", "roverimpact.scenario",
+                               "roverimpact.models"))]
+    assert not loaded, f"the report loads {loaded}"
+
+
+def test_the_engines_names_are_the_engines():
+    from roverimpact._engines import ENGINE_NAMES
+    from roverimpact.simulate.engines import ENGINES
+
+    assert ENGINE_NAMES == tuple(ENGINES)
 
 
 def test_no_private_name_crosses_a_module():

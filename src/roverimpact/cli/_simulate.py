@@ -51,10 +51,10 @@ def simulate_cmd(
                                "(MuJoCo's dynamics, the scenario's contact laws)."),
 ) -> None:
     """Drive the rover into the obstacle with compliant contact; report F_max and T_c^-."""
+    from .._engines import engine_name
     from ..scenario import load_scenario
     from ..scenario.build import scenario_model
     from ..simulate import SimulationConfig, simulate_scenario
-    from ..simulate.engines import engine_name
     from ..simulate.run import build_system
 
     engine = engine_name(engine)

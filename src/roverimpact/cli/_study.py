@@ -32,7 +32,7 @@ def _f(x: float) -> str:
 
 def _label(s) -> str:
     """The paper figure of a built-in study ("DETC2014 Fig. 2"), else the folder's name."""
-    from ..studies.reproduce import BUILTIN_STUDIES
+    from ..studies.builtin import BUILTIN_STUDIES
 
     fig = BUILTIN_STUDIES.get(s.folder.name)
     return re.sub(r"-\d+ ", " ", fig) if fig else s.folder.name
@@ -288,7 +288,7 @@ def reproduce_cmd(
 ) -> int:
     """Reproduce the studies of DETC2014-35554 (Figs. 2, 3) and DETC2015-47747 (Fig. 2)."""
     from ..report.reproduce import reproduce
-    from ..studies.reproduce import BUILTIN_STUDIES
+    from ..studies.builtin import BUILTIN_STUDIES
 
     if out is None:
         out = Path("roverimpact-results-quick" if quick else "roverimpact-results")

@@ -644,7 +644,7 @@ def missing_studies_note(root: str | Path) -> str:
     a built-in study: the others' results deleted or never run), and any subfolder holding
     a study without its results (an interrupted run: its ``chunks/`` or ``manifest.json``
     but no ``results.parquet``; such a study was once left out without a word)."""
-    from ..studies.reproduce import BUILTIN_STUDIES
+    from ..studies.builtin import BUILTIN_STUDIES
 
     root = Path(root)
     if (root / RESULTS).is_file() or not root.is_dir():

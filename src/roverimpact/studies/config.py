@@ -150,7 +150,7 @@ class Study(StrictModel):
     def _engines(cls, value):
         if isinstance(value, bool):
             return value
-        from ..simulate.engines import engine_name
+        from .._engines import engine_name
 
         names = [value] if isinstance(value, str) else list(value)
         if not names:

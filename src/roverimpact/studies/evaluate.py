@@ -55,6 +55,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._engines import engines_of
 from ..contact import peak_force
 from ..exceptions import InputError, RoverImpactError
 from ..scenario import ImpactSetup, Scenario, scenario_from_dict, sweep_energy
@@ -101,18 +102,6 @@ SIMULATION_COLUMNS = ("F_max", "contact_duration", "contact_whole_window")
 #: ``F_lo`` and ``F_hi``).
 REFINED_COLUMNS = ("F_pred_refined", "contact_duration_pred", "not_an_impact")
 
-
-def engines_of(simulate) -> tuple[str, ...]:
-    """The engines of an evaluator's ``simulate`` argument: ``False`` -> ``()``, ``True``
-    -> ``("own",)``, a name or a sequence of names as given (checked)."""
-    from ..simulate.engines import engine_name
-
-    if simulate is True:
-        return ("own",)
-    if not simulate:
-        return ()
-    names = (simulate,) if isinstance(simulate, str) else tuple(simulate)
-    return tuple(engine_name(n) for n in names)
 
 
 def engine_suffix(index: int, engine: str) -> str:

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from .._io import read_toml, some_names, visible_entries
 from ..exceptions import ConfigError, StudyInterrupted
+from .builtin import BUILTIN_STUDIES
 from .config import study_from_dict
 from .executors import LazyCluster
 from .forked import ProcessDied, map_forked, side_by_side
@@ -32,13 +33,6 @@ from .sweep import run_study
 
 __all__ = ["BUILTIN_STUDIES", "QUICK_POINTS", "builtin_study_path", "run_builtin_studies"]
 
-#: Built-in studies: file stem -> the paper figure it reproduces.
-BUILTIN_STUDIES = {
-    "detc2014_fig2_beta": "DETC2014-35554 Fig. 2",
-    "detc2014_fig3_com_height": "DETC2014-35554 Fig. 3",
-    "detc2015_fig2_beta": "DETC2015-47747 Fig. 2",
-    "fixed_vn_configuration": "Fixed v_n: h x rocker pivot",
-}
 
 #: Grid points of the x parameter in ``--quick`` mode (the other swept parameters keep
 #: their two ends).

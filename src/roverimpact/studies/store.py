@@ -129,8 +129,7 @@ def simulated_forces(table: pd.DataFrame, simulate=True) -> list[tuple[str, str,
     of ``F_max`` (``True`` or absent: the own simulator); further engines are found by
     their columns (``F_max_mujoco``).
     """
-    from ..simulate.engines import ENGINE_NAMES
-    from .evaluate import engines_of
+    from .._engines import ENGINE_NAMES, engines_of
 
     try:
         engines = engines_of(simulate) or ("own",)

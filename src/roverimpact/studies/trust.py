@@ -387,7 +387,7 @@ def trust_map(
 
 
 def _engine_list(engines) -> tuple[str, ...]:
-    from ..simulate.engines import engine_name
+    from .._engines import engine_name
 
     names = [engines] if isinstance(engines, str) else list(engines)
     if not names:

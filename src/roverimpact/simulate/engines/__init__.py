@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from ..._engines import ENGINE_NAMES, engine_name
 from ...exceptions import ConfigError, ModelError
 from ..config import SimulationConfig
 from ..result import SimulationResult
@@ -35,33 +36,6 @@ from .mujoco import (
 __all__ = ["ENGINES", "ENGINE_NAMES", "LinearContact", "check_engine", "engine_name",
            "equivalent_kelvin_voigt", "get_engine", "linear_contact", "simulate_impact_mujoco",
            "simulate_impact_mujoco_laws", "simulate_scenario"]
-
-#: The simulators a scenario can run in: ``"own"`` (:func:`roverimpact.simulate.simulate_impact`,
-#: the reference), ``"mujoco"`` (:func:`simulate_impact_mujoco`: MuJoCo's soft contact) and
-#: ``"mujoco_laws"`` (:func:`simulate_impact_mujoco_laws`: MuJoCo's dynamics, the
-#: scenario's laws).
-ENGINE_NAMES = tuple(ENGINES)
-
-
-def engine_name(name) -> str:
-    """``name`` checked against :data:`ENGINE_NAMES` (case-insensitive, ``-`` as ``_``).
-
-    >>> engine_name("MuJoCo")
-    'mujoco'
-    >>> engine_name("mujoco-laws")
-    'mujoco_laws'
-
-    Raises
-    ------
-    ConfigError
-        Not a string, or an unknown engine; the message lists the known ones.
-    """
-    key = name.strip().lower().replace("-", "_") if isinstance(name, str) else None
-    if key not in ENGINES:
-        raise ConfigError(f"unknown simulation engine {name!r}: choose one of "
-                          f"{', '.join(ENGINE_NAMES)}")
-    return key
-
 
 def get_engine(name: str) -> Callable:
     """The function ``(mbm, config, *, q0=None, v0=None) -> SimulationResult`` of an engine."""
