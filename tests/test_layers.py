@@ -217,6 +217,19 @@ def test_a_report_loads_neither_the_evaluator_nor_the_simulators(tmp_path):
     assert not loaded, f"the report loads {loaded}"
 
 
+def test_a_figure_of_one_simulation_loads_no_study_report():
+    """``roverimpact simulate`` draws its force history with :mod:`roverimpact.report.simulation`:
+    the report package loads its names on first use, so that figure does not import the
+    study report and its statistics (scipy.stats, half a second of the command's 2.3 s)."""
+    code = ("import sys, roverimpact.report.simulation; "
+            "print(' '.join(sorted(sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    loaded = [m for m in out if m.startswith(("scipy.stats", "roverimpact.report.html",
+                                              "roverimpact.studies"))]
+    assert not loaded, f"roverimpact.report.simulation loads {loaded}"
+
+
 def test_the_engines_names_are_the_engines():
     from roverimpact._engines import ENGINE_NAMES
     from roverimpact.simulate.engines import ENGINES
