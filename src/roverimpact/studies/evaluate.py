@@ -103,7 +103,6 @@ SIMULATION_COLUMNS = ("F_max", "contact_duration", "contact_whole_window")
 REFINED_COLUMNS = ("F_pred_refined", "contact_duration_pred", "not_an_impact")
 
 
-
 def engine_suffix(index: int, engine: str) -> str:
     """Column suffix of the ``index``-th engine of a study: ``""`` for the first (the
     reference: ``F_max``), ``"_<engine>"`` for the others (``F_max_mujoco``)."""

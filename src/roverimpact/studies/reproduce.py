@@ -33,7 +33,6 @@ from .sweep import run_study
 
 __all__ = ["BUILTIN_STUDIES", "QUICK_POINTS", "builtin_study_path", "run_builtin_studies"]
 
-
 #: Grid points of the x parameter in ``--quick`` mode (the other swept parameters keep
 #: their two ends).
 QUICK_POINTS = 5
