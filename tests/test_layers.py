@@ -21,7 +21,7 @@ PKG = SRC / "roverimpact"
 
 #: bottom to top; a top-level module or sub-package of roverimpact per entry
 LAYERS = [
-    "exceptions", "_version", "_validation", "_kernels",        # checks and kernels
+    "_lazy", "exceptions", "_version", "_validation", "_kernels",  # checks and kernels
     "energy", "impulse", "unilateral", "frictional",            # the core: numbers in, out
     "_io", "_schema", "_engines",                               # files, config schemas, names
     "contact",

@@ -7,9 +7,9 @@ needs numpy alone and a command pays only for what it uses.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
+from ._lazy import attach
 from ._version import __version__
 
 #: public name -> module that defines it (relative to this package)
@@ -96,19 +96,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)
-        globals()[name] = value  # later lookups skip this function
-        return value
-    if name in _SUBPACKAGES:
-        return importlib.import_module(f".{name}", __name__)
-    raise AttributeError(f"module 'roverimpact' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted({*globals(), *_EXPORTS, *_SUBPACKAGES})
-
+__getattr__, __dir__ = attach(__name__, _EXPORTS, _SUBPACKAGES)
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from . import contact

@@ -7,8 +7,9 @@ study report and its statistics (scipy.stats) with it.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from .._lazy import attach
 
 #: public name -> module that defines it (relative to this package)
 _EXPORTS = {"build_report": ".html", "plot_study": ".plots"}
@@ -16,17 +17,7 @@ _EXPORTS = {"build_report": ".html", "plot_study": ".plots"}
 __all__ = ["build_report", "plot_study"]
 
 
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)
-        globals()[name] = value  # later lookups skip this function
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted({*globals(), *_EXPORTS})
-
+__getattr__, __dir__ = attach(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .html import build_report
