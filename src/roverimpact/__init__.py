@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ._lazy import attach
+from ._lazy import attach as _attach
 from ._version import __version__
 
 #: public name -> module that defines it (relative to this package)
@@ -96,7 +96,7 @@ __all__ = [
 ]
 
 
-__getattr__, __dir__ = attach(__name__, _EXPORTS, _SUBPACKAGES)
+__getattr__, __dir__ = _attach(__name__, _EXPORTS, _SUBPACKAGES)
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from . import contact

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._lazy import attach
+from .._lazy import attach as _attach
 
 #: public name -> module that defines it (relative to this package)
 _EXPORTS = {"build_report": ".html", "plot_study": ".plots"}
@@ -17,7 +17,7 @@ _EXPORTS = {"build_report": ".html", "plot_study": ".plots"}
 __all__ = ["build_report", "plot_study"]
 
 
-__getattr__, __dir__ = attach(__name__, _EXPORTS)
+__getattr__, __dir__ = _attach(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .html import build_report

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._lazy import attach
+from .._lazy import attach as _attach
 
 #: public name -> module that defines it (relative to this package)
 _EXPORTS = {
@@ -47,7 +47,7 @@ __all__ = [
 ]
 
 
-__getattr__, __dir__ = attach(__name__, _EXPORTS)
+__getattr__, __dir__ = _attach(__name__, _EXPORTS)
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs
     from .config import Case, Study, expand, load_study
