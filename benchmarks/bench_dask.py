@@ -1,6 +1,7 @@
 """Dask against serial, in one run: does ``--workers 2`` help, and is it never slower?
 
     python benchmarks/bench_dask.py [--n-indicator 1000000] [--n-sim 200] [--workers 2]
+                                    [--repeat 1]
 
 Issue #19's targets: >= 1.7x on 2 workers for a 1e6-case indicator sweep (3-D
 rocker-bogie, T_c^- only) and for 200 simulated cases (2-D rover, own engine); never
@@ -14,6 +15,11 @@ Each workload runs three ways, wall time from the call to the finished table:
   printed, from the manifest);
 * on an already running local cluster (``scheduler=address``), as several studies of one
   session share one (``reproduce``), start-up excluded.
+
+``--repeat N`` runs the three in turns N times and prints every round and the medians of
+the ratios: on a machine whose speed swings within a minute one round's ratio is one draw
+(200 simulated cases on a cluster started for them gave 1.63-1.90x in six runs on
+2026-11-30).
 
 The load average is printed before each run: on a shared machine other jobs take cores
 and the speed-up cannot exceed ``cores - load``. With forked workers (Linux, the default:
@@ -107,25 +113,41 @@ def timed(study: dict, tmp: str, tag: str, **kw) -> tuple[float, str, np.ndarray
     return wall, f"{manifest.get('executor', 'serial')} ({before})", T
 
 
-def compare(name: str, study: dict, workers: int, address: str) -> None:
+def compare(name: str, study: dict, workers: int, address: str, repeat: int = 1) -> None:
+    """The study serially, on a cluster started for it and on the running cluster, in
+    turns, ``repeat`` rounds: with more than one, every round's ratios and their medians
+    (this machine's speed swings within a minute; one round's ratio is one draw)."""
+    rounds = []
     with tempfile.TemporaryDirectory() as tmp:
         warm = ({**study, "grid": {"obstacle.beta_deg": [30.0]}} if "grid" in study
                 else {**study, "random": {**study["random"], "n": 2}})
         run_study(warm, f"{tmp}/warm")                  # imports and compiled kernels
-        ts, es, Ts = timed(study, tmp, "serial")
-        cs = chunk_times()
-        tw, ew, Tw = timed(study, tmp, "workers", workers=workers)
-        tr, er, Tr = timed(study, tmp, "running", scheduler=address)
-        cr = chunk_times()
-    same = np.array_equal(Ts, Tw, equal_nan=True) and np.array_equal(Ts, Tr, equal_nan=True)
+        for r in range(repeat):
+            ts, es, Ts = timed(study, tmp, f"serial{r}")
+            cs = chunk_times()
+            tw, ew, Tw = timed(study, tmp, f"workers{r}", workers=workers)
+            tr, er, Tr = timed(study, tmp, f"running{r}", scheduler=address)
+            cr = chunk_times()
+            same = (np.array_equal(Ts, Tw, equal_nan=True)
+                    and np.array_equal(Ts, Tr, equal_nan=True))
+            rounds.append((ts, es, tw, ew, tr, er, same, cs, cr))
     print(f"{name}:")
-    print(f"  serial                        {ts:8.2f} s   {es}")
-    print(f"  workers={workers} (cluster started) {tw:8.2f} s   {ts / tw:5.2f}x   {ew}")
-    print(f"  running cluster               {tr:8.2f} s   {ts / tr:5.2f}x   {er}")
-    print(f"  T_c^- identical in the three runs: {same}")
-    if cs and cr:
-        print(f"  computing a chunk: {np.mean(cs):.3f} s serially, {np.mean(cr):.3f} s on the "
-              f"running cluster ({np.mean(cr) / np.mean(cs):.2f}x; {len(cr)} chunks)")
+    for r, (ts, es, tw, ew, tr, er, same, cs, cr) in enumerate(rounds):
+        if repeat > 1:
+            print(f" round {r + 1} of {repeat}")
+        print(f"  serial                        {ts:8.2f} s   {es}")
+        print(f"  workers={workers} (cluster started) {tw:8.2f} s   {ts / tw:5.2f}x   {ew}")
+        print(f"  running cluster               {tr:8.2f} s   {ts / tr:5.2f}x   {er}")
+        print(f"  T_c^- identical in the three runs: {same}")
+        if cs and cr:
+            print(f"  computing a chunk: {np.mean(cs):.3f} s serially, {np.mean(cr):.3f} s on "
+                  f"the running cluster ({np.mean(cr) / np.mean(cs):.2f}x; {len(cr)} chunks)")
+    if repeat > 1:
+        started = [ts / tw for ts, _, tw, *_ in rounds]
+        running = [ts / tr for ts, _, _, _, tr, *_ in rounds]
+        print(f"  median of {repeat} rounds: cluster started {np.median(started):.2f}x "
+              f"({min(started):.2f}-{max(started):.2f}), running cluster "
+              f"{np.median(running):.2f}x ({min(running):.2f}-{max(running):.2f})")
 
 
 def _first_task(_i: int = 0) -> int:
@@ -277,6 +299,8 @@ def main() -> None:
     ap.add_argument("--n-indicator", type=int, default=1_000_000)
     ap.add_argument("--n-sim", type=int, default=200)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="rounds of serial / cluster started / running cluster, in turns")
     args = ap.parse_args()
     from roverimpact.studies.executors import local_cluster, worker_start_method
 
@@ -286,10 +310,10 @@ def main() -> None:
     with local_cluster(args.workers) as address:      # as --workers starts one
         if args.n_indicator:
             compare(f"indicator sweep, 3-D rocker-bogie, {args.n_indicator:,} cases",
-                    indicator_study(args.n_indicator), args.workers, address)
+                    indicator_study(args.n_indicator), args.workers, address, args.repeat)
         if args.n_sim:
             compare(f"simulated sweep, 2-D rover, {args.n_sim} random cases",
-                    simulated_study(args.n_sim), args.workers, address)
+                    simulated_study(args.n_sim), args.workers, address, args.repeat)
     cluster_start(args.workers)
     if args.n_indicator:
         background_work(args.workers, indicator_study(1_000_000), "indicator cases")
