@@ -412,13 +412,14 @@ def test_no_simulate_ranks_the_peaks_by_T_c_alone(tmp_path, capsys, monkeypatch,
     import json
 
     import roverimpact as ri
+    import roverimpact.simulate
     from roverimpact.cli import main
-    from roverimpact.studies import evaluate
 
     def no_simulation(*a, **k):
         raise AssertionError("simulated")
 
-    monkeypatch.setattr(evaluate, "simulate_scenario", no_simulation)
+    # the evaluator takes the simulator from roverimpact.simulate when it simulates
+    monkeypatch.setattr(roverimpact.simulate, "simulate_scenario", no_simulation)
     d = tmp_path / "exp"
     shutil.copytree(EXAMPLE, d)
     argv = ["experiment", str(d / "trials.toml"), "-o", str(tmp_path / "out"), "--no-plot"]

@@ -217,6 +217,27 @@ def test_a_report_loads_neither_the_evaluator_nor_the_simulators(tmp_path):
     assert not loaded, f"the report loads {loaded}"
 
 
+_STUDY_MODULES = """
+import sys
+from roverimpact.studies import run_study
+run_study(sys.argv[1], sys.argv[2])
+print(' '.join(sorted(sys.modules)))
+"""
+
+
+def test_a_study_that_only_ranks_loads_no_simulator(tmp_path):
+    """A study without ``simulate`` computes T_c^- and the predicted force: it imports
+    neither the simulators nor MuJoCo (the evaluator imports them when a study simulates)."""
+    out = subprocess.run([sys.executable, "-c", _STUDY_MODULES,
+                          str(ROOT / "examples" / "study_rigid_body.toml"),
+                          str(tmp_path / "rb")],
+                         capture_output=True, text=True, check=True).stdout.split()
+    assert (tmp_path / "rb" / "results.parquet").is_file()
+    loaded = [m for m in out if m.split(".")[0] == "mujoco"
+              or m.startswith("roverimpact.simulate")]
+    assert not loaded, f"a study that only ranks loads {loaded}"
+
+
 def test_a_figure_of_one_simulation_loads_no_study_report():
     """``roverimpact simulate`` draws its force history with :mod:`roverimpact.report.simulation`:
     the report package loads its names on first use, so that figure does not import the

@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import nullcontext
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -77,8 +78,6 @@ from ..scenario.build import (
     warn_if_pulling,
     warn_jammed,
 )
-from ..simulate import SimulationConfig, reuse_settled_states, simulate_scenario
-from ..simulate.engines import check_engine
 from .config import apply_overrides
 
 __all__ = [
@@ -203,6 +202,8 @@ def _simulate_one(sc: Scenario, model, engine: str = "own", suffix: str = ""
                   ) -> dict[str, Any]:
     """F_max (summed obstacle normal force, the papers' f_n) and duration of one engine;
     NaN on failure. Column names end in ``suffix``."""
+    from ..simulate import simulate_scenario  # here: a study that only ranks needs none
+
     try:
         res = simulate_scenario(sc, model=model, engine=engine)
     except RoverImpactError as exc:
@@ -214,6 +215,17 @@ def _simulate_one(sc: Scenario, model, engine: str = "own", suffix: str = ""
                "T_c_minus_sim": float(res.T_c_minus),
                "contact_whole_window": not bool(res.separated), "sim_error": ""}
     return {k + suffix: v for k, v in out.items()}
+
+
+def _settle_once(engines: Sequence[str]):
+    """:func:`roverimpact.simulate.reuse_settled_states` when ``engines`` simulate, else
+    nothing: the simulators are imported by the studies that simulate only (half a second
+    of a command's start)."""
+    if not engines:
+        return nullcontext()
+    from ..simulate import reuse_settled_states
+
+    return reuse_settled_states()
 
 
 def _simulate_all(sc: Scenario, model, engines: Sequence[str]) -> dict[str, Any]:
@@ -331,6 +343,9 @@ class ScenarioEvaluator:
         setup = ImpactSetup.from_scenario(sc) if models is None else self._setup(sc, models)
         _law_of(sc)
         if engines:
+            from ..simulate import SimulationConfig
+            from ..simulate.engines import check_engine
+
             cfg = SimulationConfig.from_scenario(sc)
             for engine in engines:
                 check_engine(engine, setup.model, cfg, terrain=sc.terrain is not None)
@@ -529,7 +544,7 @@ class ScenarioEvaluator:
         # the refined prediction (needs m_eff) and the simulations, case by case; the
         # cases of one model that settle alike (an angle or speed sweep) settle once per
         # engine (reuse_settled_states: the same configuration, the same bits)
-        with reuse_settled_states():
+        with _settle_once(engines):
             for idx, setup in pending:
                 for i in idx:
                     sc_i = scenario_from_dict(apply_overrides(base, overrides[i]))
