@@ -219,8 +219,8 @@ def _simulate_one(sc: Scenario, model, engine: str = "own", suffix: str = ""
 
 def _settle_once(engines: Sequence[str]):
     """:func:`roverimpact.simulate.reuse_settled_states` when ``engines`` simulate, else
-    nothing: the simulators are imported by the studies that simulate only (0.44 s of
-    imports beyond the scenario layer's, on 2026-11-30's machine)."""
+    nothing: only the studies that simulate import the simulators (``python -X importtime``
+    shows what the others save)."""
     if not engines:
         return nullcontext()
     from ..simulate import reuse_settled_states
