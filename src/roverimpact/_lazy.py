@@ -10,6 +10,7 @@ scientific Python ecosystem, without the dependency.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import sys
 from collections.abc import Callable, Iterable, Mapping
 
@@ -22,9 +23,14 @@ def attach(package: str, exports: Mapping[str, str], submodules: Iterable[str] =
     name to the module that defines it (relative to ``package``); ``submodules`` are
     subpackages returned as attributes.
 
+    A module of the package that is not imported yet is imported when read, as it would
+    be if the package imported all its modules.
+
     >>> getattr_, dir_ = attach("roverimpact", {"partition": ".energy"})
     >>> getattr_("partition").__name__, "partition" in dir_()
     ('partition', True)
+    >>> getattr_("impulse").__name__
+    'roverimpact.impulse'
     """
     exports = dict(exports)
     submodules = frozenset(submodules)
@@ -34,7 +40,10 @@ def attach(package: str, exports: Mapping[str, str], submodules: Iterable[str] =
             value = getattr(importlib.import_module(exports[name], package), name)
             setattr(sys.modules[package], name, value)  # later reads skip this function
             return value
-        if name in submodules:
+        if name in submodules or (not name.startswith("__") and importlib.util.find_spec(
+                f"{package}.{name}") is not None):
+            # a subpackage, or any module of the package not imported yet
+            # (``roverimpact.studies.sweep`` after ``import roverimpact.studies``)
             return importlib.import_module(f".{name}", package)
         raise AttributeError(f"module {package!r} has no attribute {name!r}")
 
