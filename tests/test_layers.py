@@ -238,17 +238,20 @@ def test_a_study_that_only_ranks_loads_no_simulator(tmp_path):
     assert not loaded, f"a study that only ranks loads {loaded}"
 
 
-def test_a_figure_of_one_simulation_loads_no_study_report():
-    """``roverimpact simulate`` draws its force history with :mod:`roverimpact.report.simulation`:
-    the report package loads its names on first use, so that figure does not import the
-    study report and its statistics (scipy.stats, half a second of the command's 2.3 s)."""
-    code = ("import sys, roverimpact.report.simulation; "
-            "print(' '.join(sorted(sys.modules)))")
+@pytest.mark.parametrize("module", ["roverimpact.report.simulation", "roverimpact.report.draw",
+                                    "roverimpact.report.contact"])
+def test_a_figure_of_one_case_loads_no_study_report(module):
+    """``roverimpact simulate``, ``draw`` and ``contact --plot`` draw one case's figure: the
+    report package loads its names on first use and its figures module reads tables
+    without importing pandas, so these import neither the study report and its
+    statistics (scipy.stats: half a second of ``simulate``'s 2.3 s) nor pandas (0.2 s of
+    ``contact --plot``)."""
+    code = f"import sys, {module}; print(' '.join(sorted(sys.modules)))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     loaded = [m for m in out if m.startswith(("scipy.stats", "roverimpact.report.html",
-                                              "roverimpact.studies"))]
-    assert not loaded, f"roverimpact.report.simulation loads {loaded}"
+                                              "roverimpact.studies", "pandas"))]
+    assert not loaded, f"{module} loads {sorted({m.split('.')[0] for m in loaded})}: {loaded[:5]}"
 
 
 def test_the_engines_names_are_the_engines():

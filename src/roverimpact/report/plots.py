@@ -11,9 +11,12 @@ from __future__ import annotations
 import re
 import textwrap
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:  # tables are read where given; a figure of one model (draw) needs no pandas
+    import pandas as pd
 
 __all__ = ["ENGINE_LABELS", "LABELS", "MAP_MIN_VALUES", "force_column", "grid_map",
            "plot_study", "plot_study_map", "plot_study_summary", "save_figure", "typeset"]
@@ -216,10 +219,11 @@ def grid_map(table: pd.DataFrame, x: str, y: str, col: str
     """
     if x == y or any(c not in table for c in (x, y, col)) or len(table) == 0:
         return None
+    from pandas.api.types import is_bool_dtype, is_numeric_dtype
+
     xy = []
     for c in (x, y):
-        if (not pd.api.types.is_numeric_dtype(table[c])
-                or pd.api.types.is_bool_dtype(table[c])):
+        if not is_numeric_dtype(table[c]) or is_bool_dtype(table[c]):
             return None
         v = table[c].to_numpy(dtype=float)
         if not np.isfinite(v).all():
