@@ -85,10 +85,12 @@ def case(name, mbm, cfg, repeat):
 
 def settle_once(rounds: int) -> None:
     """The built-in angle studies with their cases settling once and each on its own."""
+    import roverimpact.simulate as simulate
     import roverimpact.studies.evaluate as evaluate
     from roverimpact._io import read_toml
 
-    shipped = evaluate.reuse_settled_states
+    # the evaluator takes the context from roverimpact.simulate when its cases simulate
+    shipped = simulate.reuse_settled_states
     studies = Path(ri.__file__).parent / "data" / "studies"
     for name in ("detc2014_fig2_beta", "detc2015_fig2_beta"):
         d = read_toml(studies / f"{name}.toml")
@@ -102,12 +104,12 @@ def settle_once(rounds: int) -> None:
         try:
             for _ in range(rounds):
                 for once in (False, True):
-                    evaluate.reuse_settled_states = shipped if once else contextlib.nullcontext
+                    simulate.reuse_settled_states = shipped if once else contextlib.nullcontext
                     t = time.perf_counter()
                     out[once] = ev.evaluate(d["base"], overrides, simulate=d["simulate"])
                     times[once].append(time.perf_counter() - t)
         finally:
-            evaluate.reuse_settled_states = shipped
+            simulate.reuse_settled_states = shipped
         same = all(np.array_equal(out[True][c], out[False][c], equal_nan=True)
                    for c in out[True] if np.asarray(out[True][c]).dtype.kind == "f")
         each, once = times[False], times[True]
