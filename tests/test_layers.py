@@ -172,6 +172,14 @@ def test_no_import_cycle_between_modules():
     assert not sccs, f"import cycles: {sccs}"
 
 
+def _modules_after(code: str, *argv: str) -> list[str]:
+    """The modules a fresh interpreter holds after running ``code`` (with ``sys.argv[1:]``
+    = ``argv``)."""
+    script = f"import sys\n{code}\nprint(' '.join(sorted(sys.modules)))"
+    return subprocess.run([sys.executable, "-c", script, *argv], capture_output=True,
+                          text=True, check=True).stdout.split()
+
+
 @pytest.mark.parametrize("module,forbidden", [
     ("roverimpact", ("pinocchio", "pandas", "pydantic", "scipy", "matplotlib", "dask",
                      "mujoco")),
@@ -183,20 +191,9 @@ def test_no_import_cycle_between_modules():
 ])
 def test_light_imports(module, forbidden):
     """What importing a module loads (a fresh interpreter): the heavy libraries wait."""
-    code = (f"import sys, {module}; "
-            "print(' '.join(sorted({m.split('.')[0] for m in sys.modules})))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout.split()
-    loaded = sorted(set(forbidden) & set(out))
+    out = _modules_after(f"import {module}")
+    loaded = sorted(set(forbidden) & {m.split(".")[0] for m in out})
     assert not loaded, f"import {module} loads {loaded}"
-
-
-_REPORT_MODULES = """
-import sys
-from roverimpact.report import build_report
-build_report(sys.argv[1], n_boot=0)
-print(' '.join(sorted(sys.modules)))
-"""
 
 
 def test_a_report_loads_neither_the_evaluator_nor_the_simulators(tmp_path):
@@ -207,8 +204,8 @@ def test_a_report_loads_neither_the_evaluator_nor_the_simulators(tmp_path):
     from roverimpact.studies import run_study
 
     run_study(ROOT / "examples" / "study_rigid_body.toml", tmp_path / "rb")
-    out = subprocess.run([sys.executable, "-c", _REPORT_MODULES, str(tmp_path / "rb")],
-                         capture_output=True, text=True, check=True).stdout.split()
+    out = _modules_after("from roverimpact.report import build_report\n"
+                         "build_report(sys.argv[1], n_boot=0)", str(tmp_path / "rb"))
     assert (tmp_path / "rb" / "report.html").is_file()
     loaded = [m for m in out if m.split(".")[0] in ("pinocchio", "numba", "mujoco")
               or m.startswith(("roverimpact.studies.evaluate", "roverimpact.studies.sweep",
@@ -217,21 +214,12 @@ def test_a_report_loads_neither_the_evaluator_nor_the_simulators(tmp_path):
     assert not loaded, f"the report loads {loaded}"
 
 
-_STUDY_MODULES = """
-import sys
-from roverimpact.studies import run_study
-run_study(sys.argv[1], sys.argv[2])
-print(' '.join(sorted(sys.modules)))
-"""
-
-
 def test_a_study_that_only_ranks_loads_no_simulator(tmp_path):
     """A study without ``simulate`` computes T_c^- and the predicted force: it imports
     neither the simulators nor MuJoCo (the evaluator imports them when a study simulates)."""
-    out = subprocess.run([sys.executable, "-c", _STUDY_MODULES,
-                          str(ROOT / "examples" / "study_rigid_body.toml"),
-                          str(tmp_path / "rb")],
-                         capture_output=True, text=True, check=True).stdout.split()
+    out = _modules_after("from roverimpact.studies import run_study\n"
+                         "run_study(sys.argv[1], sys.argv[2])",
+                         str(ROOT / "examples" / "study_rigid_body.toml"), str(tmp_path / "rb"))
     assert (tmp_path / "rb" / "results.parquet").is_file()
     loaded = [m for m in out if m.split(".")[0] == "mujoco"
               or m.startswith("roverimpact.simulate")]
@@ -246,9 +234,7 @@ def test_a_figure_of_one_case_loads_no_study_report(module):
     without importing pandas, so these import neither the study report and its
     statistics (scipy.stats: half a second of ``simulate``'s 2.3 s) nor pandas (0.2 s of
     ``contact --plot``)."""
-    code = f"import sys, {module}; print(' '.join(sorted(sys.modules)))"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout.split()
+    out = _modules_after(f"import {module}")
     loaded = [m for m in out if m.startswith(("scipy.stats", "roverimpact.report.html",
                                               "roverimpact.studies", "pandas"))]
     assert not loaded, f"{module} loads {sorted({m.split('.')[0] for m in loaded})}: {loaded[:5]}"
