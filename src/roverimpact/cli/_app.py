@@ -210,9 +210,9 @@ def compile_ahead(*later, now=(), small: bool = False, workers: bool = False) ->
 
     if small and not workers:
         declare_small_work()
-    if now and small and not workers and kernel_mode() == "auto":
-        later = (*later, *(k for k in now if k.python_budget is None))
-        now = tuple(k for k in now if k.python_budget is not None)
+        if now and kernel_mode() == "auto":
+            later = (*later, *(k for k in now if k.python_budget is None))
+            now = tuple(k for k in now if k.python_budget is not None)
     compile_in_background(*later)
     for k in now:
         k.get()
